@@ -1,0 +1,133 @@
+"""The paper's networks, built from an :class:`InerterParameters` set.
+
+- ``reduced`` (the paper's Fig. 5 / 6, default): plate m_B with friction f1, bearing
+  deformation Q_B, screw translation m_s, nut deformation Q_n cos^2 theta, inertance b with
+  rotational friction f2.
+- ``full`` (Fig. 4): the reduced network plus the nut friction's sin(theta) component.
+- ``linear``: the reduced network with every friction block bypassed (K_f1 = K_f2 = 0).
+- ``rigid`` (Song et al.): one body m_B + m_s + b with the two frictions, no deformations.
+
+Each builder takes the parameters and a friction law name (or a factory mapping the
+paper's (Coulomb, viscous) pair to a law) and returns a :class:`Network`. A new
+arrangement needs only a new builder: compilation and simulation are generic.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+from .device import DEFAULT_GEOMETRY, InerterParameters
+from .friction import FrictionLaw, make_law
+from .network import Deformation, Friction, Inerter, Mass, Network, cascade
+
+__all__ = ["NETWORKS", "build_network", "lead_angle", "NUT_SHARE"]
+
+LawFactory = Callable[[float, float], FrictionLaw]
+
+#: **Assumption** (full network only): share of the rotational Coulomb and viscous
+#: friction f2 that comes from the nut (the rest from the bearing), dimensionless.
+NUT_SHARE = 1.0
+
+
+def lead_angle(lead: float | None = None, screw_diameter: float | None = None) -> float:
+    """Thread (lead) angle theta of the screw, rad: tan(theta) = lead / (pi d).
+
+    **Assumption**: the paper does not give theta; defaults use the lead and the screw
+    diameter implied by the paper's theoretical inertances (``Geometry.from_paper``):
+    p = 19.84 mm, d = 49.6 mm, theta = 7.3 degrees.
+    """
+    lead = DEFAULT_GEOMETRY.lead if lead is None else lead
+    d = 2 * DEFAULT_GEOMETRY.screw_radius() if screw_diameter is None else screw_diameter
+    return math.atan(lead / (math.pi * d))
+
+
+def _factory(friction: str | LawFactory) -> LawFactory:
+    if callable(friction):
+        return friction
+    make_law(friction, 1.0, 0.0)  # validates the name
+    return lambda f0, c: make_law(friction, f0, c)
+
+
+def reduced(p: InerterParameters, friction: str | LawFactory = "coulomb") -> Network:
+    law = _factory(friction)
+    return cascade(
+        Mass(p.m_B),
+        Friction(law(p.f1_0, p.c_f1)),
+        Deformation(p.c_B, p.k_B),
+        Mass(p.m_s),
+        Deformation(p.c_n, p.k_n),
+        Inerter(p.b),
+        Friction(law(p.f2_0, p.c_f2)),
+        name="reduced",
+    )
+
+
+def full(
+    p: InerterParameters,
+    friction: str | LawFactory = "coulomb",
+    *,
+    theta: float | None = None,
+    nut_share: float = NUT_SHARE,
+) -> Network:
+    """Fig. 4: adds the nut friction's sin(theta) part on the screw translation node.
+
+    **Assumptions**: f2 = f_B + f_n cos(theta) with f_n cos(theta) = nut_share * f2, so the
+    sin(theta) part is nut_share * tan(theta) times f2 (Coulomb and viscous alike); in the
+    ladder it is a shunt at the screw translation node, which moves with the rotation
+    coordinate up to the (stiff) nut deformation.
+    """
+    if not 0 <= nut_share <= 1:
+        raise ValueError(f"nut_share must lie in [0, 1], got {nut_share}")
+    law = _factory(friction)
+    t = math.tan(lead_angle() if theta is None else theta) * nut_share
+    return cascade(
+        Mass(p.m_B),
+        Friction(law(p.f1_0, p.c_f1)),
+        Deformation(p.c_B, p.k_B),
+        Mass(p.m_s),
+        Friction(law(t * p.f2_0, t * p.c_f2)),
+        Deformation(p.c_n, p.k_n),
+        Inerter(p.b),
+        Friction(law(p.f2_0, p.c_f2)),
+        name="full",
+    )
+
+
+def linear(p: InerterParameters, friction: str | LawFactory = "coulomb") -> Network:
+    """The paper's linear model: every friction block bypassed (K_f1 = K_f2 = 0)."""
+    return cascade(
+        Mass(p.m_B),
+        Deformation(p.c_B, p.k_B),
+        Mass(p.m_s),
+        Deformation(p.c_n, p.k_n),
+        Inerter(p.b),
+        name="linear",
+    )
+
+
+def rigid(p: InerterParameters, friction: str | LawFactory = "coulomb") -> Network:
+    """Song et al.: one rigid body m_B + m_s + b with both frictions acting on it."""
+    law = _factory(friction)
+    return cascade(
+        Mass(p.m_B),
+        Friction(law(p.f1_0, p.c_f1)),
+        Mass(p.m_s),
+        Inerter(p.b),
+        Friction(law(p.f2_0, p.c_f2)),
+        name="rigid",
+    )
+
+
+NETWORKS = {"reduced": reduced, "full": full, "linear": linear, "rigid": rigid}
+
+
+def build_network(name: str, params: InerterParameters, friction="coulomb", **options) -> Network:
+    """The network called ``name`` (reduced, full, linear, rigid) for ``params``."""
+    try:
+        builder = NETWORKS[name]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"unknown network {name!r}; choose one of {', '.join(NETWORKS)}"
+        ) from None
+    return builder(params, friction, **options)

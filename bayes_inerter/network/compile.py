@@ -1,0 +1,132 @@
+"""Compile a network of blocks into flat arrays: nodes, links, contacts, state space.
+
+Walking the chain: shunt blocks (mass, inerter, friction) attach to the current node; a
+:class:`Deformation` closes the current node and opens a new one behind it. Blocks with
+no deformation between them therefore move together (a rigid chain is one body).
+
+State vector (n = 2 N - 1 for N nodes, plus one optional entry)::
+
+    x = [v_0 ... v_{N-1}, d_0 ... d_{N-2}, (x_0)]
+
+v_i: node velocities (m/s); d_j = x_j - x_{j+1}: deflection of link j (m); x_0: the
+driven node's position (m), only when asked for (it feeds back into nothing).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..friction import FrictionLaw
+from .blocks import Deformation, Friction, Inerter, Mass
+from .twoport import Network
+
+__all__ = ["CompiledNetwork", "compile_network"]
+
+
+@dataclass(frozen=True)
+class CompiledNetwork:
+    """The flat description of a chain network (see module docstring).
+
+    Attributes
+    ----------
+    masses : shape (N,), kg; mass plus inertance of each node.
+    link_c, link_k : shape (N - 1,), N s/m and N/m.
+    link_gap : shape (N - 1,), m; half-width of each link's dead zone (0: none).
+    laws : per node, the friction laws acting between it and ground.
+    """
+
+    masses: np.ndarray
+    link_c: np.ndarray
+    link_k: np.ndarray
+    link_gap: np.ndarray
+    laws: tuple[tuple[FrictionLaw, ...], ...]
+    name: str = "network"
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.masses)
+
+    def n_states(self, position: bool = False) -> int:
+        return 2 * self.n_nodes - 1 + int(position)
+
+    @property
+    def viscous(self) -> np.ndarray:
+        """Sum of the laws' viscous coefficients per node, N s/m."""
+        return np.array([sum(law.viscous for law in node) for node in self.laws], dtype=float)
+
+    @property
+    def all_coulomb(self) -> bool:
+        """True when the event-driven kernel applies: Coulomb laws only, no dead zone."""
+        laws_ok = all(law.is_coulomb for node in self.laws for law in node)
+        return laws_ok and not np.any(self.link_gap > 0)
+
+    @property
+    def coulomb_bounds(self) -> np.ndarray:
+        """Set-valued bound at rest per node (sum of the laws' bounds), N."""
+        return np.array([sum(law.bound for law in node) for node in self.laws], dtype=float)
+
+    def state_space(self, *, viscous: bool = True, position: bool = False):
+        """Linear part as x' = A x + B F (force on node 0), shape (n, n) and (n,).
+
+        Links are taken closed (no dead zone). With ``viscous`` the friction laws'
+        linear parts are in A; without, all friction is left to the caller.
+        """
+        N = self.n_nodes
+        n = self.n_states(position)
+        A = np.zeros((n, n))
+        B = np.zeros(n)
+        inv_m = 1.0 / self.masses
+        if viscous:
+            A[np.arange(N), np.arange(N)] -= self.viscous * inv_m
+        for j in range(N - 1):
+            c, k, d = self.link_c[j], self.link_k[j], N + j
+            # T_j = c (v_j - v_{j+1}) + k d_j pulls node j back and node j+1 forward
+            for node, sign in ((j, -1.0), (j + 1, 1.0)):
+                A[node, j] += sign * c * inv_m[node]
+                A[node, j + 1] -= sign * c * inv_m[node]
+                A[node, d] += sign * k * inv_m[node]
+            A[d, j], A[d, j + 1] = 1.0, -1.0
+        if position:
+            A[n - 1, 0] = 1.0
+        B[0] = inv_m[0]
+        return A, B
+
+
+def compile_network(network: Network) -> CompiledNetwork:
+    """Flatten a :class:`Network` into nodes, links and contacts."""
+    masses: list[float] = [0.0]
+    laws: list[list[FrictionLaw]] = [[]]
+    link_c: list[float] = []
+    link_k: list[float] = []
+    link_gap: list[float] = []
+    for blk in network.blocks:
+        if isinstance(blk, Mass):
+            masses[-1] += blk.m
+        elif isinstance(blk, Inerter):
+            masses[-1] += blk.b
+        elif isinstance(blk, Friction):
+            laws[-1].append(blk.law)
+        elif isinstance(blk, Deformation):
+            link_c.append(blk.c)
+            link_k.append(blk.k)
+            link_gap.append(blk.backlash.gap if blk.backlash else 0.0)
+            masses.append(0.0)
+            laws.append([])
+        else:
+            raise ValueError(f"cannot compile block {blk!r}")
+    for i, m in enumerate(masses):
+        if m <= 0:
+            raise ValueError(
+                f"network {network.name!r}: node {i} has no mass or inertance "
+                "(every node between deformations needs a Mass or an Inerter)"
+            )
+    return CompiledNetwork(
+        masses=np.array(masses),
+        link_c=np.array(link_c, dtype=float),
+        link_k=np.array(link_k, dtype=float),
+        link_gap=np.array(link_gap, dtype=float),
+        laws=tuple(tuple(node) for node in laws),
+        name=network.name,
+    )

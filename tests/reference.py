@@ -1,0 +1,186 @@
+"""An independent reference for the exact kernel: implicit (Moreau) time stepping.
+
+Backward Euler on the linear part with the set-valued Coulomb friction solved exactly at
+each step (all 3^nc contact states enumerated). First order in the step, so it converges
+slowly but surely: a fine step gives a reference that shares no code with the kernel.
+"""
+
+import numpy as np
+from numba import njit
+
+from bayes_inerter.simulate import _contacts
+
+
+@njit(cache=True)
+def _moreau(P, PB, node, f0, mass, t_fine, u_fine, h):
+    n = P.shape[0]
+    nc = node.shape[0]
+    K = t_fine.shape[0]
+    x = np.zeros(n)
+    accel = np.zeros(K)
+    W = np.zeros((nc, nc))
+    for j in range(nc):
+        for i in range(nc):
+            W[j, i] = h * P[node[j], node[i]] / mass[i]
+    n_comb = 3**nc
+    lam = np.zeros(nc)
+    for k in range(1, K):
+        q = P @ x + h * PB * u_fine[k]
+        found = False
+        for comb in range(n_comb):
+            c = comb
+            state = np.zeros(nc, dtype=np.int64)  # 0 stick, 1 slip+, 2 slip-
+            for i in range(nc):
+                state[i] = c % 3
+                c //= 3
+            for i in range(nc):
+                if state[i] == 1:
+                    lam[i] = f0[i]
+                elif state[i] == 2:
+                    lam[i] = -f0[i]
+                else:
+                    lam[i] = 0.0
+            # stuck contacts: solve W_ss lam_s = q_s - W_sf lam_f
+            ns = 0
+            for i in range(nc):
+                if state[i] == 0:
+                    ns += 1
+            if ns > 0:
+                idx = np.zeros(ns, dtype=np.int64)
+                r = 0
+                for i in range(nc):
+                    if state[i] == 0:
+                        idx[r] = i
+                        r += 1
+                M = np.zeros((ns, ns))
+                rhs = np.zeros(ns)
+                for a in range(ns):
+                    rhs[a] = q[node[idx[a]]]
+                    for i in range(nc):
+                        if state[i] != 0:
+                            rhs[a] -= W[idx[a], i] * lam[i]
+                    for b in range(ns):
+                        M[a, b] = W[idx[a], idx[b]]
+                sol = np.linalg.solve(M, rhs)
+                for a in range(ns):
+                    lam[idx[a]] = sol[a]
+            ok = True
+            for j in range(nc):
+                v = q[node[j]]
+                for i in range(nc):
+                    v -= W[j, i] * lam[i]
+                if state[j] == 0 and abs(lam[j]) > f0[j] * (1 + 1e-12):
+                    ok = False
+                if state[j] == 1 and v <= 0:
+                    ok = False
+                if state[j] == 2 and v >= 0:
+                    ok = False
+            if ok:
+                found = True
+                break
+        if not found:
+            raise RuntimeError("no consistent contact state")
+        xn = q.copy()
+        for i in range(nc):
+            for r in range(n):
+                xn[r] -= h * P[r, node[i]] * lam[i] / mass[i]
+        accel[k] = (xn[0] - x[0]) / h
+        x = xn
+    return accel
+
+
+def moreau_reference(compiled, time, force, refine):
+    """Acceleration of node 0 at the record's samples, by Moreau stepping at h / refine.
+
+    The returned value at a sample is the mean acceleration over the fine step that ends
+    there, which converges to the instantaneous value with the step.
+    """
+    A, B = compiled.state_space(viscous=True)
+    h = (time[1] - time[0]) / refine
+    t_fine = np.linspace(time[0], time[-1], (len(time) - 1) * refine + 1)
+    u_fine = np.interp(t_fine, time, force)
+    P = np.linalg.inv(np.eye(A.shape[0]) - h * A)
+    nodes, f0, mass = _contacts(compiled)
+    a = _moreau(P, P @ B, nodes, f0, mass, t_fine, u_fine, h)
+    return a[::refine]
+
+
+def hybrid_reference(compiled, time, force, *, rtol=1e-10):
+    """Acceleration of node 0 by scipy's Radau on each mode with event location.
+
+    An independent implementation of the same hybrid (stick-slip) system as the kernel:
+    scipy integrates each mode, finds the switches with its own root finder, and the
+    switching rules are written out here again. Integrates one sample interval at a time.
+    """
+    from scipy.integrate import solve_ivp
+
+    A, B = compiled.state_space(viscous=True)
+    nodes, f0, mass = _contacts(compiled)
+    nc = len(nodes)
+    n = A.shape[0]
+    stuck = np.ones(nc, dtype=bool)
+    sgn = np.ones(nc)
+    x = np.zeros(n)
+    accel = np.zeros(len(time))
+
+    def holding(i, t0, t1, u0, u1, tt, xx):
+        u = u0 + (u1 - u0) * (tt - t0) / (t1 - t0)
+        return mass[i] * (A[nodes[i]] @ xx + B[nodes[i]] * u)
+
+    def deriv(t0, t1, u0, u1):
+        def f(tt, xx):
+            u = u0 + (u1 - u0) * (tt - t0) / (t1 - t0)
+            dx = A @ xx + B * u
+            for i in range(nc):
+                if stuck[i]:
+                    dx[nodes[i]] = 0.0
+                else:
+                    dx[nodes[i]] -= sgn[i] * f0[i] / mass[i]
+            return dx
+        return f
+
+    def switch(t0, t1, u0, u1, tt, xx):
+        for i in range(nc):
+            r = holding(i, t0, t1, u0, u1, tt, xx)
+            if stuck[i]:
+                if abs(r) > f0[i] * (1 - 1e-9):
+                    stuck[i] = False
+                    sgn[i] = np.sign(r)
+            elif sgn[i] * xx[nodes[i]] <= 1e-15:
+                xx[nodes[i]] = 0.0
+                r = holding(i, t0, t1, u0, u1, tt, xx)
+                if abs(r) <= f0[i]:
+                    stuck[i] = True
+                else:
+                    sgn[i] = np.sign(r)
+
+    switch(time[0], time[1], force[0], force[1], time[0], x)
+    f = deriv(time[0], time[1], force[0], force[1])
+    accel[0] = f(time[0], x)[0]
+    for k in range(len(time) - 1):
+        t0, t1, u0, u1 = time[k], time[k + 1], force[k], force[k + 1]
+        tt = t0
+        for _ in range(100):
+            events = []
+            for i in range(nc):
+                if stuck[i]:
+                    for side in (1.0, -1.0):
+                        ev = (lambda i, side: lambda s, y: f0[i] - side * holding(i, t0, t1, u0, u1, s, y))(i, side)
+                        ev.terminal = True
+                        ev.direction = -1
+                        events.append(ev)
+                else:
+                    ev = (lambda i: lambda s, y: sgn[i] * y[nodes[i]])(i)
+                    ev.terminal = True
+                    ev.direction = -1
+                    events.append(ev)
+            sol = solve_ivp(deriv(t0, t1, u0, u1), (tt, t1), x, method="Radau", rtol=rtol,
+                            atol=1e-14, events=events or None)
+            x = sol.y[:, -1].copy()
+            tt = sol.t[-1]
+            if sol.status == 1:
+                switch(t0, t1, u0, u1, tt, x)
+            if tt >= t1:
+                break
+        accel[k + 1] = deriv(t0, t1, u0, u1)(t1, x)[0]
+    return accel
