@@ -78,18 +78,19 @@ def _tables(Abar, h, J):
     return F
 
 
-@njit(cache=True)
-def _step(F, z, out):
-    """out = z + F z."""
+@njit(cache=True, inline="always")
+def _step(FT, z, out):
+    """out = z + F z, with FT = F transposed (column sweeps: independent adds)."""
     m = z.shape[0]
     for i in range(m):
-        s = z[i]
-        for j in range(m):
-            s += F[i, j] * z[j]
-        out[i] = s
+        out[i] = z[i]
+    for j in range(m):
+        zj = z[j]
+        for i in range(m):
+            out[i] += FT[j, i] * zj
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _dot(row, z):
     s = 0.0
     for j in range(z.shape[0]):
@@ -97,7 +98,7 @@ def _dot(row, z):
     return s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _cubic_range(y0, d0, y1, d1):
     """Min and max over s in [0, 1] of the cubic Hermite interpolant (d scaled by T)."""
     lo = min(y0, y1)
@@ -105,32 +106,29 @@ def _cubic_range(y0, d0, y1, d1):
     a = 2.0 * y0 - 2.0 * y1 + d0 + d1
     b = -3.0 * y0 + 3.0 * y1 - 2.0 * d0 - d1
     c = d0
-    # roots of 3 a s^2 + 2 b s + c
+    # extremes at the roots of 3 a s^2 + 2 b s + c inside (0, 1)
     A = 3.0 * a
     B = 2.0 * b
-    roots = np.empty(2)
-    nr = 0
     if abs(A) < 1e-300:
         if abs(B) > 1e-300:
-            roots[0] = -c / B
-            nr = 1
-    else:
-        disc = B * B - 4.0 * A * c
-        if disc >= 0.0:
-            sq = np.sqrt(disc)
-            roots[0] = (-B - sq) / (2.0 * A)
-            roots[1] = (-B + sq) / (2.0 * A)
-            nr = 2
-    for r in range(nr):
-        s = roots[r]
-        if 0.0 < s < 1.0:
-            p = ((a * s + b) * s + c) * s + y0
-            lo = min(lo, p)
-            hi = max(hi, p)
+            s = -c / B
+            if 0.0 < s < 1.0:
+                p = ((a * s + b) * s + c) * s + y0
+                lo = min(lo, p)
+                hi = max(hi, p)
+        return lo, hi
+    disc = B * B - 4.0 * A * c
+    if disc >= 0.0:
+        sq = np.sqrt(disc)
+        for s in ((-B - sq) / (2.0 * A), (-B + sq) / (2.0 * A)):
+            if 0.0 < s < 1.0:
+                p = ((a * s + b) * s + c) * s + y0
+                lo = min(lo, p)
+                hi = max(hi, p)
     return lo, hi
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _guards(z, mode, nc, node, R, VD, RD, val, der):
     """Guard values and time derivatives at z: velocity (sliding) or holding force (stuck)."""
     for i in range(nc):
@@ -142,7 +140,7 @@ def _guards(z, mode, nc, node, R, VD, RD, val, der):
             der[i] = _dot(VD[mode, i], z)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _crossed(va, da, vb, db, T, mode, nc, sgn, f0):
     """True when some guard is (or may have been) violated between the two ends."""
     for i in range(nc):
@@ -205,6 +203,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
     accel : (K,) acceleration of out_node just after each sample instant, m/s^2.
     states : (K, n) states at the samples (shape (0, n) unless store).
     status : STATUS_OK, or STATUS_TOO_MANY_EVENTS (accel then NaN from that sample on).
+    stats : (2,) int, the number of mode switches and of bisections (switch searches).
     """
     m = Abar.shape[0]
     nc = node.shape[0]
@@ -214,7 +213,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
     J = _levels(Abar, h)
     FULL = np.int64(1) << J
 
-    # Per mode: tables, derivative rows, output row.
+    # Per mode: tables (transposed, see _step), derivative rows, output row.
     F = np.zeros((n_modes, J + 1, m, m))
     VD = np.zeros((n_modes, max(nc, 1), m))
     RD = np.zeros((n_modes, max(nc, 1), m))
@@ -229,13 +228,16 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
         for i in range(nc):
             if (mode >> i) & 1:
                 As[node[i], :] = 0.0
-        F[mode] = _tables(As, h, J)
+        T = _tables(As, h, J)
+        for lev in range(J + 1):
+            F[mode, lev] = T[lev].T
         for i in range(nc):
             VD[mode, i] = As[node[i]]
             RD[mode, i] = R[i] @ As
         OUT[mode] = As[out_node]
 
     accel = np.full(K, np.nan)
+    stats = np.zeros(2, dtype=np.int64)  # mode switches, bisections
     states = np.zeros((K if store else 0, n))
     z = np.zeros(m)
     z[:n] = z_init
@@ -282,12 +284,13 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             _step(F[mode, level], z, zn)
             _guards(zn, mode, nc, node, R, VD, RD, vb, db)
             if not _crossed(va, da, vb, db, h * size / FULL, mode, nc, sgn, f0):
-                z[:] = zn
-                va[:] = vb
-                da[:] = db
+                z, zn = zn, z  # swap buffers instead of copying
+                va, vb = vb, va
+                da, db = db, da
                 pos += size
                 continue
             # Bisect for the first crossing inside [pos, pos + size].
+            stats[1] += 1
             zc[:] = z
             while size > 1:
                 size >>= 1
@@ -305,15 +308,16 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             new_mode = _switch(z, mode, nc, node, R, f0, sgn, wcol)
             if new_mode != mode:
                 events += 1
+                stats[0] += 1
                 mode = new_mode
             else:
                 # no switch due: a false alarm of the Hermite test, or a switch that left
                 # the mode unchanged (a reversal); count both to bound the work
                 events += 1
             if events > max_events:
-                return accel, states, STATUS_TOO_MANY_EVENTS
+                return accel, states, STATUS_TOO_MANY_EVENTS, stats
             _guards(z, mode, nc, node, R, VD, RD, va, da)
         accel[k + 1] = _dot(OUT[mode], z)
         if store:
             states[k + 1] = z[:n]
-    return accel, states, STATUS_OK
+    return accel, states, STATUS_OK, stats

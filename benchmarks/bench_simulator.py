@@ -1,0 +1,86 @@
+"""Benchmark: the exact kernel against scipy's Radau on the same record.
+
+Run by hand: ``python benchmarks/bench_simulator.py``. Prints medians and ratios measured
+side by side in one run (this machine is shared and noisy: read ratios, not absolutes).
+"""
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+from conftest import inverse_dynamics_force  # noqa: E402
+from reference import hybrid_reference  # noqa: E402
+
+from bayes_inerter import paper_parameters, simulate  # noqa: E402
+from bayes_inerter._stiff import run_stiff  # noqa: E402
+from bayes_inerter.models import build_network  # noqa: E402
+from bayes_inerter.network import compile_network  # noqa: E402
+from bayes_inerter.simulate import _contacts, run_piecewise_linear  # noqa: E402
+
+
+def timed(fn, repeats):
+    out, times = None, []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return out, statistics.median(times)
+
+
+def rel_error(a, ref):
+    return np.linalg.norm(a - ref) / np.linalg.norm(ref - ref.mean())
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--setting", default="A1")
+    ap.add_argument("--freq", type=float, default=1.0)
+    ap.add_argument("--duration", type=float, default=10.0)
+    ap.add_argument("--repeats", type=int, default=20)
+    ap.add_argument("--reference", action="store_true", help="also run the slow hybrid reference")
+    args = ap.parse_args()
+
+    p = paper_parameters(args.setting)
+    t, f = inverse_dynamics_force(p, args.freq, duration=args.duration, ramp=1.0)
+    compiled = compile_network(build_network("reduced", p))
+    A, B = compiled.state_space()
+    h = t[1] - t[0]
+    print(f"record: {args.setting}, {args.freq} Hz, {args.duration} s at {1 / h:.0f} Hz "
+          f"({len(t)} samples); contacts: {len(_contacts(compiled)[0])}")
+
+    simulate(p, t, f)  # compile the kernel
+    a, t_api = timed(lambda: simulate(p, t, f), args.repeats)
+    _, t_kernel = timed(lambda: run_piecewise_linear(compiled, A, B, f, h), args.repeats)
+
+    A0, B0 = compiled.state_space(viscous=False)
+    (a_radau, _), t_radau = timed(
+        lambda: run_stiff(compiled, A0, B0, t, f, v_eps=1e-4, rtol=1e-6), 3
+    )
+    print(f"exact kernel, simulate():         median {t_api * 1e3:8.3f} ms")
+    print(f"exact kernel, without API checks: median {t_kernel * 1e3:8.3f} ms")
+    print(f"scipy Radau rtol 1e-6, tanh 1e-4: median {t_radau * 1e3:8.1f} ms")
+    print(f"speed-up (Radau / simulate()): {t_radau / t_api:,.0f}x")
+    print(f"Radau's difference from the exact kernel: {rel_error(a_radau, a):.2e} (eq. 5 norm)")
+    if args.reference:
+        ref, t_ref = timed(lambda: hybrid_reference(compiled, t, f), 1)
+        print(f"hybrid reference ({t_ref:.1f} s): kernel error {rel_error(a, ref):.2e}, "
+              f"Radau error {rel_error(a_radau, ref):.2e}")
+
+    print("\ncost against record length (simulate(), median):")
+    base = None
+    for duration in (1.0, 10.0, 100.0, 600.0):
+        tt, ff = inverse_dynamics_force(p, args.freq, duration=duration, ramp=1.0)
+        _, tm = timed(lambda: simulate(p, tt, ff), max(3, args.repeats // 4))
+        base = base or tm / len(tt)
+        print(f"  {duration:6.0f} s ({len(tt):7d} samples): {tm * 1e3:9.3f} ms, "
+              f"{tm / len(tt) * 1e9:6.0f} ns/sample")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,102 @@
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from bayes_inerter.friction import Coulomb, Smooth, Stribeck, make_law
+
+finite = st.floats(0.0, 1e4, allow_nan=False)
+speeds = st.floats(-10.0, 10.0, allow_nan=False)
+
+
+def laws():
+    coulomb = st.builds(Coulomb, finite, finite)
+    stribeck = st.builds(
+        lambda fc, extra, vs, c: Stribeck(fc, fc + extra, vs, c),
+        finite, finite, st.floats(1e-4, 1.0), finite,
+    )
+    smooth = st.builds(
+        lambda fc, extra, vb, c: Smooth(fc + extra, fc, vb, c),
+        finite, finite, st.floats(1e-4, 1.0), finite,
+    )
+    return st.one_of(coulomb, stribeck, smooth)
+
+
+@settings(max_examples=200, deadline=None)
+@given(laws(), speeds)
+def test_laws_are_odd_dissipative_and_finite(law, v):
+    f = law.force(v)
+    assert np.isfinite(f)
+    assert f * v >= 0  # friction never feeds energy in
+    assert law.force(-v) == pytest.approx(-f, abs=1e-9 * (1 + abs(f)))
+    fr, slope = law.regularized(v, 1e-4)
+    assert np.isfinite(fr) and np.isfinite(slope)
+
+
+@settings(max_examples=100, deadline=None)
+@given(laws(), st.floats(-0.05, 0.05), st.floats(1e-5, 1e-3))
+def test_regularized_slope_is_the_derivative(law, v, v_eps):
+    dv = 1e-9
+    f_plus, _ = law.regularized(v + dv, v_eps)
+    f_minus, _ = law.regularized(v - dv, v_eps)
+    _, slope = law.regularized(v, v_eps)
+    numeric = (f_plus - f_minus) / (2 * dv)
+    assert slope == pytest.approx(numeric, rel=1e-4, abs=1e-3 * (1 + abs(slope)))
+
+
+def test_regularized_coulomb_tends_to_sign():
+    law = Coulomb(10.0, 2.0)
+    v = np.array([-0.1, -1e-3, 1e-3, 0.1])
+    f, _ = law.regularized(v, 1e-7)
+    np.testing.assert_allclose(f, law.force(v), rtol=1e-12)
+
+
+def test_smooth_law_formula():
+    law = Smooth(f_brk=12.0, f_c=10.0, v_brk=0.01, c=3.0)
+    v = 0.004
+    v_st, v_coul = 0.01 * np.sqrt(2), 0.001
+    expected = (
+        np.sqrt(2 * np.e) * 2.0 * np.exp(-((v / v_st) ** 2)) * v / v_st
+        + 10.0 * np.tanh(v / v_coul)
+        + 3.0 * v
+    )
+    assert law.force(v) == pytest.approx(expected)
+    # the Simscape law peaks at the break-away force near v_brk (for small viscous part)
+    v = np.linspace(1e-4, 0.05, 20001)
+    peak = Smooth(12.0, 10.0, 0.01, 0.0).force(v).max()
+    assert peak == pytest.approx(12.0, rel=0.02)
+
+
+def test_stribeck_levels():
+    law = Stribeck(f_c=10.0, f_s=13.0, v_s=0.01, c=0.0)
+    assert law.bound == 13.0
+    assert law.force(1e-9) == pytest.approx(13.0)
+    assert law.force(1.0) == pytest.approx(10.0)
+
+
+def test_bounds_and_linear_parts():
+    assert Coulomb(5.0, 1.0).bound == 5.0 and Coulomb(5.0, 1.0).is_coulomb
+    assert Smooth(5.0, 5.0, 1e-3, 1.0).bound == 0.0
+    assert Stribeck(5.0, 6.0, 1e-2, 2.0).without_coulomb() == Coulomb(0.0, 2.0)
+
+
+@pytest.mark.parametrize(
+    "build, message",
+    [
+        (lambda: Coulomb(-1.0, 0.0), "f0 must be non-negative"),
+        (lambda: Coulomb(float("nan"), 0.0), "f0 must be finite"),
+        (lambda: Stribeck(10.0, 5.0, 0.01), "f_s"),
+        (lambda: Stribeck(10.0, 12.0, 0.0), "v_s must be positive"),
+        (lambda: Smooth(1.0, 2.0, 0.01), "f_brk"),
+        (lambda: make_law("dahl", 1.0, 0.0), "unknown friction law 'dahl'"),
+    ],
+)
+def test_bad_laws(build, message):
+    with pytest.raises(ValueError, match=message):
+        build()
+
+
+def test_make_law():
+    assert make_law("coulomb", 3.0, 1.0) == Coulomb(3.0, 1.0)
+    assert make_law("stribeck", 3.0, 1.0).bound == pytest.approx(3.9)
+    assert isinstance(make_law("smooth", 3.0, 1.0), Smooth)

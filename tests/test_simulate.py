@@ -1,0 +1,196 @@
+import dataclasses
+
+import numpy as np
+import pytest
+from conftest import inverse_dynamics_force
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from reference import hybrid_reference, moreau_reference
+from scipy import signal
+from scipy.linalg import expm
+
+from bayes_inerter import SimulationError, paper_parameters, simulate, simulate_network
+from bayes_inerter._kernel import _levels, _tables
+from bayes_inerter.models import NETWORKS, build_network
+from bayes_inerter.network import accel_response, compile_network
+
+
+def rel_error(a, ref):
+    """Relative L2 error normalised as in the paper's eq. (5)."""
+    return np.linalg.norm(a - ref) / np.linalg.norm(ref - ref.mean())
+
+
+@pytest.mark.parametrize(
+    "setting, freq, network",
+    [("A0", 0.5, "reduced"), ("B2", 1.5, "reduced"), ("A3", 1.0, "full"), ("A2", 1.0, "rigid")],
+)
+def test_matches_independent_hybrid_reference(setting, freq, network):
+    p = paper_parameters(setting)
+    t, f = inverse_dynamics_force(p, freq, duration=1.6, ramp=0.4)
+    a = simulate(p, t, f, network=network)
+    ref = hybrid_reference(compile_network(build_network(network, p)), t, f)
+    assert rel_error(a, ref) < 1e-3
+
+
+def test_stick_slip_record_sticks():
+    # A0 at 0.5 Hz: the plate's Coulomb friction dominates, the plate stops at reversals
+    p = paper_parameters("A0")
+    t, f = inverse_dynamics_force(p, 0.5, duration=3.0, ramp=0.5)
+    f = 0.9 * f  # less force than the friction needs at times: stick phases
+    a = simulate(p, t, f)
+    stuck = np.mean(a == 0.0)
+    assert 0.1 < stuck < 0.9
+    ref = hybrid_reference(compile_network(build_network("reduced", p)), t[:1200], f[:1200])
+    assert rel_error(a[:1200], ref) < 1e-3
+
+
+@pytest.mark.slow
+def test_moreau_stepping_converges_to_kernel():
+    """Halving-free first-order scheme: error falls about tenfold per tenfold step."""
+    p = paper_parameters("A1")
+    t, f = inverse_dynamics_force(p, 1.0, duration=1.5, ramp=0.5)
+    a = simulate(p, t, f)
+    c = compile_network(build_network("reduced", p))
+    errors = [rel_error(a, moreau_reference(c, t, f, r)) for r in (100, 1000)]
+    assert errors[1] < errors[0] / 5
+    assert errors[1] < 0.05
+
+
+def test_refining_the_record_changes_nothing():
+    """Upsampling the (linearly interpolated) force must give the same trajectory."""
+    p = paper_parameters("A1")
+    t, f = inverse_dynamics_force(p, 1.0, duration=2.0)
+    a = simulate(p, t, f)
+    t10 = np.linspace(t[0], t[-1], 10 * (len(t) - 1) + 1)
+    a10 = simulate(p, t10, np.interp(t10, t, f))[::10]
+    assert rel_error(a10, a) < 1e-6
+
+
+@pytest.mark.parametrize("setting", ["A0", "B2"])
+def test_linear_part_is_exact(setting):
+    """Without contacts the kernel equals scipy's first-order-hold discretisation."""
+    p = dataclasses.replace(paper_parameters(setting), f1_0=0.0, f2_0=0.0)
+    t, f = inverse_dynamics_force(p, 1.5, duration=2.0)
+    f = f * np.clip(t / 0.05, 0, 1)  # start from zero force: scipy's foh state is then rest
+    A, B = compile_network(build_network("reduced", p)).state_space()
+    h = t[1] - t[0]
+    C, D = A[:1], B[:1].reshape(1, 1)
+    Ad, Bd, Cd, Dd, _ = signal.cont2discrete((A, B.reshape(-1, 1), C, D), h, method="foh")
+    _, y, _ = signal.dlsim((Ad, Bd, Cd, Dd, h), f)
+    a = simulate(p, t, f)
+    assert rel_error(a, y.ravel()) < 1e-6
+
+
+def test_tables_match_scipy_expm():
+    p = paper_parameters("A1")
+    A, _ = compile_network(build_network("reduced", p)).state_space()
+    h = 1e-3
+    J = _levels(A, h)
+    F = _tables(A, h, J)
+    for j in (0, 3, 10, J):
+        E = expm(A * h / 2**j)
+        np.testing.assert_allclose(F[j] + np.eye(len(A)), E, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", sorted(NETWORKS))
+def test_chirp_spectrum_matches_cascade(name):
+    """With Coulomb terms off, the simulated chirp's spectrum is the cascade's a/F."""
+    p = dataclasses.replace(paper_parameters("A2"), f1_0=0.0, f2_0=0.0)
+    net = build_network(name, p)
+    fs, T = 10_000.0, 8.0
+    t = np.arange(int(2 * T * fs)) / fs
+    f = np.where(t < T, signal.chirp(t, 0.5, T, 400.0, method="logarithmic"), 0.0) * 100.0
+    f *= signal.windows.tukey(len(t), 0.02)
+    a = simulate_network(net, t, f)
+    freqs = np.fft.rfftfreq(len(t), 1 / fs)
+    empirical = np.fft.rfft(a) / np.fft.rfft(f)
+    band = (freqs > 2.0) & (freqs < 300.0)
+    model = accel_response(net, 2 * np.pi * freqs[band])
+    err = np.abs(empirical[band] - model) / np.abs(model)
+    assert np.median(err) < 0.01
+    assert np.percentile(err, 95) < 0.03
+
+
+bad_inputs = [
+    (lambda t, f: (t, f[:-1]), "force has shape"),
+    (lambda t, f: (t, np.where(np.arange(len(f)) == 7, np.nan, f)), "force has a NaN.*index 7"),
+    (lambda t, f: (t, np.where(np.arange(len(f)) == 3, np.inf, f)), "force has a NaN or infinite"),
+    (lambda t, f: (np.where(np.arange(len(t)) == 5, np.nan, t), f), "time has a NaN"),
+    (lambda t, f: (t[::-1], f), "strictly increasing"),
+    (lambda t, f: (np.r_[t[:10], t[9], t[11:]], f), "strictly increasing; it is not at index 10"),
+    (lambda t, f: (t * (1 + 0.2 * (np.arange(len(t)) > 50)), f), "uniformly sampled"),
+    (lambda t, f: (t[:1], f[:1]), "at least 2 samples"),
+    (lambda t, f: (t.reshape(-1, 1), f), "one-dimensional"),
+]
+
+
+@pytest.mark.parametrize("make, message", bad_inputs)
+def test_bad_records(make, message):
+    p = paper_parameters("A1")
+    t, f = inverse_dynamics_force(p, 1.0, duration=0.2)
+    t2, f2 = make(t, f)
+    with pytest.raises(ValueError, match=message):
+        simulate(p, t2, f2)
+
+
+def test_bad_options():
+    p = paper_parameters("A1")
+    t, f = inverse_dynamics_force(p, 1.0, duration=0.2)
+    with pytest.raises(ValueError, match="unknown network"):
+        simulate(p, t, f, network="fig9")
+    with pytest.raises(ValueError, match="unknown friction law"):
+        simulate(p, t, f, friction="dahl")
+    with pytest.raises(ValueError, match="unknown method"):
+        simulate(p, t, f, method="euler")
+    with pytest.raises(ValueError, match="exact kernel needs Coulomb"):
+        simulate(p, t, f, friction="smooth", method="exact")
+    with pytest.raises(ValueError, match="params must be InerterParameters"):
+        simulate({"b": 1.0}, t, f)
+    with pytest.raises(ValueError, match="initial state must have shape"):
+        simulate(p, t, f, x0=np.zeros(3))
+
+
+def test_non_coulomb_laws_use_the_stiff_solver():
+    p = paper_parameters("A2")
+    t, f = inverse_dynamics_force(p, 1.0, duration=0.6, ramp=0.2)
+    exact = simulate(p, t, f)
+    # a smooth law with a narrow tanh is close to set-valued Coulomb
+    smooth = simulate(p, t, f, friction="smooth")
+    assert np.all(np.isfinite(smooth))
+    assert rel_error(smooth, exact) < 0.1
+    stribeck = simulate(p, t, f, friction="stribeck")
+    assert np.all(np.isfinite(stribeck))
+
+
+@pytest.mark.slow
+def test_regularised_solver_converges_to_exact_kernel():
+    p = paper_parameters("A1")
+    t, f = inverse_dynamics_force(p, 1.0, duration=1.5, ramp=0.5)
+    exact = simulate(p, t, f)
+    errs = [rel_error(simulate(p, t, f, method="stiff", v_eps=v), exact) for v in (1e-3, 1e-5)]
+    assert errs[1] < errs[0] / 3
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.sampled_from(sorted(NETWORKS)),
+    st.fixed_dictionaries(
+        {
+            "b": st.floats(10.0, 5e4), "m_s": st.floats(1.0, 100.0),
+            "m_B": st.floats(1.0, 200.0), "c_n": st.floats(0.0, 1e8),
+            "k_n": st.floats(1e3, 1e9), "c_B": st.floats(0.0, 1e6),
+            "k_B": st.floats(1e4, 1e10), "f1_0": st.floats(0.0, 5e3),
+            "c_f1": st.floats(0.0, 1e4), "f2_0": st.floats(0.0, 5e3),
+            "c_f2": st.floats(0.0, 1e4),
+        }
+    ),
+    st.floats(0.2, 3.0),
+)
+def test_output_is_finite_over_wide_parameters(name, values, freq):
+    p = dataclasses.replace(paper_parameters("A0"), **values)
+    t, f = inverse_dynamics_force(paper_parameters("A3"), freq, duration=0.5, ramp=0.2)
+    try:
+        a = simulate(p, t, f, network=name)
+    except SimulationError:
+        return  # reported chatter is a clear outcome, not a silent one
+    assert np.all(np.isfinite(a))
