@@ -1,0 +1,180 @@
+"""The command line: ``bayes-inerter COMMAND ...``.
+
+Exit status: 0 success; 1 bad input or a failed run (one-line error, no traceback);
+2 usage error (argparse); 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+__all__ = ["main"]
+
+EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+class CliError(Exception):
+    """An error reported as one line on stderr with exit status 1."""
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r} must be a positive number")
+    return value
+
+
+def _non_negative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r} must be a non-negative number")
+    return value
+
+
+def _add_generator_options(p: argparse.ArgumentParser) -> None:
+    from .records.generator import GeneratorSettings
+
+    d = GeneratorSettings()
+    g = p.add_argument_group("generator settings (assumptions; see README)")
+    g.add_argument("--amplitude", type=_positive_float, default=d.amplitude, help="drive amplitude, m (%(default)s)")
+    g.add_argument("--fs", type=_positive_float, default=d.fs, help="record sampling rate, Hz (%(default)s)")
+    g.add_argument("--duration", type=_positive_float, default=d.duration, help="record length with the ramp, s (%(default)s)")
+    g.add_argument("--ramp", type=_non_negative_float, default=d.ramp, help="ramp-in time, s (%(default)s)")
+    g.add_argument("--force-noise", type=_non_negative_float, default=d.force_noise, help="load-cell noise, N rms (%(default)s)")
+    g.add_argument("--accel-noise", type=_non_negative_float, default=d.accel_noise, help="accelerometer noise, m/s^2 rms (%(default)s)")
+    g.add_argument("--antialias", choices=("fir", "none"), default=d.antialias, help="anti-alias filter (%(default)s)")
+    g.add_argument("--truth-network", choices=("reduced", "full"), default=d.network, help="truth network (%(default)s)")
+    g.add_argument("--truth-friction", choices=("coulomb", "stribeck", "smooth"), default=d.friction, help="truth friction law (%(default)s)")
+    g.add_argument("--backlash", type=_non_negative_float, default=d.backlash, help="nut backlash half-width, m (%(default)s)")
+    g.add_argument("--seed", type=int, default=0, help="noise seed (%(default)s)")
+
+
+def _settings_from(args):
+    from .records.generator import GeneratorSettings
+
+    return GeneratorSettings(
+        amplitude=args.amplitude, fs=args.fs, duration=args.duration, ramp=args.ramp,
+        force_noise=args.force_noise, accel_noise=args.accel_noise, antialias=args.antialias,
+        network=args.truth_network, friction=args.truth_friction, backlash=args.backlash,
+    )
+
+
+def _progress(iterable, total, desc):
+    from tqdm import tqdm
+
+    return tqdm(iterable, total=total, desc=desc, unit="record", file=sys.stderr, disable=None)
+
+
+def cmd_generate(args) -> int:
+    from .device import FREQUENCIES_HZ, SETTINGS, paper_parameters
+    from .records import generate_record, paper_grid, write_record
+
+    settings = _settings_from(args)
+    out = Path(args.out)
+    if args.paper_grid:
+        if out.suffix.lower() == ".csv":
+            raise CliError(f"--paper-grid writes a folder of records; {out} looks like a file name")
+        total = len(SETTINGS) * len(FREQUENCIES_HZ)
+        for name, freq, rec in _progress(paper_grid(settings=settings, seed=args.seed), total, "generating"):
+            path, _ = write_record(out / f"{name}_{freq:g}Hz.csv", rec)
+            print(f"wrote {path}")
+        return EXIT_OK
+    if args.setting is None or args.freq is None:
+        raise CliError("give --setting and --freq for one record, or --paper-grid for all 27")
+    if out.suffix.lower() != ".csv":
+        raise CliError(f"--out must name a .csv file for one record, got {out}")
+    rec = generate_record(
+        paper_parameters(args.setting), args.freq, settings=settings, rng=args.seed,
+        setting_name=args.setting.upper(),
+    )
+    path, side = write_record(out, rec)
+    print(f"wrote {path} ({len(rec.time)} samples, {rec.duration:g} s at {rec.fs:g} Hz) and {side}")
+    return EXIT_OK
+
+
+def cmd_inspect(args) -> int:
+    from .records import read_record
+
+    rec = read_record(args.record)
+    print(f"{args.record}: valid record")
+    print(f"  samples {len(rec.time)}, duration {rec.duration:g} s, rate {rec.fs:g} Hz")
+    for name, x, unit in (("force", rec.force, "N"), ("accel", rec.accel, "m/s^2"), ("disp", rec.disp, "m")):
+        if x is not None:
+            print(f"  {name:6s} min {x.min():.6g} {unit}, max {x.max():.6g} {unit}, rms {x.std():.6g} {unit}")
+    if rec.metadata:
+        for key, value in rec.metadata.items():
+            text = json.dumps(value) if isinstance(value, (dict, list)) else str(value)
+            print(f"  {key}: {text}")
+    else:
+        print("  no metadata (give m_s or the setting when fitting)")
+    if args.plot:
+        from .plots import plot_record
+
+        fig = plot_record(rec)
+        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(args.plot, dpi=120)
+        print(f"wrote {args.plot}")
+    return EXIT_OK
+
+
+def cmd_demo(args) -> int:
+    from .demo import run_demo
+
+    for path in run_demo(Path(args.out), setting=args.setting, freq=args.freq, seed=args.seed):
+        print(f"wrote {path}")
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="bayes-inerter",
+        description="Bayesian uncertainty quantification of a ball-screw inerter.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("demo", help="simulate a generated paper record with the paper's networks and plot it")
+    p.add_argument("--setting", default="A1", help="flywheel setting (%(default)s)")
+    p.add_argument("--freq", type=_positive_float, default=1.0, help="drive frequency, Hz (%(default)s)")
+    p.add_argument("--seed", type=int, default=0, help="noise seed (%(default)s)")
+    p.add_argument("--out", default="results/demo", help="output folder (%(default)s)")
+    p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser("generate", help="generate records of the paper's protocol")
+    p.add_argument("--setting", help="flywheel setting A0..A6, B1, B2")
+    p.add_argument("--freq", type=_positive_float, help="drive frequency, Hz")
+    p.add_argument("--paper-grid", action="store_true", help="all 27 records of the paper into --out (a folder)")
+    p.add_argument("--out", required=True, help="record file (.csv), or folder with --paper-grid")
+    _add_generator_options(p)
+    p.set_defaults(func=cmd_generate)
+
+    p = sub.add_parser("inspect", help="validate a record and print its summary")
+    p.add_argument("record", help="record CSV file")
+    p.add_argument("--plot", help="also plot the record into this PNG file")
+    p.set_defaults(func=cmd_inspect)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except (CliError, ValueError, OSError, RuntimeError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_FAIL
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,214 @@
+"""The CSV format for records, generated and measured alike, and its validating reader.
+
+A record is a CSV file with the header ``time_s,force_N,accel_m_s2`` (optionally a fourth
+column ``disp_m``), one sample a row, SI units. Its metadata sits either in a JSON file of
+the same name beside it (``run1.csv`` -> ``run1.json``) or in ``# key: value`` lines
+before the header (values that read as numbers become numbers). Known keys:
+``setting`` (A0..B2) or ``m_s`` (kg), ``m_B`` (kg), ``drive_frequency_hz``,
+``sampling_rate_hz``; generated records also carry ``true_parameters`` and ``generator``.
+
+The reader drops, interpolates and reorders nothing: any problem is a
+:class:`RecordError` (a ValueError) with a one-line message naming the file, the line
+or column, and what to do.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..device import SETTINGS
+from ..simulate import UNIFORM_RTOL
+from .record import Record
+
+__all__ = ["RecordError", "read_record", "write_record", "metadata_path", "COLUMNS", "MIN_SAMPLES"]
+
+COLUMNS = ("time_s", "force_N", "accel_m_s2")
+OPTIONAL_COLUMNS = ("disp_m",)
+#: Fewest samples a record may have (a tenth of a second at 1 kHz).
+MIN_SAMPLES = 100
+#: Largest relative mismatch between metadata's sampling rate and the time column.
+RATE_RTOL = 1e-3
+
+
+class RecordError(ValueError):
+    """A record that cannot be used as it is; the message says where and what to do."""
+
+
+def metadata_path(path) -> Path:
+    """The JSON metadata file beside a record: same name, suffix .json."""
+    return Path(path).with_suffix(".json")
+
+
+def _number(text: str):
+    try:
+        value = float(text)
+    except ValueError:
+        return text
+    return int(value) if value.is_integer() and "." not in text and "e" not in text.lower() else value
+
+
+def _check_metadata(path, meta: dict, time: np.ndarray) -> None:
+    where = f"{path}: metadata"
+    name = meta.get("setting")
+    if name is not None and str(name).upper() not in SETTINGS:
+        raise RecordError(f"{where} names an unknown setting {name!r}; use one of {', '.join(SETTINGS)}")
+    for key in ("m_s", "m_B", "drive_frequency_hz", "sampling_rate_hz"):
+        if key in meta and meta[key] is not None:
+            value = meta[key]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+                raise RecordError(f"{where} key {key!r} must be a positive number, got {value!r}")
+    rate = meta.get("sampling_rate_hz")
+    if rate is not None:
+        actual = (len(time) - 1) / (time[-1] - time[0])
+        if abs(actual - rate) > RATE_RTOL * rate:
+            raise RecordError(
+                f"{where} says sampling_rate_hz = {rate:g} but the time column is sampled at "
+                f"{actual:g} Hz; correct one of them"
+            )
+
+
+def _read_metadata(path: Path, header_meta: dict) -> dict:
+    side = metadata_path(path)
+    meta: dict = {}
+    if side.exists():
+        try:
+            meta = json.loads(side.read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise RecordError(f"{side}: not valid JSON ({exc}); fix or remove the metadata file") from None
+        if not isinstance(meta, dict):
+            raise RecordError(f"{side}: metadata must be a JSON object of key: value pairs")
+    for key, value in header_meta.items():
+        if key in meta and meta[key] != value:
+            raise RecordError(
+                f"{path}: header line '# {key}: {value}' contradicts {side.name} ({meta[key]!r}); "
+                "keep one source of metadata"
+            )
+        meta[key] = value
+    return meta
+
+
+def read_record(path) -> Record:
+    """Read and validate a record CSV (and its metadata); raise RecordError if unusable."""
+    path = Path(path)
+    if not path.exists():
+        raise RecordError(f"{path}: no such file; check the path")
+    if path.is_dir():
+        raise RecordError(f"{path}: is a folder, not a record file")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise RecordError(f"{path}: not a text file (byte {exc.start} is not UTF-8); export the record as CSV text") from None
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot be read ({exc.strerror})") from None
+    if not text.strip():
+        raise RecordError(f"{path}: the file is empty; expected a header {','.join(COLUMNS)} and samples")
+    if "\x00" in text:
+        raise RecordError(f"{path}: contains NUL bytes; this is not a CSV text file")
+
+    lines = text.splitlines()
+    header_meta: dict = {}
+    i = 0
+    while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
+        line = lines[i][1:].strip() if lines[i].startswith("#") else ""
+        if line:
+            if ":" not in line:
+                raise RecordError(f"{path}: line {i + 1}: metadata lines read '# key: value'; got {lines[i]!r}")
+            key, value = (part.strip() for part in line.split(":", 1))
+            header_meta[key] = _number(value)
+        i += 1
+    if i == len(lines):
+        raise RecordError(f"{path}: no header line; expected {','.join(COLUMNS)}")
+    header_line = i + 1
+    header = [h.strip() for h in next(csv.reader([lines[i]]))]
+    dupes = sorted({h for h in header if header.count(h) > 1})
+    if dupes:
+        raise RecordError(f"{path}: line {header_line}: column {dupes[0]!r} appears more than once")
+    for col in COLUMNS:
+        if col not in header:
+            raise RecordError(
+                f"{path}: line {header_line}: missing column {col!r} (found {', '.join(header)}); "
+                f"the header must read {','.join(COLUMNS)}[,disp_m] in SI units"
+            )
+    unknown = [h for h in header if h not in COLUMNS + OPTIONAL_COLUMNS]
+    if unknown:
+        raise RecordError(
+            f"{path}: line {header_line}: unknown column {unknown[0]!r}; allowed columns are "
+            f"{', '.join(COLUMNS + OPTIONAL_COLUMNS)} (SI units)"
+        )
+
+    ncol = len(header)
+    data = np.empty((len(lines) - i - 1, ncol))
+    nrow = 0
+    for lineno, row in enumerate(csv.reader(lines[i + 1 :]), start=header_line + 1):
+        if not row or (len(row) == 1 and not row[0].strip()):
+            raise RecordError(f"{path}: line {lineno} is blank; remove blank lines inside the data")
+        if len(row) != ncol:
+            raise RecordError(f"{path}: line {lineno} has {len(row)} fields, expected {ncol} ({','.join(header)})")
+        for j, field in enumerate(row):
+            try:
+                value = float(field)
+            except ValueError:
+                raise RecordError(
+                    f"{path}: line {lineno}, column {header[j]}: {field.strip()!r} is not a number"
+                ) from None
+            if not math.isfinite(value):
+                raise RecordError(
+                    f"{path}: line {lineno}, column {header[j]}: {field.strip()} is not a finite "
+                    "number; repair the sample (the reader interpolates nothing)"
+                )
+            data[nrow, j] = value
+        nrow += 1
+    data = data[:nrow]
+    if nrow < MIN_SAMPLES:
+        raise RecordError(f"{path}: {nrow} samples; a record needs at least {MIN_SAMPLES}")
+
+    col = {name: data[:, header.index(name)] for name in header}
+    t = col["time_s"]
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        k = int(np.argmax(dt <= 0))
+        raise RecordError(
+            f"{path}: line {header_line + k + 2}: time {t[k + 1]!r} s is not after {t[k]!r} s; "
+            "samples must be in strictly increasing time order"
+        )
+    h = (t[-1] - t[0]) / (len(t) - 1)
+    dev = np.abs(dt - h) / h
+    if dev.max() > UNIFORM_RTOL:
+        k = int(np.argmax(dev))
+        raise RecordError(
+            f"{path}: line {header_line + k + 2}: sample interval {dt[k]:.6g} s differs from the "
+            f"mean {h:.6g} s by {dev[k]:.2%}; resample the record uniformly"
+        )
+    meta = _read_metadata(path, header_meta)
+    _check_metadata(path, meta, t)
+    return Record(time=t, force=col["force_N"], accel=col["accel_m_s2"], disp=col.get("disp_m"), metadata=meta)
+
+
+def write_record(path, record: Record, *, overwrite: bool = True) -> tuple[Path, Path]:
+    """Write a record as CSV plus its JSON metadata beside it; return both paths.
+
+    Numbers are written with 17 significant digits, so reading gives the same arrays.
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".csv":
+        raise ValueError(f"{path}: a record file must end in .csv")
+    side = metadata_path(path)
+    if not overwrite and (path.exists() or side.exists()):
+        raise FileExistsError(f"{path} exists; choose another name")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cols = [record.time, record.force, record.accel]
+    header = list(COLUMNS)
+    if record.disp is not None:
+        cols.append(record.disp)
+        header.append("disp_m")
+    data = np.column_stack(cols)
+    tmp = path.with_suffix(".csv.tmp")
+    np.savetxt(tmp, data, fmt="%.17g", delimiter=",", header=",".join(header), comments="")
+    tmp.replace(path)
+    side.write_text(json.dumps(record.metadata, indent=2, sort_keys=True) + "\n")
+    return path, side

@@ -1,0 +1,29 @@
+"""Figure: two generated records (A0 at 0.5 Hz and B2 at 1.5 Hz) as a person would look at them.
+
+Writes results/records/records.png (and the two records beside it). Run:
+``python studies/records_figure.py``.
+"""
+
+from pathlib import Path
+
+from bayes_inerter import paper_parameters
+from bayes_inerter.plots import plot_records
+from bayes_inerter.records import generate_record, write_record
+
+OUT = Path(__file__).resolve().parents[1] / "results" / "records"
+
+
+def main():
+    OUT.mkdir(parents=True, exist_ok=True)
+    records, labels = [], []
+    for seed, (name, freq) in enumerate((("A0", 0.5), ("B2", 1.5))):
+        rec = generate_record(paper_parameters(name), freq, rng=seed, setting_name=name)
+        write_record(OUT / f"{name}_{freq:g}Hz.csv", rec)
+        records.append(rec)
+        labels.append(f"{name} at {freq:g} Hz (paper parameters, default generator)")
+    fig = plot_records(records, labels=labels)
+    fig.savefig(OUT / "records.png", dpi=110)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,88 @@
+import subprocess
+import sys
+
+import pytest
+
+from bayes_inerter.cli import main
+from bayes_inerter.records import read_record
+
+SHORT = ["--duration", "1.0", "--ramp", "0.3"]
+
+
+def test_generate_one_record(tmp_path, capsys):
+    out = tmp_path / "a1.csv"
+    assert main(["generate", "--setting", "A1", "--freq", "1.0", "--out", str(out), *SHORT]) == 0
+    assert f"wrote {out}" in capsys.readouterr().out
+    rec = read_record(out)
+    assert rec.metadata["setting"] == "A1" and rec.metadata["generator"]["duration"] == 1.0
+
+
+def test_generate_paper_grid(tmp_path, capsys):
+    out = tmp_path / "grid"
+    assert main(["generate", "--paper-grid", "--out", str(out), "--duration", "0.3", "--ramp", "0.1"]) == 0
+    files = sorted(p.name for p in out.glob("*.csv"))
+    assert len(files) == 27 and "B2_1.5Hz.csv" in files and "A0_0.5Hz.csv" in files
+    assert capsys.readouterr().out.count("wrote ") == 27
+
+
+def test_inspect_valid(tmp_path, capsys):
+    out = tmp_path / "b2.csv"
+    main(["generate", "--setting", "B2", "--freq", "1.5", "--out", str(out), *SHORT])
+    capsys.readouterr()
+    png = tmp_path / "b2.png"
+    assert main(["inspect", str(out), "--plot", str(png)]) == 0
+    text = capsys.readouterr().out
+    assert "valid record" in text and "duration 1 s" in text and "rate 1000 Hz" in text
+    assert "setting: B2" in text and png.exists()
+
+
+def test_inspect_bad_record(tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time_s,force_N\n0,1\n")
+    png = tmp_path / "bad.png"
+    assert main(["inspect", str(bad), "--plot", str(png)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and "missing column 'accel_m_s2'" in err
+    assert err.count("\n") == 1
+    assert not png.exists()
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["generate", "--setting", "A9", "--freq", "1", "--out", "x.csv"], "unknown flywheel setting"),
+        (["generate", "--setting", "A1", "--out", "x.csv"], "give --setting and --freq"),
+        (["generate", "--setting", "A1", "--freq", "1", "--out", "x.txt"], "must name a .csv file"),
+        (["generate", "--paper-grid", "--out", "x.csv"], "writes a folder"),
+    ],
+)
+def test_generate_bad_input(tmp_path, monkeypatch, capsys, argv, message):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 1
+    assert message in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
+def test_usage_errors_exit_2(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["generate", "--setting", "A1", "--freq", "-1", "--out", "x.csv"])
+    assert info.value.code == 2
+    assert "must be a positive number" in capsys.readouterr().err
+
+
+def test_no_traceback_from_the_console_script(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "bayes_inerter.cli", "inspect", str(tmp_path / "nope.csv")],
+        capture_output=True, text=True,
+    )
+    assert proc.returncode == 1
+    assert "Traceback" not in proc.stderr
+    assert proc.stderr.strip() == f"error: {tmp_path / 'nope.csv'}: no such file; check the path"
+
+
+def test_demo(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    for name in ("demo_fits.png", "demo_record.png", "demo_phi.csv", "A1_1Hz.csv"):
+        assert (tmp_path / name).exists()
+    rows = (tmp_path / "demo_phi.csv").read_text().splitlines()
+    assert rows[0] == "network,phi" and len(rows) == 4
