@@ -1,0 +1,20 @@
+"""Bayesian inference of one record: model, priors, sampler, results, plots."""
+
+from .fit import FitResult, fit_record
+from .model import MODELS, LikelihoodSettings, PosteriorModel
+from .priors import DEFAULT_PRIORS, LogNormal, LogUniform
+from .sampler import CheckpointError, Convergence, run_sampler
+
+__all__ = [
+    "FitResult",
+    "fit_record",
+    "MODELS",
+    "LikelihoodSettings",
+    "PosteriorModel",
+    "DEFAULT_PRIORS",
+    "LogNormal",
+    "LogUniform",
+    "CheckpointError",
+    "Convergence",
+    "run_sampler",
+]

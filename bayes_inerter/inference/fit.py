@@ -1,0 +1,147 @@
+"""Fit one record: the Python API behind ``bayes-inerter fit``.
+
+Writes into the output folder: ``chain.h5`` (the emcee checkpoint, written as it goes),
+``summary.csv``, ``posterior.nc`` (arviz InferenceData), ``corner.png``, ``bands.png``,
+``trace.png``, ``phi.png`` and ``fit.json`` (convergence, settings, versions, timings).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import platform
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..records.record import Record
+from .model import LikelihoodSettings, PosteriorModel
+from .results import posterior_sample, summary_rows, to_inference_data, write_summary
+from .sampler import Convergence, run_sampler
+
+__all__ = ["fit_record", "FitResult", "check_output_folder"]
+
+
+@dataclass
+class FitResult:
+    """What ``fit_record`` produced (files are in ``out``)."""
+
+    out: Path
+    summary: list
+    converged: bool
+    reason: str
+    iterations: int
+    tau: np.ndarray
+    idata: object
+    timings: dict = field(default_factory=dict)
+
+    def row(self, name: str) -> dict:
+        for r in self.summary:
+            if r["name"] == name:
+                return r
+        raise KeyError(name)
+
+
+def check_output_folder(out: Path) -> None:
+    """Refuse, before any work, an output folder that cannot be made or written."""
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{out}: exists and is not a folder")
+    parent = out if out.exists() else next((p for p in out.parents if p.exists()), Path("."))
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ValueError(f"{out}: cannot write there (permission denied); choose another --out")
+
+
+def _versions() -> dict:
+    import arviz
+    import emcee
+    import numba
+    import scipy
+
+    from .. import __version__
+
+    return {"bayes_inerter": __version__, "numpy": np.__version__, "scipy": scipy.__version__,
+            "emcee": emcee.__version__, "arviz": arviz.__version__, "numba": numba.__version__,
+            "python": platform.python_version()}
+
+
+def fit_record(
+    record: Record,
+    out,
+    *,
+    model: str = "two-port",
+    m_s: float | None = None,
+    m_B: float | None = None,
+    walkers: int | None = None,
+    steps: int | None = None,
+    seed: int = 0,
+    fresh: bool = False,
+    processes: int = 1,
+    likelihood: LikelihoodSettings | None = None,
+    priors: dict | None = None,
+    convergence: Convergence | None = None,
+    progress=None,
+    plots: bool = True,
+) -> FitResult:
+    """Sample the posterior of one record and write every output into ``out``.
+
+    Everything that can be checked is checked before sampling starts (record, masses,
+    options, output folder); the folder is not touched if any check fails.
+    """
+    out = Path(out)
+    pm = PosteriorModel(record, model, m_s=m_s, m_B=m_B, priors=priors or {},
+                        likelihood=likelihood or LikelihoodSettings())
+    check_output_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    run = run_sampler(pm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, fresh=fresh,
+                      processes=processes, convergence=convergence, progress=progress)
+    t_sample = time.perf_counter() - t0
+    sample = posterior_sample(pm, run.sampler, run.tau)
+    rows = summary_rows(sample)
+    idata, sims = to_inference_data(pm, sample, rng=np.random.default_rng(seed + 1))
+    t_post = time.perf_counter() - t0 - t_sample
+    write_summary(out / "summary.csv", rows)
+    idata.to_netcdf(str(out / "posterior.nc"))
+    if plots:
+        _write_plots(out, pm, sample, sims)
+    t_total = time.perf_counter() - t0
+    info = {
+        "model": model, "converged": run.converged, "reason": run.reason,
+        "iterations": run.iteration, "walkers": run.sampler.nwalkers, "seed": seed,
+        "tau": dict(zip(pm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
+        "m_s": pm.m_s, "m_B": pm.m_B, "likelihood": dataclasses.asdict(pm.likelihood),
+        "stride": pm.stride, "priors": {n: p.describe() for n, p in pm.all_priors.items()},
+        "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
+        "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total},
+        "versions": _versions(),
+        "record_metadata": record.metadata,
+    }
+    (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
+    return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, idata,
+                     info["timings_s"])
+
+
+def _write_plots(out: Path, pm: PosteriorModel, sample, sims) -> None:
+    import matplotlib.pyplot as plt
+
+    from .plots import plot_bands, plot_corner, plot_phi, plot_trace, reference_values
+
+    meta = pm.record.metadata
+    label = f"{meta.get('setting') or 'record'}" + (
+        f", {pm.record.drive_frequency:g} Hz" if pm.record.drive_frequency else "")
+    flat = sample.values.reshape(-1, len(sample.names))
+    truths, paper = reference_values(sample.names, meta, pm.model)
+    figs = {
+        "corner.png": plot_corner(flat, sample.names, truths=truths, paper=paper,
+                                  title=f"{label}: {pm.model} model"),
+        "bands.png": plot_bands(pm.record.time, pm.measured_lp, sims, freq=pm.record.drive_frequency,
+                                title=f"{label}: posterior predictive acceleration ({pm.model})"),
+        "trace.png": plot_trace(sample.theta, sample.names, burn=sample.burn, thin=sample.thin),
+        "phi.png": plot_phi(sample.phi, title=f"{label}: fit accuracy"),
+    }
+    for name, fig in figs.items():
+        fig.savefig(out / name, dpi=100)
+        plt.close(fig)

@@ -1,0 +1,243 @@
+"""The statistical model: parameters, priors, and the likelihood of one record.
+
+The data are the record's acceleration, compared with the simulated one (driven by the
+record's force) through the same zero-phase low-pass (``records.lowpass``), on a grid
+thinned to every ``stride``-th sample inside the record less ``edge`` seconds at each
+end. The residual is modelled as
+
+- ``"ar1"`` (default): a stationary AR(1) process, r_t = rho r_{t-1} + e_t, e_t ~ N(0, sigma^2),
+  with sigma and rho unknown. Model error leaves residuals far from white; the AR(1)
+  term lets the data say how correlated they are, which keeps intervals honest.
+- ``"iid"``: independent N(0, sigma^2) (MODEL.md section 7 measured it overconfident).
+
+Parameters are sampled as theta = log(value) (see ``priors``); sigma too; rho as is.
+The fit accuracy phi (eq. 5, on the low-passed signals inside the window) is a derived
+quantity of every evaluation.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..device import TABLE_I, InerterParameters, setting as get_setting
+from ..records.conditioning import LOWPASS_HZ, lowpass
+from ..records.record import Record
+from ..simulate import SimulationError, check_record, simulate
+from .priors import DEFAULT_PRIORS, NOISE_PRIORS, RHO_BOUNDS
+
+__all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
+
+PHYSICAL = ("b", "f1_0", "c_f1", "f2_0", "c_f2", "c_n", "k_n", "c_B", "k_B")
+
+#: The nested models: network and the parameters each one frees (the rest fixed).
+#: In ``rigid`` one body carries one friction: f1_0 and c_f1 are the totals (f2 = 0).
+MODELS = {
+    "two-port": ("reduced", PHYSICAL),
+    "rigid": ("rigid", ("b", "f1_0", "c_f1")),
+    "linear": ("linear", ("b", "c_n", "k_n", "c_B", "k_B")),
+}
+
+
+@dataclass(frozen=True)
+class LikelihoodSettings:
+    """How simulated and measured accelerations are compared (all documented defaults).
+
+    Attributes
+    ----------
+    residual : "ar1" (default) or "iid".
+    cutoff : matched low-pass cut-off, Hz (default 30).
+    stride : keep every stride-th sample; None: fs / (2 cutoff), about one sample per
+        correlation length of the low-passed signal (16 at 1 kHz and 30 Hz).
+    edge : seconds left out at each end (zero-phase filter transients), default 0.25 s.
+    """
+
+    residual: str = "ar1"
+    cutoff: float = LOWPASS_HZ
+    stride: int | None = None
+    edge: float = 0.25
+
+    def __post_init__(self) -> None:
+        if self.residual not in ("ar1", "iid"):
+            raise ValueError(f"residual model must be 'ar1' or 'iid', got {self.residual!r}")
+        if not self.cutoff > 0:
+            raise ValueError(f"cut-off must be positive, got {self.cutoff}")
+        if self.stride is not None and not (isinstance(self.stride, int) and self.stride >= 1):
+            raise ValueError(f"stride must be a positive integer, got {self.stride!r}")
+        if not self.edge >= 0:
+            raise ValueError(f"edge must be non-negative, got {self.edge}")
+
+
+def record_masses(record: Record, m_s: float | None = None, m_B: float | None = None) -> tuple[float, float]:
+    """m_s and m_B (kg) from the options, else the record's metadata (m_s, or setting)."""
+    meta = record.metadata
+    if m_s is None:
+        m_s = meta.get("m_s")
+    if m_s is None and meta.get("setting"):
+        m_s = get_setting(meta["setting"]).m_s
+    if m_s is None:
+        raise ValueError(
+            "the screw mass m_s is unknown: give --m-s KG, or put m_s or setting in the record's metadata"
+        )
+    if m_B is None:
+        m_B = meta.get("m_B", TABLE_I["m_B"])
+    for name, value in (("m_s", m_s), ("m_B", m_B)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a positive number of kg, got {value!r}")
+    return float(m_s), float(m_B)
+
+
+@dataclass
+class PosteriorModel:
+    """Log-posterior of one record under one of :data:`MODELS`.
+
+    ``log_prob(theta)`` returns (log posterior, phi); -inf and NaN where the parameters
+    lie outside the prior or the simulation fails.
+    """
+
+    record: Record
+    model: str = "two-port"
+    m_s: float | None = None
+    m_B: float | None = None
+    priors: dict = field(default_factory=dict)
+    likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
+
+    def __post_init__(self) -> None:
+        if self.model not in MODELS:
+            raise ValueError(f"unknown model {self.model!r}; choose one of {', '.join(MODELS)}")
+        rec = self.record
+        check_record(rec.time, rec.force, rec.accel, names=("force", "accel"))
+        self.m_s, self.m_B = record_masses(rec, self.m_s, self.m_B)
+        self.network, self.free = MODELS[self.model]
+        unknown = set(self.priors) - set(PHYSICAL) - set(NOISE_PRIORS)
+        if unknown:
+            raise ValueError(f"priors given for unknown parameters: {', '.join(sorted(unknown))}")
+        self.all_priors = {**DEFAULT_PRIORS, **NOISE_PRIORS, **self.priors}
+        self.names = list(self.free) + ["sigma"] + (["rho"] if self.likelihood.residual == "ar1" else [])
+        self.fs = rec.fs
+        lk = self.likelihood
+        if not lk.cutoff < self.fs / 2:
+            raise ValueError(f"cut-off {lk.cutoff} Hz must be below half the sampling rate {self.fs:g} Hz")
+        self.stride = lk.stride or max(1, int(self.fs / (2 * lk.cutoff)))
+        n_edge = int(round(lk.edge * self.fs))
+        window = np.arange(n_edge, len(rec.time) - n_edge)
+        self.window = window
+        self.grid = window[:: self.stride]
+        if len(self.grid) < 10:
+            raise ValueError(
+                f"only {len(self.grid)} samples left for the likelihood; the record is too short "
+                f"for edge {lk.edge} s and stride {self.stride}"
+            )
+        self.measured_lp = lowpass(rec.accel, self.fs, lk.cutoff)
+        self.observed = self.measured_lp[self.grid]
+        m = self.measured_lp[window]
+        self._phi_norm = float(np.linalg.norm(m - m.mean()))
+        fixed = dict(TABLE_I, m_s=self.m_s, m_B=self.m_B, b=1.0)
+        if self.model == "rigid":
+            fixed.update(f2_0=0.0, c_f2=0.0)
+        self.fixed = fixed
+
+    # -- parameter vectors ---------------------------------------------------------
+    @property
+    def ndim(self) -> int:
+        return len(self.names)
+
+    def bounds(self) -> np.ndarray:
+        """(ndim, 2) bounds of theta (log space; rho as is)."""
+        out = [self.all_priors[n].bounds for n in self.free] + [self.all_priors["sigma"].bounds]
+        if self.likelihood.residual == "ar1":
+            out.append(RHO_BOUNDS)
+        return np.array(out)
+
+    def parameters(self, theta) -> InerterParameters:
+        """The network's parameters at theta."""
+        values = dict(self.fixed)
+        for name, t in zip(self.free, theta):
+            values[name] = math.exp(t)
+        return InerterParameters(**values)
+
+    def to_theta(self, params: InerterParameters, sigma: float, rho: float = 0.0) -> np.ndarray:
+        theta = [math.log(getattr(params, n)) for n in self.free] + [math.log(sigma)]
+        if self.likelihood.residual == "ar1":
+            theta.append(rho)
+        return np.array(theta)
+
+    def values(self, theta) -> dict:
+        """Parameter values (SI units) at theta, by name."""
+        out = {n: math.exp(t) for n, t in zip(self.free, theta)}
+        out["sigma"] = math.exp(theta[len(self.free)])
+        if self.likelihood.residual == "ar1":
+            out["rho"] = float(theta[-1])
+        return out
+
+    # -- densities -------------------------------------------------------------------
+    def log_prior(self, theta) -> float:
+        lp = 0.0
+        for name, t in zip(self.free, theta):
+            lp += self.all_priors[name].logpdf(t)
+        lp += self.all_priors["sigma"].logpdf(theta[len(self.free)])
+        if self.likelihood.residual == "ar1":
+            rho = theta[-1]
+            lo, hi = RHO_BOUNDS
+            lp += -math.log(hi - lo) if lo <= rho <= hi else -math.inf
+        return lp
+
+    def simulate_lp(self, theta) -> np.ndarray:
+        """Low-passed simulated acceleration over the whole record."""
+        a = simulate(self.parameters(theta), self.record.time, self.record.force, network=self.network)
+        return lowpass(a, self.fs, self.likelihood.cutoff)
+
+    def phi(self, sim_lp: np.ndarray) -> float:
+        w = self.window
+        return 1.0 - float(np.linalg.norm(sim_lp[w] - self.measured_lp[w])) / self._phi_norm
+
+    def pointwise_loglik(self, residual: np.ndarray, sigma: float, rho: float = 0.0) -> np.ndarray:
+        """Log-likelihood of each kept residual (AR(1): conditional on the one before)."""
+        if self.likelihood.residual == "iid" or rho == 0.0:
+            var0 = sigma * sigma
+            innov = residual
+            out = -0.5 * (innov * innov / var0 + math.log(2 * math.pi * var0))
+            return out
+        out = np.empty_like(residual)
+        var = sigma * sigma
+        var0 = var / (1 - rho * rho)
+        out[0] = -0.5 * (residual[0] ** 2 / var0 + math.log(2 * math.pi * var0))
+        innov = residual[1:] - rho * residual[:-1]
+        out[1:] = -0.5 * (innov * innov / var + math.log(2 * math.pi * var))
+        return out
+
+    def noise(self, theta) -> tuple[float, float]:
+        sigma = math.exp(theta[len(self.free)])
+        rho = float(theta[-1]) if self.likelihood.residual == "ar1" else 0.0
+        return sigma, rho
+
+    def evaluate(self, theta):
+        """(log prior, pointwise log-likelihood, low-passed simulation) at theta."""
+        lp = self.log_prior(theta)
+        if not math.isfinite(lp):
+            return lp, None, None
+        try:
+            sim = self.simulate_lp(theta)
+        except (SimulationError, ValueError):
+            return -math.inf, None, None
+        if not np.all(np.isfinite(sim)):
+            return -math.inf, None, None
+        sigma, rho = self.noise(theta)
+        ll = self.pointwise_loglik(sim[self.grid] - self.observed, sigma, rho)
+        return lp, ll, sim
+
+    def log_prob(self, theta):
+        """(log posterior, phi) at theta."""
+        lp, ll, sim = self.evaluate(np.asarray(theta, dtype=float))
+        if ll is None:
+            return -math.inf, math.nan
+        total = lp + float(ll.sum())
+        if not math.isfinite(total):
+            return -math.inf, math.nan
+        return total, self.phi(sim)
+
+    def replace(self, **changes) -> PosteriorModel:
+        return dataclasses.replace(self, **changes)

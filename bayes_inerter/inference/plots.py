@@ -1,0 +1,135 @@
+"""Plots of a posterior: corner, credible bands, traces, phi. Each returns the figure."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..device import TABLE_I  # noqa: E402
+
+__all__ = ["plot_corner", "plot_bands", "plot_trace", "plot_phi", "reference_values"]
+
+UNITS = {"b": "kg", "f1_0": "N", "c_f1": "N s/m", "f2_0": "N", "c_f2": "N s/m", "c_n": "N s/m",
+         "k_n": "N/m", "c_B": "N s/m", "k_B": "N/m", "sigma": "m/s²", "rho": ""}
+
+
+def _label(name: str) -> str:
+    unit = UNITS.get(name, "")
+    return f"log10 {name} [{unit}]" if name != "rho" else "rho"
+
+
+def _to_plot(name, x):
+    return x if name == "rho" else np.log10(x)
+
+
+def reference_values(names, metadata: dict, model: str):
+    """(truth, paper) values for the corner plot's markers, None where they do not apply.
+
+    The truth comes from a generated record's metadata; the paper's values are Table I
+    (and Table 2's b for the record's setting). In the rigid model f1_0 and c_f1 are the
+    totals, so the paper's split values are not marked there.
+    """
+    from ..device import SETTINGS
+
+    truth = metadata.get("true_parameters") or {}
+    setting = metadata.get("setting")
+    paper = dict(TABLE_I)
+    if setting and str(setting).upper() in SETTINGS:
+        paper["b"] = SETTINGS[str(setting).upper()].b_paper
+    t_out, p_out = [], []
+    for n in names:
+        t = truth.get(n)
+        p = paper.get(n)
+        if model == "rigid" and n in ("f1_0", "c_f1"):
+            t = None if t is None else truth.get(n) + truth.get(n.replace("1", "2"), 0.0)
+            p = None
+        t_out.append(None if t is None else _to_plot(n, t))
+        p_out.append(None if p is None else _to_plot(n, p))
+    return t_out, p_out
+
+
+def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: str = ""):
+    """Corner plot of (n, ndim) draws in SI units, drawn in log10 (rho as is)."""
+    import corner
+
+    x = np.column_stack([_to_plot(n, values[:, i]) for i, n in enumerate(names)])
+    fig = corner.corner(
+        x, labels=[_label(n) for n in names], truths=truths, truth_color="tab:blue",
+        quantiles=[0.03, 0.5, 0.97], show_titles=True, title_fmt=".3g",
+        title_kwargs={"fontsize": 8}, label_kwargs={"fontsize": 8}, plot_datapoints=False,
+    )
+    if paper is not None and any(p is not None for p in paper):
+        corner.overplot_lines(fig, [np.nan if p is None else p for p in paper], color="tab:red", ls="--")
+    fig.suptitle(title + "\nblue: truth of a generated record; red dashed: the paper's values", fontsize=10)
+    return fig
+
+
+def _reversal_time(time, accel_lp, freq):
+    """A velocity reversal in the last full cycle: where the integrated, high-passed
+    acceleration (the velocity, up to drift) crosses zero."""
+    from scipy import signal
+
+    fs = (len(time) - 1) / (time[-1] - time[0])
+    v = np.cumsum(accel_lp) / fs
+    sos = signal.butter(2, max(0.1 * (freq or 1.0), 0.05), btype="highpass", fs=fs, output="sos")
+    v = signal.sosfiltfilt(sos, v)
+    period = 1.0 / (freq or 1.0)
+    sel = np.flatnonzero((time > time[-1] - 1.5 * period) & (time < time[-1] - 0.3 * period))
+    crossings = sel[np.flatnonzero(np.diff(np.sign(v[sel])) != 0)]
+    return time[crossings[0]] if len(crossings) else time[-1] - period
+
+
+def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, title: str = ""):
+    """Median, 50 % and 94 % bands of simulated low-passed acceleration over the
+    measured one: the whole record and a zoom on a velocity reversal."""
+    q = np.percentile(sims, [3, 25, 50, 75, 97], axis=0)
+    t_rev = _reversal_time(time, measured_lp, freq)
+    span = 0.12 / (freq or 1.0)
+    fig, axes = plt.subplots(2, 1, figsize=(10, 7), layout="constrained")
+    for ax, window in zip(axes, (None, (t_rev - span, t_rev + span))):
+        sel = slice(None) if window is None else (time >= window[0]) & (time <= window[1])
+        ax.fill_between(time[sel], q[0][sel], q[4][sel], color="tab:orange", alpha=0.3, lw=0, label="94 % band")
+        ax.fill_between(time[sel], q[1][sel], q[3][sel], color="tab:orange", alpha=0.6, lw=0, label="50 % band")
+        ax.plot(time[sel], q[2][sel], color="tab:red", lw=0.8, label="posterior median")
+        ax.plot(time[sel], measured_lp[sel], color="k", lw=0.8, label="measured")
+        ax.set_ylabel("acceleration, low-passed (m/s²)")
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[0].set_title(title)
+    axes[1].set_title(f"zoom on a velocity reversal near {t_rev:.2f} s", fontsize=9)
+    axes[1].set_xlabel("time (s)")
+    return fig
+
+
+def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1):
+    """Walker traces of every parameter as sampled (log values), after burn-in.
+
+    ``theta`` has shape (walkers, draws, ndim) from the kept (thinned) chain."""
+    ndim = theta.shape[2]
+    fig, axes = plt.subplots(ndim, 1, figsize=(9, 1.3 * ndim + 1), sharex=True, layout="constrained")
+    axes = np.atleast_1d(axes)
+    steps = burn + thin * np.arange(theta.shape[1])
+    for i, ax in enumerate(axes):
+        y = theta[:, :, i] / (1 if names[i] == "rho" else np.log(10))
+        ax.plot(steps, y.T, lw=0.4, alpha=0.5)
+        ax.set_ylabel(_label(names[i]), fontsize=7)
+        ax.tick_params(labelsize=7)
+    axes[-1].set_xlabel(f"step (burn-in of {burn} steps discarded, every {thin}th shown)")
+    return fig
+
+
+def plot_phi(phi: np.ndarray, *, paper: float | None = None, title: str = ""):
+    """Posterior of the fit accuracy phi (eq. 5, low-passed)."""
+    fig, ax = plt.subplots(figsize=(6, 3.5), layout="constrained")
+    ax.hist(phi.ravel() * 100, bins=50, color="tab:green", alpha=0.8)
+    if paper is not None:
+        ax.axvline(paper * 100, color="tab:red", ls="--", label=f"paper: {paper:.1%}")
+        ax.legend(fontsize=8)
+    ax.set_xlabel("fit accuracy φ (%), low-passed")
+    ax.set_ylabel("draws")
+    ax.set_title(title, fontsize=10)
+    return fig

@@ -1,0 +1,101 @@
+"""Priors on the physical parameters, in the log space where they are sampled.
+
+Every parameter of the network is positive and may lie anywhere across orders of
+magnitude, so each is sampled as theta = log(value) with a prior that is uniform in
+theta between two bounds (log-uniform in the value) or normal in theta (log-normal).
+The defaults (:data:`DEFAULT_PRIORS`) are **assumptions** of this package, wide enough
+to hold the paper's values with orders of magnitude to spare; a user passes others.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["LogUniform", "LogNormal", "DEFAULT_PRIORS", "NOISE_PRIORS"]
+
+
+@dataclass(frozen=True)
+class LogUniform:
+    """log(value) uniform on [log(low), log(high)]; value in the units of its parameter."""
+
+    low: float
+    high: float
+
+    def __post_init__(self) -> None:
+        if not (0 < self.low < self.high < math.inf):
+            raise ValueError(f"LogUniform needs 0 < low < high < inf, got {self.low}, {self.high}")
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        """Bounds in log space."""
+        return math.log(self.low), math.log(self.high)
+
+    def logpdf(self, theta: float) -> float:
+        lo, hi = self.bounds
+        return -math.log(hi - lo) if lo <= theta <= hi else -math.inf
+
+    def sample(self, rng: np.random.Generator, size=None):
+        lo, hi = self.bounds
+        return rng.uniform(lo, hi, size)
+
+    def describe(self) -> str:
+        return f"log-uniform on [{self.low:g}, {self.high:g}]"
+
+
+@dataclass(frozen=True)
+class LogNormal:
+    """log(value) normal with median ``median`` and log-space sd ``sigma``, truncated to
+    +- ``width`` sd (so the sampler and optimiser have bounds)."""
+
+    median: float
+    sigma: float
+    width: float = 5.0
+
+    def __post_init__(self) -> None:
+        if not (self.median > 0 and self.sigma > 0 and self.width > 0):
+            raise ValueError("LogNormal needs positive median, sigma and width")
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        mu = math.log(self.median)
+        return mu - self.width * self.sigma, mu + self.width * self.sigma
+
+    def logpdf(self, theta: float) -> float:
+        lo, hi = self.bounds
+        if not lo <= theta <= hi:
+            return -math.inf
+        z = (theta - math.log(self.median)) / self.sigma
+        return -0.5 * z * z - math.log(self.sigma * math.sqrt(2 * math.pi))
+
+    def sample(self, rng: np.random.Generator, size=None):
+        lo, hi = self.bounds
+        x = rng.normal(math.log(self.median), self.sigma, size)
+        return np.clip(x, lo, hi)
+
+    def describe(self) -> str:
+        return f"log-normal, median {self.median:g}, log-sd {self.sigma:g}"
+
+
+#: Default priors (SI units). Each spans at least three orders of magnitude around the
+#: paper's value (Table I; b across all nine flywheel settings).
+DEFAULT_PRIORS = {
+    "b": LogUniform(100.0, 1e5),  # kg
+    "f1_0": LogUniform(1.0, 1e4),  # N
+    "c_f1": LogUniform(1e-3, 1e5),  # N s/m
+    "f2_0": LogUniform(1e-2, 1e4),  # N
+    "c_f2": LogUniform(1e-1, 1e5),  # N s/m
+    "c_n": LogUniform(1e3, 1e8),  # N s/m
+    "k_n": LogUniform(1e3, 1e9),  # N/m
+    "c_B": LogUniform(1e-3, 1e6),  # N s/m
+    "k_B": LogUniform(1e5, 1e10),  # N/m
+}
+
+#: Priors of the residual model: scale (m/s^2, log-uniform) and AR(1) coefficient
+#: (uniform on [-0.99, 0.99], sampled as is).
+NOISE_PRIORS = {
+    "sigma": LogUniform(1e-5, 10.0),
+}
+RHO_BOUNDS = (-0.99, 0.99)

@@ -1,0 +1,167 @@
+"""From a finished chain to arviz's InferenceData, a summary table and predictive draws.
+
+- burn-in: 2 x the largest autocorrelation time (or half the chain if tau is not
+  estimable); thinning: half the smallest tau;
+- the posterior (values in SI units, not logs) and phi, the fit accuracy, for every kept
+  draw; sample_stats holds the log posterior;
+- for at most ``max_draws`` of those draws (further thinned): the pointwise
+  log-likelihood (so models compare by LOO) and the posterior predictive acceleration on
+  the likelihood's grid (simulation plus AR(1) noise); observed_data is the low-passed
+  measured acceleration on that grid.
+
+Summary columns are written by this package from arviz's numbers, so they do not change
+with the arviz line: name, mean, sd, hdi_3%, hdi_97%, r_hat, ess_bulk, ess_tail.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model import PosteriorModel
+
+__all__ = ["PosteriorSample", "posterior_sample", "to_inference_data", "summary_rows", "write_summary",
+           "SUMMARY_COLUMNS", "MAX_DRAWS"]
+
+SUMMARY_COLUMNS = ("name", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail")
+MAX_DRAWS = 600  # draws that get a simulation for log-likelihood and predictive
+
+
+@dataclass
+class PosteriorSample:
+    """Kept draws after burn-in: values (chain=walker, draw, name) and phi."""
+
+    names: list
+    values: np.ndarray  # (walkers, draws, ndim) in SI units
+    theta: np.ndarray  # (walkers, draws, ndim) as sampled
+    phi: np.ndarray  # (walkers, draws)
+    lp: np.ndarray  # (walkers, draws)
+    burn: int
+    thin: int
+
+    def as_dict(self) -> dict:
+        out = {n: self.values[:, :, i] for i, n in enumerate(self.names)}
+        out["phi"] = self.phi
+        return out
+
+
+def _to_values(model: PosteriorModel, theta: np.ndarray) -> np.ndarray:
+    vals = np.exp(theta)
+    if model.likelihood.residual == "ar1":
+        vals[..., -1] = theta[..., -1]  # rho is sampled as is
+    return vals
+
+
+def posterior_sample(model: PosteriorModel, sampler, tau) -> PosteriorSample:
+    n = sampler.iteration
+    if np.all(np.isfinite(tau)) and 2 * np.max(tau) < n - 10:
+        burn = int(2 * np.max(tau))
+        thin = max(1, int(0.5 * np.min(tau)))
+    else:
+        burn, thin = n // 2, 1
+    chain = sampler.get_chain(discard=burn, thin=thin)  # (draws, walkers, ndim)
+    blobs = sampler.get_blobs(discard=burn, thin=thin)
+    lp = sampler.get_log_prob(discard=burn, thin=thin)
+    theta = np.transpose(chain, (1, 0, 2))
+    return PosteriorSample(
+        names=list(model.names), values=_to_values(model, theta), theta=theta,
+        phi=np.asarray(blobs, dtype=float).T, lp=lp.T, burn=burn, thin=thin,
+    )
+
+
+def _subset(sample: PosteriorSample, max_draws: int):
+    walkers, draws = sample.phi.shape
+    step = max(1, math.ceil(walkers * draws / max_draws))
+    return np.arange(draws - 1, -1, -step)[::-1]
+
+
+def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np.random.Generator,
+                      max_draws: int = MAX_DRAWS, keep_sims: int = 200):
+    """InferenceData of the kept draws; also the full-rate low-passed simulations of up to
+    ``keep_sims`` draws (for credible bands), shape (n, K)."""
+    import arviz as az
+
+    idx = _subset(sample, max_draws)
+    theta = sample.theta[:, idx]
+    walkers, draws, _ = theta.shape
+    n_grid = len(model.grid)
+    loglik = np.empty((walkers, draws, n_grid))
+    pred = np.empty((walkers, draws, n_grid))
+    sims = []
+    sim_every = max(1, math.ceil(walkers * draws / keep_sims))
+    k = 0
+    for w in range(walkers):
+        for d in range(draws):
+            _, ll, sim = model.evaluate(theta[w, d])
+            if ll is None:  # cannot happen for accepted draws, but never write garbage
+                loglik[w, d] = np.nan
+                pred[w, d] = np.nan
+                continue
+            loglik[w, d] = ll
+            sigma, rho = model.noise(theta[w, d])
+            pred[w, d] = sim[model.grid] + _ar1_noise(rng, n_grid, sigma, rho)
+            if k % sim_every == 0:
+                sims.append(sim)
+            k += 1
+    posterior = {n: sample.values[:, idx, i] for i, n in enumerate(sample.names)}
+    posterior["phi"] = sample.phi[:, idx]
+    coords = {"time": model.record.time[model.grid]}
+    dims = {"accel": ["time"]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        idata = az.from_dict(
+            posterior=posterior,
+            log_likelihood={"accel": loglik},
+            posterior_predictive={"accel": pred},
+            observed_data={"accel": model.observed},
+            sample_stats={"lp": sample.lp[:, idx]},
+            coords=coords,
+            dims=dims,
+        )
+    return idata, np.array(sims)
+
+
+def _ar1_noise(rng, n, sigma, rho):
+    e = rng.standard_normal(n) * sigma
+    if rho == 0.0:
+        return e
+    out = np.empty(n)
+    out[0] = e[0] / math.sqrt(1 - rho * rho)
+    for i in range(1, n):
+        out[i] = rho * out[i - 1] + e[i]
+    return out
+
+
+def summary_rows(sample: PosteriorSample) -> list[dict]:
+    """One row per parameter (and phi) with the summary columns, from the kept draws."""
+    import arviz as az
+
+    rows = []
+    data = sample.as_dict()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name, x in data.items():
+            hdi = az.hdi(x.ravel(), hdi_prob=0.94)
+            rows.append({
+                "name": name,
+                "mean": float(np.mean(x)),
+                "sd": float(np.std(x, ddof=1)),
+                "hdi_3%": float(hdi[0]),
+                "hdi_97%": float(hdi[1]),
+                "r_hat": float(az.rhat(x)),
+                "ess_bulk": float(az.ess(x, method="bulk")),
+                "ess_tail": float(az.ess(x, method="tail")),
+            })
+    return rows
+
+
+def write_summary(path, rows: list[dict]) -> None:
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(SUMMARY_COLUMNS)
+        for r in rows:
+            w.writerow([r["name"]] + [f"{r[c]:.10g}" for c in SUMMARY_COLUMNS[1:]])

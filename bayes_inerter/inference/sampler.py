@@ -1,0 +1,256 @@
+"""Sampling with emcee: HDF5 checkpoints, resume, and a convergence loop.
+
+The chain is written to an HDF5 file (emcee's ``HDFBackend``) at every step, with the
+sampler's random state, so a run that is killed can be continued: running again with the
+same checkpoint adds only the missing steps, and the steps already taken are kept as
+they are. A checkpoint written for another model, record or number of walkers is
+refused with a one-line error rather than overwritten.
+
+Convergence (documented defaults, :class:`Convergence`): emcee's integrated
+autocorrelation time tau (``get_autocorr_time(tol=0)``) per parameter, checked every
+``check_every`` steps; converged when the chain is longer than ``n_tau`` times the
+largest tau, tau moved less than ``tau_rtol`` since the last check, and, after
+discarding 2 tau of burn-in, R-hat < ``max_rhat`` and bulk ESS >= ``min_ess`` (arviz,
+treating walkers as chains: they are not independent, so R-hat here is a check that no
+walker is stuck apart from the others, not a proof). Or stops at ``max_steps``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import multiprocessing
+from dataclasses import dataclass
+
+import emcee
+import numpy as np
+
+from .model import PosteriorModel
+
+__all__ = ["Convergence", "CheckpointError", "SamplerRun", "run_sampler", "record_digest"]
+
+#: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
+DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
+#: Spread of the initial walker ball in theta (log space), around the optimum.
+BALL = 1e-3
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be continued (corrupt, or made for another run)."""
+
+
+@dataclass(frozen=True)
+class Convergence:
+    """When an open-ended run stops (see module docstring)."""
+
+    n_tau: float = 50.0
+    tau_rtol: float = 0.05
+    max_rhat: float = 1.05
+    min_ess: float = 400.0
+    check_every: int = 500
+    max_steps: int = 20_000
+
+
+@dataclass
+class SamplerRun:
+    """What a run produced: the sampler (chain in its backend) and convergence facts."""
+
+    sampler: emcee.EnsembleSampler
+    converged: bool
+    tau: np.ndarray
+    reason: str
+    start_theta: np.ndarray | None = None
+
+    @property
+    def iteration(self) -> int:
+        return self.sampler.iteration
+
+
+def record_digest(model: PosteriorModel) -> str:
+    """Identity of the data a checkpoint belongs to (record arrays and model settings)."""
+    h = hashlib.sha256()
+    rec = model.record
+    for arr in (rec.time, rec.force, rec.accel):
+        h.update(np.ascontiguousarray(arr, dtype=float).tobytes())
+    h.update(repr((model.model, model.names, model.m_s, model.m_B, model.likelihood, sorted(
+        (k, repr(v)) for k, v in model.all_priors.items()))).encode())
+    return h.hexdigest()[:16]
+
+
+# The log-probability for worker processes: a top-level function over a module global set
+# before the pool forks, so that only the parameter vector is pickled per call.
+_MODEL: PosteriorModel | None = None
+
+
+def _log_prob(theta):
+    return _MODEL.log_prob(theta)
+
+
+def _open_backend(path, model: PosteriorModel, nwalkers: int, fresh: bool):
+    """An HDF backend ready to sample into, and the steps it already holds."""
+    import h5py
+
+    digest = record_digest(model)
+    if fresh and path.exists():
+        path.unlink()  # the user asked to start over
+    backend = emcee.backends.HDFBackend(str(path), name="mcmc")
+    if not path.exists():
+        return backend, 0, digest
+    try:
+        with h5py.File(path, "r") as f:
+            if "mcmc" not in f:
+                return backend, 0, digest
+            attrs = dict(f["mcmc"].attrs)
+        iteration = backend.iteration
+        shape = backend.shape
+    except Exception as exc:  # h5py raises OSError, KeyError, ValueError for damaged files
+        raise CheckpointError(
+            f"{path}: checkpoint is unreadable or truncated ({type(exc).__name__}); "
+            "move it away to keep it, or run with --fresh to start over"
+        ) from None
+    if attrs.get("bayes_inerter_digest") != digest:
+        raise CheckpointError(
+            f"{path}: checkpoint belongs to another record, model or settings; "
+            "use another output folder, or --fresh to start over"
+        )
+    if shape != (nwalkers, model.ndim):
+        raise CheckpointError(
+            f"{path}: checkpoint has {shape[0]} walkers and {shape[1]} parameters, this run "
+            f"{nwalkers} and {model.ndim}; use the same --walkers, or --fresh"
+        )
+    return backend, iteration, digest
+
+
+def _initial_ball(theta: np.ndarray, model: PosteriorModel, nwalkers: int, rng: np.random.Generator):
+    bounds = model.bounds()
+    p0 = theta + BALL * rng.standard_normal((nwalkers, len(theta))) * (bounds[:, 1] - bounds[:, 0])
+    return np.clip(p0, bounds[:, 0] + 1e-9, bounds[:, 1] - 1e-9)
+
+
+def _diagnostics(sampler, conv: Convergence):
+    from .diagnostics import rhat_ess
+
+    tau = sampler.get_autocorr_time(tol=0)
+    burn = int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else sampler.iteration // 2
+    rhat, ess = rhat_ess(sampler.get_chain(discard=min(burn, sampler.iteration - 2)))
+    return tau, rhat, ess
+
+
+def run_sampler(
+    model: PosteriorModel,
+    checkpoint,
+    *,
+    nwalkers: int | None = None,
+    steps: int | None = None,
+    seed: int = 0,
+    fresh: bool = False,
+    processes: int = 1,
+    convergence: Convergence | None = None,
+    moves=None,
+    progress=None,
+    start=None,
+) -> SamplerRun:
+    """Sample the posterior of ``model`` into the HDF5 file ``checkpoint``.
+
+    Parameters
+    ----------
+    nwalkers : walkers (default: 4 x parameters, even).
+    steps : run exactly this many steps in all (continuing a checkpoint adds only what is
+        missing); None runs until converged or ``convergence.max_steps``.
+    seed : seeds the optimiser, the initial ball and the sampler's random state.
+    fresh : start over even if the checkpoint holds steps.
+    processes : worker processes evaluating walkers in parallel (1: none).
+    progress : callable(iteration, target or None), called after each step.
+    start : optional (theta, log prob) to start from instead of the optimiser.
+    """
+    from pathlib import Path
+
+    global _MODEL
+    conv = convergence or Convergence()
+    checkpoint = Path(checkpoint)
+    nwalkers = nwalkers or 2 * ((4 * model.ndim + 1) // 2)
+    if nwalkers < 2 * model.ndim or nwalkers % 2:
+        raise ValueError(f"walkers must be even and at least {2 * model.ndim} (twice the parameters), got {nwalkers}")
+    if steps is not None and steps < 1:
+        raise ValueError(f"steps must be a positive number, got {steps}")
+    backend, done, digest = _open_backend(checkpoint, model, nwalkers, fresh)
+    if done == 0:
+        backend.reset(nwalkers, model.ndim)
+        with backend.open("a") as f:
+            f["mcmc"].attrs["bayes_inerter_digest"] = digest
+            f["mcmc"].attrs["parameter_names"] = ",".join(model.names)
+    _MODEL = model
+    pool = multiprocessing.get_context("fork").Pool(processes) if processes > 1 else None
+    try:
+        sampler = emcee.EnsembleSampler(
+            nwalkers, model.ndim, _log_prob, pool=pool, moves=moves or DEFAULT_MOVES,
+            backend=backend, blobs_dtype=float,
+        )
+        start_theta = None
+        if done == 0:
+            rng = np.random.default_rng(seed)
+            if start is None:
+                from .optimize import find_start
+
+                start = find_start(model, rng)
+            start_theta = np.asarray(start[0], dtype=float)
+            sampler.random_state = np.random.RandomState(seed).get_state()
+            state = _initial_ball(start_theta, model, nwalkers, rng)
+        else:
+            state = None  # continue from the checkpoint's last state and random state
+        target = steps
+        tau = np.full(model.ndim, np.nan)
+        if steps is not None:
+            n_more = steps - done
+            if n_more > 0:
+                for _ in sampler.sample(state, iterations=n_more, store=True):
+                    if progress:
+                        progress(sampler.iteration, target)
+            tau, rhat, ess = _diagnostics(sampler, conv)
+            ok = _is_converged(sampler.iteration, tau, None, rhat, ess, conv)
+            reason = "converged" if ok else _why_not(sampler.iteration, tau, rhat, ess, conv)
+            return SamplerRun(sampler, ok, tau, reason, start_theta)
+        previous = None
+        while True:
+            chunk = min(conv.check_every, conv.max_steps - sampler.iteration)
+            if chunk > 0:
+                for _ in sampler.sample(state, iterations=chunk, store=True):
+                    if progress:
+                        progress(sampler.iteration, None)
+                state = None
+            tau, rhat, ess = _diagnostics(sampler, conv)
+            if _is_converged(sampler.iteration, tau, previous, rhat, ess, conv):
+                return SamplerRun(sampler, True, tau, "converged", start_theta)
+            if sampler.iteration >= conv.max_steps:
+                return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, tau, rhat, ess, conv), start_theta)
+            previous = tau
+    finally:
+        if pool is not None:
+            pool.close()
+            pool.join()
+        _MODEL = None
+
+
+def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> bool:
+    if not np.all(np.isfinite(tau)):
+        return False
+    if iteration < conv.n_tau * np.max(tau):
+        return False
+    if previous is not None and np.all(np.isfinite(previous)):
+        if np.max(np.abs(tau - previous) / tau) > conv.tau_rtol:
+            return False
+    return bool(np.nanmax(rhat) < conv.max_rhat and np.nanmin(ess) >= conv.min_ess)
+
+
+def _why_not(iteration, tau, rhat, ess, conv: Convergence) -> str:
+    parts = []
+    if np.all(np.isfinite(tau)):
+        need = conv.n_tau * np.max(tau)
+        if iteration < need:
+            parts.append(f"chain of {iteration} steps is shorter than {conv.n_tau:g} tau = {need:.0f}")
+    else:
+        parts.append("autocorrelation time not estimable")
+    if not np.nanmax(rhat) < conv.max_rhat:
+        parts.append(f"max R-hat {np.nanmax(rhat):.3f} >= {conv.max_rhat}")
+    if not np.nanmin(ess) >= conv.min_ess:
+        parts.append(f"min bulk ESS {np.nanmin(ess):.0f} < {conv.min_ess:g}")
+    return "not converged: " + ("; ".join(parts) if parts else "tau still changing")
