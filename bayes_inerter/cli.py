@@ -126,6 +126,56 @@ def cmd_inspect(args) -> int:
     return EXIT_OK
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be at least 1")
+    return value
+
+
+def cmd_fit(args) -> int:
+    import os
+
+    from tqdm import tqdm
+
+    from .inference import fit_record
+    from .inference.model import LikelihoodSettings
+    from .records import read_record
+
+    rec = read_record(args.record)  # refused here, before the output folder is touched
+    bar = tqdm(total=args.steps, desc="sampling", unit="step", file=sys.stderr, disable=None)
+
+    def progress(iteration, target):
+        bar.total = target
+        bar.n = iteration
+        bar.refresh()
+
+    processes = args.processes or min(2, os.cpu_count() or 1)
+    try:
+        result = fit_record(
+            rec, args.out, model=args.model, m_s=args.m_s, walkers=args.walkers, steps=args.steps,
+            seed=args.seed, fresh=args.fresh, processes=processes,
+            likelihood=LikelihoodSettings(residual=args.residual), progress=progress,
+        )
+    finally:
+        bar.close()
+    b = result.row("b")
+    print(f"b = {b['mean']:.6g} kg (94 % HDI {b['hdi_3%']:.6g} to {b['hdi_97%']:.6g}), "
+          f"{result.iterations} steps")
+    phi = result.row("phi")
+    print(f"phi = {phi['mean']:.2%} (94 % HDI {phi['hdi_3%']:.2%} to {phi['hdi_97%']:.2%})")
+    if result.converged:
+        print("converged")
+    else:
+        print(f"warning: {result.reason}; do not trust these intervals yet "
+              "(run again with more --steps, or without --steps)")
+    print(f"wrote {args.out}/summary.csv, posterior.nc, chain.h5, corner.png, bands.png, trace.png, phi.png, fit.json")
+    return EXIT_OK
+
+
 def cmd_demo(args) -> int:
     from .demo import run_demo
 
@@ -155,6 +205,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="record file (.csv), or folder with --paper-grid")
     _add_generator_options(p)
     p.set_defaults(func=cmd_generate)
+
+    p = sub.add_parser("fit", help="sample the posterior of one record with emcee")
+    p.add_argument("record", help="record CSV file")
+    p.add_argument("--out", required=True, help="output folder (a checkpoint there is continued)")
+    p.add_argument("--m-s", type=_positive_float, help="screw mass m_s, kg (else from the record's metadata)")
+    p.add_argument("--model", choices=("two-port", "rigid", "linear"), default="two-port", help="model (%(default)s)")
+    p.add_argument("--walkers", type=_positive_int, help="walkers (default 4 x parameters)")
+    p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
+    p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")
+    p.add_argument("--residual", choices=("ar1", "iid"), default="ar1", help="residual model (%(default)s)")
+    p.add_argument("--processes", type=_positive_int, help="worker processes (default: up to 2)")
+    p.add_argument("--fresh", action="store_true", help="start over instead of continuing the checkpoint")
+    p.set_defaults(func=cmd_fit)
 
     p = sub.add_parser("inspect", help="validate a record and print its summary")
     p.add_argument("record", help="record CSV file")

@@ -20,7 +20,7 @@ import numpy as np
 from ..records.record import Record
 from .model import LikelihoodSettings, PosteriorModel
 from .results import posterior_sample, summary_rows, to_inference_data, write_summary
-from .sampler import Convergence, run_sampler
+from .sampler import Convergence, check_run_options, run_sampler
 
 __all__ = ["fit_record", "FitResult", "check_output_folder"]
 
@@ -93,6 +93,7 @@ def fit_record(
     out = Path(out)
     pm = PosteriorModel(record, model, m_s=m_s, m_B=m_B, priors=priors or {},
                         likelihood=likelihood or LikelihoodSettings())
+    check_run_options(pm.ndim, walkers, steps)
     check_output_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

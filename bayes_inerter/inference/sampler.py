@@ -26,7 +26,7 @@ import numpy as np
 
 from .model import PosteriorModel
 
-__all__ = ["Convergence", "CheckpointError", "SamplerRun", "run_sampler", "record_digest"]
+__all__ = ["Convergence", "CheckpointError", "SamplerRun", "run_sampler", "record_digest", "check_run_options"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
@@ -135,6 +135,16 @@ def _diagnostics(sampler, conv: Convergence):
     return tau, rhat, ess
 
 
+def check_run_options(ndim: int, nwalkers: int | None, steps: int | None) -> int:
+    """Validate walkers and steps; return the number of walkers (default 4 x ndim, even)."""
+    nwalkers = nwalkers or 2 * ((4 * ndim + 1) // 2)
+    if nwalkers < 2 * ndim or nwalkers % 2:
+        raise ValueError(f"walkers must be even and at least {2 * ndim} (twice the parameters), got {nwalkers}")
+    if steps is not None and steps < 1:
+        raise ValueError(f"steps must be a positive number, got {steps}")
+    return nwalkers
+
+
 def run_sampler(
     model: PosteriorModel,
     checkpoint,
@@ -167,11 +177,7 @@ def run_sampler(
     global _MODEL
     conv = convergence or Convergence()
     checkpoint = Path(checkpoint)
-    nwalkers = nwalkers or 2 * ((4 * model.ndim + 1) // 2)
-    if nwalkers < 2 * model.ndim or nwalkers % 2:
-        raise ValueError(f"walkers must be even and at least {2 * model.ndim} (twice the parameters), got {nwalkers}")
-    if steps is not None and steps < 1:
-        raise ValueError(f"steps must be a positive number, got {steps}")
+    nwalkers = check_run_options(model.ndim, nwalkers, steps)
     backend, done, digest = _open_backend(checkpoint, model, nwalkers, fresh)
     if done == 0:
         backend.reset(nwalkers, model.ndim)
@@ -196,7 +202,8 @@ def run_sampler(
             sampler.random_state = np.random.RandomState(seed).get_state()
             state = _initial_ball(start_theta, model, nwalkers, rng)
         else:
-            state = None  # continue from the checkpoint's last state and random state
+            # continue from the checkpoint's last state, with its random state
+            state = backend.get_last_sample()
         target = steps
         tau = np.full(model.ndim, np.nan)
         if steps is not None:
@@ -216,7 +223,7 @@ def run_sampler(
                 for _ in sampler.sample(state, iterations=chunk, store=True):
                     if progress:
                         progress(sampler.iteration, None)
-                state = None
+                state = sampler.get_last_sample()
             tau, rhat, ess = _diagnostics(sampler, conv)
             if _is_converged(sampler.iteration, tau, previous, rhat, ess, conv):
                 return SamplerRun(sampler, True, tau, "converged", start_theta)

@@ -1,0 +1,96 @@
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from bayes_inerter import paper_parameters
+from bayes_inerter.inference import LikelihoodSettings, LogNormal, LogUniform, PosteriorModel
+from bayes_inerter.records import GeneratorSettings, Record, generate_record
+
+
+@pytest.fixture(scope="module")
+def record():
+    return generate_record(paper_parameters("A2"), 1.5, settings=GeneratorSettings(duration=3.0, ramp=1.0),
+                           rng=3, setting_name="A2")
+
+
+def test_log_prob_at_truth(record):
+    m = PosteriorModel(record)
+    p = paper_parameters("A2")
+    lp, phi = m.log_prob(m.to_theta(p, 0.003, 0.0))
+    assert math.isfinite(lp) and phi > 0.95
+    assert m.names == ["b", "f1_0", "c_f1", "f2_0", "c_f2", "c_n", "k_n", "c_B", "k_B", "sigma", "rho"]
+    # 10 % off in b is far less probable
+    lp_off, phi_off = m.log_prob(m.to_theta(dataclasses.replace(p, b=1.1 * p.b), 0.003, 0.0))
+    assert lp_off < lp - 10 and phi_off < phi
+
+
+def test_outside_prior(record):
+    m = PosteriorModel(record)
+    theta = m.to_theta(paper_parameters("A2"), 0.003, 0.0)
+    theta[0] = math.log(1e7)  # b beyond the prior's bound
+    assert m.log_prob(theta)[0] == -math.inf
+    theta = m.to_theta(paper_parameters("A2"), 0.003, 0.999)  # rho beyond 0.99
+    assert m.log_prob(theta)[0] == -math.inf
+
+
+def test_ar1_loglik_is_the_multivariate_normal(record):
+    m = PosteriorModel(record)
+    rng = np.random.default_rng(0)
+    r = rng.standard_normal(30)
+    sigma, rho = 0.7, 0.6
+    n = len(r)
+    cov = sigma**2 / (1 - rho**2) * rho ** np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+    expected = stats.multivariate_normal(np.zeros(n), cov).logpdf(r)
+    assert m.pointwise_loglik(r, sigma, rho).sum() == pytest.approx(expected, rel=1e-10)
+    iid = PosteriorModel(record, likelihood=LikelihoodSettings(residual="iid"))
+    assert iid.pointwise_loglik(r, sigma).sum() == pytest.approx(stats.norm(0, sigma).logpdf(r).sum())
+    assert iid.names[-1] == "sigma"
+
+
+def test_nested_models(record):
+    rigid = PosteriorModel(record, "rigid")
+    assert rigid.names == ["b", "f1_0", "c_f1", "sigma", "rho"]
+    assert rigid.fixed["f2_0"] == 0.0
+    linear = PosteriorModel(record, "linear")
+    assert linear.names == ["b", "c_n", "k_n", "c_B", "k_B", "sigma", "rho"]
+    p = paper_parameters("A2")
+    lp, phi = rigid.log_prob(rigid.to_theta(dataclasses.replace(p, f1_0=p.f1_0 + p.f2_0, c_f1=p.c_f1 + p.c_f2), 0.01, 0.0))
+    assert math.isfinite(lp) and phi > 0.5
+
+
+def test_masses_from_metadata_or_options(record):
+    assert PosteriorModel(record).m_s == 19.594
+    bare = Record(record.time, record.force, record.accel)
+    with pytest.raises(ValueError, match="m_s is unknown: give --m-s"):
+        PosteriorModel(bare)
+    assert PosteriorModel(bare, m_s=20.0).m_s == 20.0
+    with pytest.raises(ValueError, match="m_s must be a positive number"):
+        PosteriorModel(bare, m_s=-1.0)
+
+
+def test_bad_model_options(record):
+    with pytest.raises(ValueError, match="unknown model 'fig6'"):
+        PosteriorModel(record, "fig6")
+    with pytest.raises(ValueError, match="priors given for unknown parameters: zeta"):
+        PosteriorModel(record, priors={"zeta": LogUniform(1.0, 2.0)})
+    with pytest.raises(ValueError, match="residual model"):
+        LikelihoodSettings(residual="ar2")
+    short = Record(record.time[:150], record.force[:150], record.accel[:150], metadata=record.metadata)
+    with pytest.raises(ValueError, match="too short"):
+        PosteriorModel(short)
+    with pytest.raises(ValueError, match="LogUniform needs"):
+        LogUniform(10.0, 1.0)
+
+
+def test_priors():
+    p = LogUniform(1.0, math.e**2)
+    assert p.logpdf(1.0) == pytest.approx(-math.log(2.0))
+    assert p.logpdf(3.0) == -math.inf
+    q = LogNormal(100.0, 0.5)
+    assert q.logpdf(math.log(100.0)) == pytest.approx(stats.norm(0, 0.5).logpdf(0))
+    rng = np.random.default_rng(1)
+    x = p.sample(rng, 1000)
+    assert np.all((x >= 0) & (x <= 2))
