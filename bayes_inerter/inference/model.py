@@ -22,6 +22,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import signal
 
 from ..device import TABLE_I, InerterParameters, setting as get_setting
 from ..records.conditioning import LOWPASS_HZ, lowpass
@@ -53,12 +54,23 @@ class LikelihoodSettings:
     stride : keep every stride-th sample; None: fs / (2 cutoff), about one sample per
         correlation length of the low-passed signal (16 at 1 kHz and 30 Hz).
     edge : seconds left out at each end (zero-phase filter transients), default 0.25 s.
+    upsample : **assumption** on the force between samples. The measured force is a
+        band-limited (anti-aliased) signal; linear interpolation at 1 kHz misses the
+        shape of its fast friction reversals, which leaves a systematic residual that
+        the weakly identified parameters then absorb. With ``upsample`` = q > 1 the
+        force is reconstructed at q times the rate by polyphase FIR interpolation
+        (``scipy.signal.resample_poly``), simulated there, and the simulated
+        acceleration is brought back to the record's rate by the same filter.
+        Default 2 (measured on a generated A3 record at 1 kHz, no noise: the residual
+        at the true parameters falls from 2.0e-3 to 5.5e-4 m/s^2 rms); 1 is the paper's
+        linear interpolation. It doubles the simulation cost.
     """
 
     residual: str = "ar1"
     cutoff: float = LOWPASS_HZ
     stride: int | None = None
     edge: float = 0.25
+    upsample: int = 2
 
     def __post_init__(self) -> None:
         if self.residual not in ("ar1", "iid"):
@@ -69,6 +81,8 @@ class LikelihoodSettings:
             raise ValueError(f"stride must be a positive integer, got {self.stride!r}")
         if not self.edge >= 0:
             raise ValueError(f"edge must be non-negative, got {self.edge}")
+        if not (isinstance(self.upsample, int) and 1 <= self.upsample <= 16):
+            raise ValueError(f"upsample must be a whole number from 1 to 16, got {self.upsample!r}")
 
 
 def record_masses(record: Record, m_s: float | None = None, m_B: float | None = None) -> tuple[float, float]:
@@ -135,6 +149,13 @@ class PosteriorModel:
         self.observed = self.measured_lp[self.grid]
         m = self.measured_lp[window]
         self._phi_norm = float(np.linalg.norm(m - m.mean()))
+        q = lk.upsample
+        if q > 1:
+            n = len(rec.time)
+            self._sim_force = signal.resample_poly(rec.force, q, 1)[: (n - 1) * q + 1]
+            self._sim_time = rec.time[0] + np.arange(len(self._sim_force)) / (self.fs * q)
+        else:
+            self._sim_force, self._sim_time = rec.force, rec.time
         fixed = dict(TABLE_I, m_s=self.m_s, m_B=self.m_B, b=1.0)
         if self.model == "rigid":
             fixed.update(f2_0=0.0, c_f2=0.0)
@@ -187,7 +208,10 @@ class PosteriorModel:
 
     def simulate_lp(self, theta) -> np.ndarray:
         """Low-passed simulated acceleration over the whole record."""
-        a = simulate(self.parameters(theta), self.record.time, self.record.force, network=self.network)
+        a = simulate(self.parameters(theta), self._sim_time, self._sim_force, network=self.network)
+        q = self.likelihood.upsample
+        if q > 1:
+            a = signal.resample_poly(a, 1, q)[: len(self.record.time)]
         return lowpass(a, self.fs, self.likelihood.cutoff)
 
     def phi(self, sim_lp: np.ndarray) -> float:
