@@ -21,7 +21,11 @@ def test_log_prob_at_truth(record):
     p = paper_parameters("A2")
     lp, phi = m.log_prob(m.to_theta(p, 0.003, 0.0))
     assert math.isfinite(lp) and phi > 0.95
-    assert m.names == ["b", "f1_0", "c_f1", "f2_0", "c_f2", "c_n", "k_n", "c_B", "k_B", "sigma", "rho"]
+    assert m.names == ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B", "sigma", "rho"]
+    v = m.values(m.to_theta(p, 0.003, 0.0))
+    for name in ("b", "f1_0", "c_f1", "f2_0", "c_f2", "k_B"):
+        assert v[name] == pytest.approx(getattr(p, name), rel=1e-12)
+    assert v["f_0"] == pytest.approx(p.f1_0 + p.f2_0) and v["f_share"] == pytest.approx(p.f1_0 / (p.f1_0 + p.f2_0))
     # 10 % off in b is far less probable
     lp_off, phi_off = m.log_prob(m.to_theta(dataclasses.replace(p, b=1.1 * p.b), 0.003, 0.0))
     assert lp_off < lp - 10 and phi_off < phi
@@ -33,6 +37,9 @@ def test_outside_prior(record):
     theta[0] = math.log(1e7)  # b beyond the prior's bound
     assert m.log_prob(theta)[0] == -math.inf
     theta = m.to_theta(paper_parameters("A2"), 0.003, 0.999)  # rho beyond 0.99
+    assert m.log_prob(theta)[0] == -math.inf
+    theta = m.to_theta(paper_parameters("A2"), 0.003, 0.0)
+    theta[m.names.index("f_share")] = 1.2  # a share above one
     assert m.log_prob(theta)[0] == -math.inf
 
 
@@ -48,6 +55,19 @@ def test_ar1_loglik_is_the_multivariate_normal(record):
     iid = PosteriorModel(record, likelihood=LikelihoodSettings(residual="iid"))
     assert iid.pointwise_loglik(r, sigma).sum() == pytest.approx(stats.norm(0, sigma).logpdf(r).sum())
     assert iid.names[-1] == "sigma"
+
+
+def test_raw_parametrisation(record):
+    raw = PosteriorModel(record, split=False)
+    assert raw.names[:5] == ["b", "f1_0", "c_f1", "f2_0", "c_f2"]
+    split = PosteriorModel(record)
+    p = paper_parameters("A2")
+    # same likelihood, different prior: the log-likelihood parts agree
+    _, ll_raw, _ = raw.evaluate(raw.to_theta(p, 0.003, 0.1))
+    _, ll_split, _ = split.evaluate(split.to_theta(p, 0.003, 0.1))
+    np.testing.assert_allclose(ll_raw, ll_split)
+    with pytest.raises(ValueError, match="no friction pair"):
+        PosteriorModel(record, "rigid", split=True)
 
 
 def test_nested_models(record):

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..records.record import Record
 from .model import LikelihoodSettings, PosteriorModel
-from .results import posterior_sample, summary_rows, to_inference_data, write_summary
+from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_summary
 from .sampler import Convergence, check_run_options, run_sampler
 
 __all__ = ["fit_record", "FitResult", "check_output_folder"]
@@ -37,6 +37,7 @@ class FitResult:
     tau: np.ndarray
     idata: object
     timings: dict = field(default_factory=dict)
+    contraction: dict = field(default_factory=dict)
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -102,6 +103,7 @@ def fit_record(
     t_sample = time.perf_counter() - t0
     sample = posterior_sample(pm, run.sampler, run.tau)
     rows = summary_rows(sample)
+    shrink = contraction(pm, sample)
     idata, sims = to_inference_data(pm, sample, rng=np.random.default_rng(seed + 1))
     t_post = time.perf_counter() - t0 - t_sample
     write_summary(out / "summary.csv", rows)
@@ -116,13 +118,14 @@ def fit_record(
         "m_s": pm.m_s, "m_B": pm.m_B, "likelihood": dataclasses.asdict(pm.likelihood),
         "stride": pm.stride, "priors": {n: p.describe() for n, p in pm.all_priors.items()},
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
+        "contraction": shrink,
         "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total},
         "versions": _versions(),
         "record_metadata": record.metadata,
     }
     (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
     return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, idata,
-                     info["timings_s"])
+                     info["timings_s"], shrink)
 
 
 def _write_plots(out: Path, pm: PosteriorModel, sample, sims) -> None:
@@ -134,7 +137,7 @@ def _write_plots(out: Path, pm: PosteriorModel, sample, sims) -> None:
     label = f"{meta.get('setting') or 'record'}" + (
         f", {pm.record.drive_frequency:g} Hz" if pm.record.drive_frequency else "")
     flat = sample.values.reshape(-1, len(sample.names))
-    truths, paper = reference_values(sample.names, meta, pm.model)
+    truths, paper = reference_values(pm, meta)
     figs = {
         "corner.png": plot_corner(flat, sample.names, truths=truths, paper=paper,
                                   title=f"{label}: {pm.model} model"),

@@ -28,7 +28,7 @@ from ..device import TABLE_I, InerterParameters, setting as get_setting
 from ..records.conditioning import LOWPASS_HZ, lowpass
 from ..records.record import Record
 from ..simulate import SimulationError, check_record, simulate
-from .priors import DEFAULT_PRIORS, NOISE_PRIORS, RHO_BOUNDS
+from .priors import DEFAULT_PRIORS, NOISE_PRIORS, SPLIT_PRIORS
 
 __all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
 
@@ -110,6 +110,15 @@ class PosteriorModel:
 
     ``log_prob(theta)`` returns (log posterior, phi); -inf and NaN where the parameters
     lie outside the prior or the simulation fails.
+
+    Parametrisation (``split``, default True for the two-port model): the two Coulomb
+    forces and the two viscous coefficients are sampled as sums and the plate's share,
+    ``f_0 = f1_0 + f2_0``, ``f_share = f1_0 / f_0``, ``c_f = c_f1 + c_f2``,
+    ``c_share = c_f1 / c_f``, because the data fix the sums well and the shares poorly
+    (v_B and v_th are nearly equal: MODEL.md section 7), and walkers move freely along a
+    share where they crawl along the curved ridge of the raw pair. The priors are then
+    on the sums (log-uniform) and the shares (uniform): a documented choice. The four
+    raw values are reported as derived quantities. ``split=False`` samples them directly.
     """
 
     record: Record
@@ -118,6 +127,7 @@ class PosteriorModel:
     m_B: float | None = None
     priors: dict = field(default_factory=dict)
     likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
+    split: bool | None = None
 
     def __post_init__(self) -> None:
         if self.model not in MODELS:
@@ -126,11 +136,26 @@ class PosteriorModel:
         check_record(rec.time, rec.force, rec.accel, names=("force", "accel"))
         self.m_s, self.m_B = record_masses(rec, self.m_s, self.m_B)
         self.network, self.free = MODELS[self.model]
-        unknown = set(self.priors) - set(PHYSICAL) - set(NOISE_PRIORS)
+        pairs = {"f1_0", "f2_0", "c_f1", "c_f2"}
+        can_split = pairs <= set(self.free)
+        if self.split is None:
+            self.split = can_split
+        if self.split and not can_split:
+            raise ValueError(f"the {self.model} model has no friction pair to split")
+        known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(NOISE_PRIORS)
+        unknown = set(self.priors) - known
         if unknown:
             raise ValueError(f"priors given for unknown parameters: {', '.join(sorted(unknown))}")
-        self.all_priors = {**DEFAULT_PRIORS, **NOISE_PRIORS, **self.priors}
-        self.names = list(self.free) + ["sigma"] + (["rho"] if self.likelihood.residual == "ar1" else [])
+        self.all_priors = {**DEFAULT_PRIORS, **SPLIT_PRIORS, **NOISE_PRIORS, **self.priors}
+        if self.split:
+            sampled = [n for n in self.free if n not in pairs]
+            sampled[1:1] = ["f_0", "f_share", "c_f", "c_share"]
+        else:
+            sampled = list(self.free)
+        self.n_phys = len(sampled)
+        self.names = sampled + ["sigma"] + (["rho"] if self.likelihood.residual == "ar1" else [])
+        self.derived_names = sorted(pairs, key=PHYSICAL.index) if self.split else []
+        self._log = np.array([self.all_priors[n].log_scale for n in self.names])
         self.fs = rec.fs
         lk = self.likelihood
         if not lk.cutoff < self.fs / 2:
@@ -167,43 +192,55 @@ class PosteriorModel:
         return len(self.names)
 
     def bounds(self) -> np.ndarray:
-        """(ndim, 2) bounds of theta (log space; rho as is)."""
-        out = [self.all_priors[n].bounds for n in self.free] + [self.all_priors["sigma"].bounds]
-        if self.likelihood.residual == "ar1":
-            out.append(RHO_BOUNDS)
-        return np.array(out)
+        """(ndim, 2) bounds of theta (log space for log-scale priors, else as is)."""
+        return np.array([self.all_priors[n].bounds for n in self.names])
+
+    def to_values(self, theta: np.ndarray) -> np.ndarray:
+        """Sampled values in SI units (or as is for shares and rho); any leading axes."""
+        theta = np.asarray(theta, dtype=float)
+        return np.where(self._log, np.exp(np.where(self._log, theta, 0.0)), theta)
+
+    def physical(self, values: dict) -> dict:
+        """Raw network parameters (the free ones) from sampled values by name."""
+        out = {n: values[n] for n in self.free if n in values}
+        if self.split:
+            out["f1_0"] = values["f_0"] * values["f_share"]
+            out["f2_0"] = values["f_0"] * (1.0 - values["f_share"])
+            out["c_f1"] = values["c_f"] * values["c_share"]
+            out["c_f2"] = values["c_f"] * (1.0 - values["c_share"])
+        return out
+
+    def sampled_from_physical(self, phys: dict) -> dict:
+        """Sampled quantities (by name) from raw parameters, where they can be formed."""
+        out = {n: phys[n] for n in self.names if n in phys}
+        if self.split and all(k in phys for k in ("f1_0", "f2_0", "c_f1", "c_f2")):
+            f0, c = phys["f1_0"] + phys["f2_0"], phys["c_f1"] + phys["c_f2"]
+            out.update(f_0=f0, c_f=c, f_share=phys["f1_0"] / f0 if f0 > 0 else 0.5,
+                       c_share=phys["c_f1"] / c if c > 0 else 0.5)
+        return out
+
+    def values(self, theta) -> dict:
+        """Sampled and derived parameter values at theta, by name."""
+        vals = dict(zip(self.names, map(float, self.to_values(theta))))
+        vals.update(self.physical(vals))
+        return vals
 
     def parameters(self, theta) -> InerterParameters:
         """The network's parameters at theta."""
-        values = dict(self.fixed)
-        for name, t in zip(self.free, theta):
-            values[name] = math.exp(t)
-        return InerterParameters(**values)
+        vals = dict(zip(self.names, map(float, self.to_values(theta))))
+        return InerterParameters(**{**self.fixed, **self.physical(vals)})
 
     def to_theta(self, params: InerterParameters, sigma: float, rho: float = 0.0) -> np.ndarray:
-        theta = [math.log(getattr(params, n)) for n in self.free] + [math.log(sigma)]
-        if self.likelihood.residual == "ar1":
-            theta.append(rho)
-        return np.array(theta)
-
-    def values(self, theta) -> dict:
-        """Parameter values (SI units) at theta, by name."""
-        out = {n: math.exp(t) for n, t in zip(self.free, theta)}
-        out["sigma"] = math.exp(theta[len(self.free)])
-        if self.likelihood.residual == "ar1":
-            out["rho"] = float(theta[-1])
-        return out
+        phys = {n: getattr(params, n) for n in self.free}
+        vals = self.sampled_from_physical({**phys, "sigma": sigma, "rho": rho})
+        theta = [math.log(vals[n]) if lg else vals[n] for n, lg in zip(self.names, self._log)]
+        return np.array(theta, dtype=float)
 
     # -- densities -------------------------------------------------------------------
     def log_prior(self, theta) -> float:
         lp = 0.0
-        for name, t in zip(self.free, theta):
+        for name, t in zip(self.names, theta):
             lp += self.all_priors[name].logpdf(t)
-        lp += self.all_priors["sigma"].logpdf(theta[len(self.free)])
-        if self.likelihood.residual == "ar1":
-            rho = theta[-1]
-            lo, hi = RHO_BOUNDS
-            lp += -math.log(hi - lo) if lo <= rho <= hi else -math.inf
         return lp
 
     def simulate_lp(self, theta) -> np.ndarray:
@@ -234,7 +271,7 @@ class PosteriorModel:
         return out
 
     def noise(self, theta) -> tuple[float, float]:
-        sigma = math.exp(theta[len(self.free)])
+        sigma = math.exp(theta[self.n_phys])
         rho = float(theta[-1]) if self.likelihood.residual == "ar1" else 0.0
         return sigma, rho
 

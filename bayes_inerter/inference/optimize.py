@@ -76,20 +76,35 @@ def rigid_guess(model: PosteriorModel) -> dict:
 
 
 def _initial_point(model: PosteriorModel) -> np.ndarray:
-    """The rigid guess where it applies, the prior's log-centre elsewhere, within bounds."""
-    bounds = model.bounds()[: len(model.free)]
-    guess = rigid_guess(model)
-    x = np.array([math.log(guess[n]) if n in guess else 0.5 * (lo + hi) for n, (lo, hi) in zip(model.free, bounds)])
-    return np.clip(x, bounds[:, 0] + 1e-9, bounds[:, 1] - 1e-9)
+    """The rigid guess where it applies, the prior's centre elsewhere, within bounds."""
+    n = model.n_phys
+    bounds = model.bounds()[:n]
+    guess = model.sampled_from_physical(rigid_guess(model))
+    x = []
+    for name, lg, (lo, hi) in zip(model.names[:n], model._log[:n], bounds):
+        if name in guess:
+            x.append(math.log(guess[name]) if lg else guess[name])
+        else:
+            x.append(0.5 * (lo + hi))
+    return np.clip(np.array(x), bounds[:, 0] + 1e-9, bounds[:, 1] - 1e-9)
 
 
 def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
     """x and its copies with the plate and rotation frictions exchanged: the two sit on a
     ridge (MODEL.md section 7), and the optimiser often stops on the wrong side."""
     out = [x]
+    names = model.names
+    if model.split:
+        for share in ("f_share", "c_share"):
+            i = names.index(share)
+            for y in list(out):
+                z = y.copy()
+                z[i] = 1.0 - y[i]
+                out.append(z)
+        return out
     for a, b in (("f1_0", "f2_0"), ("c_f1", "c_f2")):
-        if a in model.free and b in model.free:
-            i, j = model.free.index(a), model.free.index(b)
+        if a in names and b in names:
+            i, j = names.index(a), names.index(b)
             for y in list(out):
                 z = y.copy()
                 z[i], z[j] = y[j], y[i]
@@ -99,7 +114,7 @@ def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
 
 def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_POPSIZE, maxiter=DE_MAXITER):
     """Return (theta, log posterior) of a quick optimum."""
-    nphys = len(model.free)
+    nphys = model.n_phys
     bounds = model.bounds()
     # the noise entries are not optimised in stage 1: fix them mid-prior so the prior is finite
     with warnings.catch_warnings():

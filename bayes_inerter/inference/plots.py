@@ -14,41 +14,43 @@ from ..device import TABLE_I  # noqa: E402
 __all__ = ["plot_corner", "plot_bands", "plot_trace", "plot_phi", "reference_values"]
 
 UNITS = {"b": "kg", "f1_0": "N", "c_f1": "N s/m", "f2_0": "N", "c_f2": "N s/m", "c_n": "N s/m",
-         "k_n": "N/m", "c_B": "N s/m", "k_B": "N/m", "sigma": "m/s²", "rho": ""}
+         "k_n": "N/m", "c_B": "N s/m", "k_B": "N/m", "sigma": "m/s²", "f_0": "N", "c_f": "N s/m"}
+LINEAR = ("rho", "f_share", "c_share")  # drawn as is; everything else in log10
 
 
 def _label(name: str) -> str:
-    unit = UNITS.get(name, "")
-    return f"log10 {name} [{unit}]" if name != "rho" else "rho"
+    return name if name in LINEAR else f"log10 {name} [{UNITS.get(name, '')}]"
 
 
 def _to_plot(name, x):
-    return x if name == "rho" else np.log10(x)
+    return x if name in LINEAR else np.log10(x)
 
 
-def reference_values(names, metadata: dict, model: str):
-    """(truth, paper) values for the corner plot's markers, None where they do not apply.
+def reference_values(model, metadata: dict):
+    """(truth, paper) values of the sampled quantities for the corner plot's markers,
+    None where they do not apply.
 
     The truth comes from a generated record's metadata; the paper's values are Table I
-    (and Table 2's b for the record's setting). In the rigid model f1_0 and c_f1 are the
-    totals, so the paper's split values are not marked there.
+    (and Table 2's b for the record's setting), turned into sums and shares where those
+    are sampled. In the rigid model f1_0 and c_f1 are totals: the truth is summed, the
+    paper's split values are not marked.
     """
     from ..device import SETTINGS
 
-    truth = metadata.get("true_parameters") or {}
+    truth = dict(metadata.get("true_parameters") or {})
     setting = metadata.get("setting")
     paper = dict(TABLE_I)
     if setting and str(setting).upper() in SETTINGS:
         paper["b"] = SETTINGS[str(setting).upper()].b_paper
-    t_out, p_out = [], []
-    for n in names:
-        t = truth.get(n)
-        p = paper.get(n)
-        if model == "rigid" and n in ("f1_0", "c_f1"):
-            t = None if t is None else truth.get(n) + truth.get(n.replace("1", "2"), 0.0)
-            p = None
-        t_out.append(None if t is None else _to_plot(n, t))
-        p_out.append(None if p is None else _to_plot(n, p))
+    if model.model == "rigid":
+        if truth:
+            truth["f1_0"] = truth.get("f1_0", 0.0) + truth.get("f2_0", 0.0)
+            truth["c_f1"] = truth.get("c_f1", 0.0) + truth.get("c_f2", 0.0)
+        paper.pop("f1_0"), paper.pop("c_f1")
+    t_s = model.sampled_from_physical(truth) if truth else {}
+    p_s = model.sampled_from_physical(paper)
+    t_out = [None if n not in t_s else _to_plot(n, t_s[n]) for n in model.names]
+    p_out = [None if n not in p_s else _to_plot(n, p_s[n]) for n in model.names]
     return t_out, p_out
 
 
@@ -114,7 +116,7 @@ def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1):
     axes = np.atleast_1d(axes)
     steps = burn + thin * np.arange(theta.shape[1])
     for i, ax in enumerate(axes):
-        y = theta[:, :, i] / (1 if names[i] == "rho" else np.log(10))
+        y = theta[:, :, i] / (1 if names[i] in LINEAR else np.log(10))
         ax.plot(steps, y.T, lw=0.4, alpha=0.5)
         ax.set_ylabel(_label(names[i]), fontsize=7)
         ax.tick_params(labelsize=7)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LogUniform", "LogNormal", "DEFAULT_PRIORS", "NOISE_PRIORS"]
+__all__ = ["LogUniform", "LogNormal", "Uniform", "DEFAULT_PRIORS", "SPLIT_PRIORS", "NOISE_PRIORS"]
 
 
 @dataclass(frozen=True)
@@ -23,6 +23,7 @@ class LogUniform:
 
     low: float
     high: float
+    log_scale = True
 
     def __post_init__(self) -> None:
         if not (0 < self.low < self.high < math.inf):
@@ -46,6 +47,32 @@ class LogUniform:
 
 
 @dataclass(frozen=True)
+class Uniform:
+    """Uniform on [low, high], sampled as is (fractions, the AR(1) coefficient)."""
+
+    low: float
+    high: float
+    log_scale = False
+
+    def __post_init__(self) -> None:
+        if not (-math.inf < self.low < self.high < math.inf):
+            raise ValueError(f"Uniform needs finite low < high, got {self.low}, {self.high}")
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        return self.low, self.high
+
+    def logpdf(self, theta: float) -> float:
+        return -math.log(self.high - self.low) if self.low <= theta <= self.high else -math.inf
+
+    def sample(self, rng: np.random.Generator, size=None):
+        return rng.uniform(self.low, self.high, size)
+
+    def describe(self) -> str:
+        return f"uniform on [{self.low:g}, {self.high:g}]"
+
+
+@dataclass(frozen=True)
 class LogNormal:
     """log(value) normal with median ``median`` and log-space sd ``sigma``, truncated to
     +- ``width`` sd (so the sampler and optimiser have bounds)."""
@@ -53,6 +80,7 @@ class LogNormal:
     median: float
     sigma: float
     width: float = 5.0
+    log_scale = True
 
     def __post_init__(self) -> None:
         if not (self.median > 0 and self.sigma > 0 and self.width > 0):
@@ -93,9 +121,20 @@ DEFAULT_PRIORS = {
     "k_B": LogUniform(1e5, 1e10),  # N/m
 }
 
-#: Priors of the residual model: scale (m/s^2, log-uniform) and AR(1) coefficient
-#: (uniform on [-0.99, 0.99], sampled as is).
+#: Priors of the sampled sums and fractions of the two frictions (the default
+#: parametrisation, see ``model``): the sums log-uniform over the ranges of the
+#: parts' sums, the plate's share uniform on [0, 1].
+SPLIT_PRIORS = {
+    "f_0": LogUniform(1.0, 2e4),  # N, f1_0 + f2_0
+    "f_share": Uniform(0.0, 1.0),  # f1_0 / (f1_0 + f2_0)
+    "c_f": LogUniform(0.1, 2e5),  # N s/m, c_f1 + c_f2
+    "c_share": Uniform(0.0, 1.0),  # c_f1 / (c_f1 + c_f2)
+}
+
+RHO_BOUNDS = (-0.99, 0.99)
+
+#: Priors of the residual model: scale (m/s^2, log-uniform) and AR(1) coefficient.
 NOISE_PRIORS = {
     "sigma": LogUniform(1e-5, 10.0),
+    "rho": Uniform(*RHO_BOUNDS),
 }
-RHO_BOUNDS = (-0.99, 0.99)

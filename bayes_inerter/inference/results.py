@@ -24,7 +24,7 @@ import numpy as np
 
 from .model import PosteriorModel
 
-__all__ = ["PosteriorSample", "posterior_sample", "to_inference_data", "summary_rows", "write_summary",
+__all__ = ["PosteriorSample", "posterior_sample", "contraction", "to_inference_data", "summary_rows", "write_summary",
            "SUMMARY_COLUMNS", "MAX_DRAWS"]
 
 SUMMARY_COLUMNS = ("name", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail")
@@ -33,11 +33,13 @@ MAX_DRAWS = 600  # draws that get a simulation for log-likelihood and predictive
 
 @dataclass
 class PosteriorSample:
-    """Kept draws after burn-in: values (chain=walker, draw, name) and phi."""
+    """Kept draws after burn-in: sampled values (chain=walker, draw, name), the raw
+    friction parameters derived from sums and shares (if split), and phi."""
 
     names: list
-    values: np.ndarray  # (walkers, draws, ndim) in SI units
+    values: np.ndarray  # (walkers, draws, ndim) in SI units (shares and rho as is)
     theta: np.ndarray  # (walkers, draws, ndim) as sampled
+    derived: dict  # name -> (walkers, draws)
     phi: np.ndarray  # (walkers, draws)
     lp: np.ndarray  # (walkers, draws)
     burn: int
@@ -45,15 +47,16 @@ class PosteriorSample:
 
     def as_dict(self) -> dict:
         out = {n: self.values[:, :, i] for i, n in enumerate(self.names)}
+        out.update(self.derived)
         out["phi"] = self.phi
         return out
 
 
-def _to_values(model: PosteriorModel, theta: np.ndarray) -> np.ndarray:
-    vals = np.exp(theta)
-    if model.likelihood.residual == "ar1":
-        vals[..., -1] = theta[..., -1]  # rho is sampled as is
-    return vals
+def _derived(model: PosteriorModel, values: np.ndarray) -> dict:
+    if not model.derived_names:
+        return {}
+    phys = model.physical({n: values[..., i] for i, n in enumerate(model.names)})
+    return {n: phys[n] for n in model.derived_names}
 
 
 def posterior_sample(model: PosteriorModel, sampler, tau) -> PosteriorSample:
@@ -67,8 +70,9 @@ def posterior_sample(model: PosteriorModel, sampler, tau) -> PosteriorSample:
     blobs = sampler.get_blobs(discard=burn, thin=thin)
     lp = sampler.get_log_prob(discard=burn, thin=thin)
     theta = np.transpose(chain, (1, 0, 2))
+    values = model.to_values(theta)
     return PosteriorSample(
-        names=list(model.names), values=_to_values(model, theta), theta=theta,
+        names=list(model.names), values=values, theta=theta, derived=_derived(model, values),
         phi=np.asarray(blobs, dtype=float).T, lp=lp.T, burn=burn, thin=thin,
     )
 
@@ -107,8 +111,7 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
             if k % sim_every == 0:
                 sims.append(sim)
             k += 1
-    posterior = {n: sample.values[:, idx, i] for i, n in enumerate(sample.names)}
-    posterior["phi"] = sample.phi[:, idx]
+    posterior = {n: v[:, idx] for n, v in sample.as_dict().items()}
     coords = {"time": model.record.time[model.grid]}
     dims = {"accel": ["time"]}
     with warnings.catch_warnings():
@@ -133,6 +136,22 @@ def _ar1_noise(rng, n, sigma, rho):
     out[0] = e[0] / math.sqrt(1 - rho * rho)
     for i in range(1, n):
         out[i] = rho * out[i - 1] + e[i]
+    return out
+
+
+def contraction(model: PosteriorModel, sample: PosteriorSample) -> dict:
+    """Posterior contraction per sampled quantity: 1 - var(posterior) / var(prior), both
+    in the sampled (log or linear) scale. Near 1: the data identify it; near 0 (or
+    below, for a non-uniform prior's truncated tail): the posterior is the prior."""
+    out = {}
+    for i, name in enumerate(model.names):
+        prior = model.all_priors[name]
+        lo, hi = prior.bounds
+        if hasattr(prior, "median") and prior.log_scale and not hasattr(prior, "low"):
+            var_prior = prior.sigma**2
+        else:
+            var_prior = (hi - lo) ** 2 / 12.0
+        out[name] = 1.0 - float(np.var(sample.theta[:, :, i])) / var_prior
     return out
 
 
