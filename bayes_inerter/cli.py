@@ -20,24 +20,24 @@ class CliError(Exception):
     """An error reported as one line on stderr with exit status 1."""
 
 
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"{text!r} must be a positive number")
-    return value
+def _number_type(convert, ok, requirement: str, noun: str = "number"):
+    """An argparse type: ``convert`` the text, then demand ``ok(value)``."""
+
+    def parse(text: str):
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a {noun}") from None
+        if not ok(value):
+            raise argparse.ArgumentTypeError(f"{text!r} must be {requirement}")
+        return value
+
+    return parse
 
 
-def _non_negative_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"{text!r} must be a non-negative number")
-    return value
+_positive_float = _number_type(float, lambda v: 0 < v < float("inf"), "a positive number")
+_non_negative_float = _number_type(float, lambda v: 0 <= v < float("inf"), "a non-negative number")
+_positive_int = _number_type(int, lambda v: v >= 1, "at least 1", "whole number")
 
 
 def _add_generator_options(p: argparse.ArgumentParser) -> None:
@@ -126,16 +126,6 @@ def cmd_inspect(args) -> int:
     return EXIT_OK
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} must be at least 1")
-    return value
-
-
 def cmd_fit(args) -> int:
     import os
 
@@ -158,7 +148,7 @@ def cmd_fit(args) -> int:
         result = fit_record(
             rec, args.out, model=args.model, m_s=args.m_s, walkers=args.walkers, steps=args.steps,
             seed=args.seed, fresh=args.fresh, processes=processes,
-            likelihood=LikelihoodSettings(residual=args.residual), progress=progress,
+            likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=progress,
         )
     finally:
         bar.close()
@@ -215,6 +205,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
     p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")
     p.add_argument("--residual", choices=("ar1", "iid"), default="ar1", help="residual model (%(default)s)")
+    p.add_argument("--upsample", type=_positive_int, default=2,
+                   help="force reconstruction rate / record rate before simulating (%(default)s; 1: linear interpolation)")
     p.add_argument("--processes", type=_positive_int, help="worker processes (default: up to 2)")
     p.add_argument("--fresh", action="store_true", help="start over instead of continuing the checkpoint")
     p.set_defaults(func=cmd_fit)

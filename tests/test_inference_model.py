@@ -114,3 +114,26 @@ def test_priors():
     rng = np.random.default_rng(1)
     x = p.sample(rng, 1000)
     assert np.all((x >= 0) & (x <= 2))
+
+
+def test_contraction_of_prior_draws_is_zero_and_of_a_point_is_one(record):
+    from bayes_inerter.inference.results import PosteriorSample, contraction
+
+    m = PosteriorModel(record)
+    rng = np.random.default_rng(2)
+    draws = np.stack([m.all_priors[n].sample(rng, (8, 4000)) for n in m.names], axis=-1)
+    sample = PosteriorSample(m.names, m.to_values(draws), draws, {}, np.zeros((8, 4000)), np.zeros((8, 4000)), 0, 1)
+    shrink = contraction(m, sample)
+    assert all(abs(v) < 0.05 for v in shrink.values())
+    point = np.broadcast_to(m.to_theta(paper_parameters("A2"), 0.003, 0.1), draws.shape) + 1e-6 * draws
+    sample = PosteriorSample(m.names, m.to_values(point), point, {}, np.zeros((8, 4000)), np.zeros((8, 4000)), 0, 1)
+    assert all(v > 0.99 for v in contraction(m, sample).values())
+
+
+def test_convergence_settings_checked():
+    from bayes_inerter.inference import Convergence
+
+    with pytest.raises(ValueError, match="max_steps must be a positive whole number"):
+        Convergence(max_steps=0)
+    with pytest.raises(ValueError, match="n_tau must be positive"):
+        Convergence(n_tau=-1.0)

@@ -49,6 +49,15 @@ class Convergence:
     check_every: int = 500
     max_steps: int = 20_000
 
+    def __post_init__(self) -> None:
+        for name in ("n_tau", "tau_rtol", "max_rhat", "min_ess"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"convergence setting {name} must be positive, got {getattr(self, name)}")
+        for name in ("check_every", "max_steps"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= 1):
+                raise ValueError(f"convergence setting {name} must be a positive whole number, got {value!r}")
+
 
 @dataclass
 class SamplerRun:
