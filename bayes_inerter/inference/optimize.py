@@ -8,6 +8,7 @@ are unidentified), so a local optimiser from a guess is not enough. Two stages:
    do not move the least-squares optimum). Its population is seeded with a
    rigid-body guess (:func:`rigid_guess`: least squares of the force on acceleration,
    sign of velocity and velocity), which puts b and the frictions in the right basin;
+   the best of the guess and the evolved point is kept;
 2. the noise parameters from that residual (sigma its sd, rho its lag-one
    correlation), then Nelder-Mead on the full log posterior.
 
@@ -26,7 +27,7 @@ from ..records.conditioning import lowpass
 from .model import PosteriorModel
 from .priors import RHO_BOUNDS
 
-__all__ = ["find_start", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER"]
+__all__ = ["find_start", "rigid_guess", "velocity_estimate", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER"]
 
 DE_POPSIZE = 8  # population per parameter
 DE_MAXITER = 40  # generations
@@ -44,27 +45,34 @@ def _sse(model: PosteriorModel, phys: np.ndarray) -> float:
     return float(r @ r)
 
 
+def velocity_estimate(model: PosteriorModel) -> np.ndarray:
+    """Velocity of terminal 1 (m/s): the derivative of the low-passed displacement when
+    the record has one, else the integral of the low-passed acceleration from rest (a
+    record starts at rest) less its straight-line drift (an accelerometer offset)."""
+    rec = model.record
+    fs = model.fs
+    if rec.disp is not None:
+        return np.gradient(lowpass(rec.disp, fs, model.likelihood.cutoff), 1.0 / fs)
+    v = np.concatenate([[0.0], np.cumsum(0.5 * (model.measured_lp[1:] + model.measured_lp[:-1])) / fs])
+    t = rec.time - rec.time[0]
+    slope, intercept = np.polyfit(t, v, 1)
+    return v - (slope * t + intercept)
+
+
 def rigid_guess(model: PosteriorModel) -> dict:
     """Total mass, Coulomb and viscous friction of one rigid body, by least squares.
 
-    F = M a + f0 sgn(v) + c v on the low-passed signals, with v the integral of the
-    low-passed acceleration, high-passed at a tenth of the drive frequency (or 0.1 Hz)
-    to remove the integration drift. Returns the free parameters' values (SI units):
+    F = M a + f0 sgn(v) + c v on the low-passed signals (v from
+    :func:`velocity_estimate`). Returns the free parameters' values (SI units):
     b = M - m_B - m_s, the Coulomb force split 95/5 between plate and rotation (a guess
     the sampler corrects), the viscous part given to the rotation.
     """
-    from scipy import signal
-
-    rec = model.record
     fs = model.fs
     a = model.measured_lp
-    f = lowpass(rec.force, fs, model.likelihood.cutoff)
-    drive = rec.drive_frequency or 1.0
-    v = np.cumsum(a) / fs
-    sos = signal.butter(2, max(0.1 * drive, 0.05), btype="highpass", fs=fs, output="sos")
-    v = signal.sosfiltfilt(sos, v)
+    f = lowpass(model.record.force, fs, model.likelihood.cutoff)
+    v = velocity_estimate(model)
     w = model.window
-    X = np.column_stack([a[w], np.tanh(v[w] / (0.05 * np.std(v[w]) + 1e-12)), v[w]])
+    X = np.column_stack([a[w], np.tanh(v[w] / (0.02 * np.std(v[w]) + 1e-12)), v[w]])
     coef, *_ = np.linalg.lstsq(X, f[w], rcond=None)
     mass, f0, c = coef
     b = max(mass - model.m_B - model.m_s, 1.0)
@@ -117,14 +125,15 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     nphys = model.n_phys
     bounds = model.bounds()
     # the noise entries are not optimised in stage 1: fix them mid-prior so the prior is finite
+    x0 = _initial_point(model)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         de = differential_evolution(
             lambda x: _sse(model, x), bounds[:nphys], popsize=popsize, maxiter=maxiter,
             seed=rng, polish=False, init="sobol", tol=1e-8, updating="deferred",
-            x0=_initial_point(model),
+            x0=x0,
         )
-    phys = min(_swaps(model, de.x), key=lambda x: _sse(model, x))
+    phys = min(_swaps(model, de.x) + _swaps(model, x0), key=lambda x: _sse(model, x))
     _, _, sim = model.evaluate(np.concatenate([phys, [0.0, 0.0][: model.ndim - nphys]]))
     r = sim[model.grid] - model.observed
     sigma = max(float(np.std(r)), 1e-5)
