@@ -79,15 +79,20 @@ def _tables(Abar, h, J):
 
 
 @njit(cache=True, inline="always")
-def _step(FT, z, out):
-    """out = z + F z, with FT = F transposed (column sweeps: independent adds)."""
+def _step(FT, z, out, n, n_in, T):
+    """out = z + F z over a time T, with FT = F transposed (column sweeps: independent
+    adds). Only the n state rows need the product: the inputs move linearly
+    (u += du T) and their slopes and the Coulomb forces stay."""
     m = z.shape[0]
     for i in range(m):
         out[i] = z[i]
     for j in range(m):
         zj = z[j]
-        for i in range(m):
-            out[i] += FT[j, i] * zj
+        if zj != 0.0:
+            for i in range(n):
+                out[i] += FT[j, i] * zj
+    for q in range(n_in):
+        out[n + q] += T * z[n + n_in + q]
 
 
 @njit(cache=True, inline="always")
@@ -269,7 +274,14 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
         for q in range(n_in):
             z[n + q] = inputs[k, q]
             z[n + n_in + q] = (inputs[k + 1, q] - inputs[k, q]) / h
-        _guards(z, mode, nc, node, R, VD, RD, va, da)
+        if k == 0:
+            _guards(z, mode, nc, node, R, VD, RD, va, da)
+        else:
+            # the guards at the interval's start are those at the last one's end, but for
+            # a stuck contact's holding-force rate, which sees the new input slope
+            for i in range(nc):
+                if (mode >> i) & 1:
+                    da[i] = _dot(RD[mode, i], z)
         pos = np.int64(0)
         events = 0
         while pos < FULL:
@@ -281,7 +293,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
                     tz += 1
             size = np.int64(1) << tz
             level = J - tz
-            _step(F[mode, level], z, zn)
+            _step(F[mode, level], z, zn, n, n_in, h * size / FULL)
             _guards(zn, mode, nc, node, R, VD, RD, vb, db)
             if not _crossed(va, da, vb, db, h * size / FULL, mode, nc, sgn, f0):
                 z, zn = zn, z  # swap buffers instead of copying
@@ -295,7 +307,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             while size > 1:
                 size >>= 1
                 level += 1
-                _step(F[mode, level], zc, zm)
+                _step(F[mode, level], zc, zm, n, n_in, h * size / FULL)
                 _guards(zc, mode, nc, node, R, VD, RD, va, da)
                 _guards(zm, mode, nc, node, R, VD, RD, vb, db)
                 if _crossed(va, da, vb, db, h * size / FULL, mode, nc, sgn, f0):
