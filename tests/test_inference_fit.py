@@ -135,3 +135,21 @@ def test_unwritable_output_refused(tmp_path, record_file, capsys):
         locked.mkdir(mode=0o500)
         assert main(["fit", str(record_file), "--out", str(locked / "x")]) == 1
         assert "cannot write there" in capsys.readouterr().err
+
+
+def test_reading_the_checkpoint_does_not_stop_a_run(tmp_path, record_file):
+    """A reader holding chain.h5 open (with HDF5's default lock) must not make the
+    sampler's next write fail."""
+    out = tmp_path / "busy"
+    args = ["fit", str(record_file), "--out", str(out), "--steps", "6", "--walkers", "24", "--processes", "1"]
+    assert main(args) == 0
+    # another process holds the file open, locked the usual way, while the run goes on
+    reader = subprocess.Popen([sys.executable, "-c",
+                               f"import h5py, time; f = h5py.File({str(out / 'chain.h5')!r}, 'r'); time.sleep(120)"])
+    try:
+        time.sleep(2.0)
+        assert main(args[:5] + ["12"] + args[6:]) == 0
+    finally:
+        reader.kill()
+        reader.wait()
+    assert len(_chain(out / "chain.h5")) == 12

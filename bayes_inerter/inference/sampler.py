@@ -85,6 +85,29 @@ def record_digest(model: PosteriorModel) -> str:
     return h.hexdigest()[:16]
 
 
+class _Backend(emcee.backends.HDFBackend):
+    """emcee's HDF5 backend, opening the file without HDF5's advisory lock.
+
+    With the lock, anyone reading ``chain.h5`` while a run writes it (h5py, a viewer)
+    makes the run's next write fail with BlockingIOError and the run stop (seen here).
+    A reader may then see a step half-written; the writer never fails. Same logic as
+    ``HDFBackend.open`` (emcee 3.1) otherwise.
+    """
+
+    def open(self, mode="r"):
+        import h5py
+
+        if self.read_only and mode != "r":
+            raise RuntimeError("the backend is read-only")
+        f = h5py.File(self.filename, mode, locking=False)
+        if not self.dtype_set and self.name in f:
+            g = f[self.name]
+            if "chain" in g:
+                self.dtype = g["chain"].dtype
+                self.dtype_set = True
+        return f
+
+
 # The log-probability for worker processes: a top-level function over a module global set
 # before the pool forks, so that only the parameter vector is pickled per call.
 _MODEL: PosteriorModel | None = None
@@ -101,11 +124,11 @@ def _open_backend(path, model: PosteriorModel, nwalkers: int, fresh: bool):
     digest = record_digest(model)
     if fresh and path.exists():
         path.unlink()  # the user asked to start over
-    backend = emcee.backends.HDFBackend(str(path), name="mcmc")
+    backend = _Backend(str(path), name="mcmc")
     if not path.exists():
         return backend, 0, digest
     try:
-        with h5py.File(path, "r") as f:
+        with h5py.File(path, "r", locking=False) as f:
             if "mcmc" not in f:
                 return backend, 0, digest
             attrs = dict(f["mcmc"].attrs)
