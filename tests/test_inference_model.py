@@ -137,3 +137,18 @@ def test_convergence_settings_checked():
         Convergence(max_steps=0)
     with pytest.raises(ValueError, match="n_tau must be positive"):
         Convergence(n_tau=-1.0)
+
+
+def test_start_guess_finds_the_basin(record):
+    from bayes_inerter.inference.optimize import rigid_guess, velocity_estimate
+
+    m = PosteriorModel(record)
+    bare = PosteriorModel(Record(record.time, record.force, record.accel, None, record.metadata))
+    v_disp, v_acc = velocity_estimate(m), velocity_estimate(bare)
+    w = m.window
+    assert np.corrcoef(v_disp[w], v_acc[w])[0, 1] > 0.99
+    p = paper_parameters("A2")
+    for model in (m, bare):
+        g = rigid_guess(model)
+        assert g["b"] == pytest.approx(p.b, rel=0.05)
+        assert g["f1_0"] + g["f2_0"] == pytest.approx(p.f1_0 + p.f2_0, rel=0.15)
