@@ -9,8 +9,10 @@ measured rate (a projection, labelled as such).
 """
 
 import argparse
+import json
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -54,10 +56,27 @@ def main():
     print(f"simulator: {spent['calls']} calls, {spent['simulate']:.1f} s = {spent['simulate'] / total:.0%} of the total, "
           f"{spent['simulate'] / spent['calls'] * 1e3:.2f} ms a call")
     print(f"per step {t_sample / args.steps * 1e3:.0f} ms; per evaluation about {t_sample / (evals + 1) * 1e3:.2f} ms")
-    tau = np.nanmax(result.tau)
-    print(f"max autocorrelation time estimated from this run: {tau:.0f} steps (unreliable below 50 tau)")
-    print(f"projection: 50 tau = {50 * tau:.0f} steps would take about {50 * tau * t_sample / args.steps / 60:.1f} min "
-          "on one process at this rate")
+    from bayes_inerter.inference.model import PosteriorModel
+
+    model = PosteriorModel(rec)
+    theta = model.to_theta(paper_parameters(args.setting), 0.003, 0.1)
+    model.log_prob(theta)
+    times = []
+    for _ in range(30):
+        t1 = time.perf_counter()
+        model.log_prob(theta)
+        times.append(time.perf_counter() - t1)
+    per_eval = float(np.median(times))
+    print(f"one log-probability evaluation: median {per_eval * 1e3:.2f} ms (30 calls)")
+    taus = []
+    for f in sorted((Path(__file__).resolve().parents[1] / "results" / "recovery").glob("*/fit.json")):
+        taus.append(max(json.loads(f.read_text())["tau"].values()))
+    if taus:
+        tau = max(taus)
+        evals = 50 * tau * args.walkers
+        print(f"largest autocorrelation time in results/recovery: {tau:.0f} steps; 50 tau x {args.walkers} walkers "
+              f"= {evals:,.0f} evaluations = {evals * per_eval / 60:.0f} min on one process, "
+              f"{evals * per_eval / 120:.0f} min on two (projection from the measured rates)")
 
 
 if __name__ == "__main__":
