@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 
 from .device import paper_parameters
 from .records import fit_accuracy, generate_record, lowpass, write_record

@@ -7,7 +7,6 @@ import matplotlib
 matplotlib.use("Agg")  # files only; no display is assumed
 
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 
 from .records.record import Record  # noqa: E402
 

@@ -53,7 +53,7 @@ def test_same_seed_same_summary(tmp_path, record_file):
 
     rec = read_record(record_file)
     a = fit_record(rec, tmp_path / "a", steps=20, walkers=24, seed=5, plots=False)
-    b = fit_record(rec, tmp_path / "b", steps=20, walkers=24, seed=5, plots=False)
+    fit_record(rec, tmp_path / "b", steps=20, walkers=24, seed=5, plots=False)
     assert (tmp_path / "a" / "summary.csv").read_bytes() == (tmp_path / "b" / "summary.csv").read_bytes()
     c = fit_record(rec, tmp_path / "c", steps=20, walkers=24, seed=6, plots=False)
     assert c.summary[0]["mean"] != a.summary[0]["mean"]

@@ -3,7 +3,7 @@ import json
 import numpy as np
 import pytest
 
-from bayes_inerter.records import GeneratorSettings, Record, RecordError, generate_record, read_record, write_record
+from bayes_inerter.records import GeneratorSettings, RecordError, generate_record, read_record, write_record
 from bayes_inerter import paper_parameters
 
 
