@@ -141,8 +141,11 @@ def _write_plots(out: Path, pm: PosteriorModel, sample, sims) -> None:
     figs = {
         "corner.png": plot_corner(flat, sample.names, truths=truths, paper=paper,
                                   title=f"{label}: {pm.model} model"),
-        "bands.png": plot_bands(pm.record.time, pm.measured_lp, sims, freq=pm.record.drive_frequency,
-                                title=f"{label}: posterior predictive acceleration ({pm.model})"),
+        # inside the likelihood's window: the low-pass rings at the record's ends
+        "bands.png": plot_bands(pm.record.time[pm.window], pm.measured_lp[pm.window], sims[:, pm.window],
+                                freq=pm.record.drive_frequency,
+                                title=f"{label}: posterior predictive acceleration ({pm.model}), "
+                                      f"{pm.likelihood.edge:g} s cut at each end"),
         "trace.png": plot_trace(sample.theta, sample.names, burn=sample.burn, thin=sample.thin),
         "phi.png": plot_phi(sample.phi, title=f"{label}: fit accuracy"),
     }
