@@ -31,7 +31,7 @@ __all__ = ["GeneratorSettings", "generate_record", "paper_grid", "STIFF_RTOL"]
 
 #: Relative tolerance of the general stiff solver when the truth is richer than the exact
 #: kernel handles (Stribeck, smooth law, backlash): 1e-6 changes phi by about 2e-5 against
-#: 1e-8 and saves a third of the time (about 7 s of computing per second of record).
+#: 1e-8 and saves a third of the time (5-8 s of computing per second of record, measured).
 STIFF_RTOL = 1e-6
 
 
