@@ -206,8 +206,10 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
     Returns
     -------
     accel : (K,) acceleration of out_node just after each sample instant, m/s^2.
+    vel : (K,) velocity of out_node at each sample instant, m/s (continuous in the
+        parameters, unlike accel, which jumps at every Coulomb switch).
     states : (K, n) states at the samples (shape (0, n) unless store).
-    status : STATUS_OK, or STATUS_TOO_MANY_EVENTS (accel then NaN from that sample on).
+    status : STATUS_OK, or STATUS_TOO_MANY_EVENTS (accel, vel then NaN from that sample on).
     stats : (2,) int, the number of mode switches and of bisections (switch searches).
     """
     m = Abar.shape[0]
@@ -242,6 +244,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
         OUT[mode] = As[out_node]
 
     accel = np.full(K, np.nan)
+    vel = np.full(K, np.nan)
     stats = np.zeros(2, dtype=np.int64)  # mode switches, bisections
     states = np.zeros((K if store else 0, n))
     z = np.zeros(m)
@@ -260,6 +263,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             z[wcol + i] = sgn[i] * f0[i]
     mode = _switch(z, mode, nc, node, R, f0, sgn, wcol)
     accel[0] = _dot(OUT[mode], z)
+    vel[0] = z[out_node]
     if store:
         states[0] = z[:n]
 
@@ -327,9 +331,10 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
                 # the mode unchanged (a reversal); count both to bound the work
                 events += 1
             if events > max_events:
-                return accel, states, STATUS_TOO_MANY_EVENTS, stats
+                return accel, vel, states, STATUS_TOO_MANY_EVENTS, stats
             _guards(z, mode, nc, node, R, VD, RD, va, da)
         accel[k + 1] = _dot(OUT[mode], z)
+        vel[k + 1] = z[out_node]
         if store:
             states[k + 1] = z[:n]
-    return accel, states, STATUS_OK, stats
+    return accel, vel, states, STATUS_OK, stats

@@ -154,7 +154,6 @@ def run_stiff(compiled, A, B, t, inputs, *, x0=None, v_eps=V_EPS, rtol=RTOL, max
 
 
 def simulate_stiff(compiled: CompiledNetwork, t, force, *, x0=None, v_eps=V_EPS, rtol=RTOL):
-    """Acceleration of node 0 under a force record, by the stiff solver."""
+    """Acceleration of node 0 under a force record, by the stiff solver, and the states."""
     A, B = compiled.state_space(viscous=False)
-    accel, _ = run_stiff(compiled, A, B, t, force, x0=x0, v_eps=v_eps, rtol=rtol)
-    return accel
+    return run_stiff(compiled, A, B, t, force, x0=x0, v_eps=v_eps, rtol=rtol)

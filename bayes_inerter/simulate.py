@@ -13,8 +13,21 @@ Two methods, chosen by ``method="auto"``:
   signs are regularised as tanh(v / v_eps). Slower by orders of magnitude: for
   generating richer "truth" records and for reference checks.
 
-Between samples the force is interpolated linearly; the output is the acceleration of
-the driven terminal just after each sample instant.
+Between samples the force is interpolated linearly. The output is the acceleration of
+the driven terminal, sampled in one of two ways (``sampling``):
+
+- ``"instant"`` (default): its value just after each sample instant;
+- ``"mean"``: its mean over the two intervals around each sample instant, the central
+  difference of the (exact) velocity, (v[k+1] - v[k-1]) / 2h (one-sided at the ends).
+
+Every Coulomb switch makes the acceleration jump (the plate's 732 N over 57 kg: about
+13 m/s^2), so an instantaneous sample changes by that much when a switch moves across a
+sample instant: the sampled output is then a discontinuous function of the parameters,
+and a likelihood built on it is rough (measured on a generated A1 record: log-likelihood
+steps of tens of nats for 0.05 % changes of the Coulomb force). The mean is continuous
+in the parameters (the velocity is), is what an anti-aliased sensor sees rather than a
+point value, and costs nothing more; its gain at 30 Hz is sinc(2 f h) = 0.996 at 1 kHz.
+The likelihood uses it.
 """
 
 from __future__ import annotations
@@ -34,7 +47,11 @@ __all__ = [
     "SimulationError",
     "MAX_EVENTS_PER_STEP",
     "UNIFORM_RTOL",
+    "SAMPLINGS",
 ]
+
+#: Ways of sampling the output acceleration (see module docstring).
+SAMPLINGS = ("instant", "mean")
 
 #: Switches allowed within one sample interval before the exact kernel gives up.
 MAX_EVENTS_PER_STEP = 200
@@ -87,6 +104,17 @@ def _first_bad(x: np.ndarray) -> int:
     return int(np.argmax(~np.isfinite(x)))
 
 
+def _check_sampling(sampling: str) -> None:
+    if sampling not in SAMPLINGS:
+        raise ValueError(f"unknown sampling {sampling!r}; choose one of {', '.join(SAMPLINGS)}")
+
+
+def mean_acceleration(vel: np.ndarray, h: float) -> np.ndarray:
+    """Mean acceleration over [t_k - h, t_k + h] from velocity samples (central
+    differences; one-sided over one interval at the ends)."""
+    return np.gradient(vel, h)
+
+
 def _contacts(compiled: CompiledNetwork):
     bounds = compiled.coulomb_bounds
     nodes = np.flatnonzero(bounds > 0).astype(np.int64)
@@ -103,12 +131,15 @@ def run_piecewise_linear(
     x0: np.ndarray | None = None,
     store: bool = False,
     max_events: int = MAX_EVENTS_PER_STEP,
+    sampling: str = "instant",
 ):
     """Run the exact kernel on x' = A x + B u(t) plus the network's Coulomb contacts.
 
     ``A`` (n, n) and ``B`` (n, n_in) must include the viscous parts; ``inputs`` (K, n_in)
-    are interpolated linearly. Returns (acceleration of node 0, states (K, n) or empty).
+    are interpolated linearly. Returns (acceleration of node 0, sampled as ``sampling``
+    says, and the states (K, n) or an empty array).
     """
+    _check_sampling(sampling)
     if not compiled.all_coulomb:
         raise ValueError("the exact kernel needs Coulomb laws only and no backlash")
     nodes, f0, mass = _contacts(compiled)
@@ -127,7 +158,7 @@ def run_piecewise_linear(
     z0 = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float)
     if z0.shape != (n,):
         raise ValueError(f"initial state must have shape ({n},), got {z0.shape}")
-    accel, states, status, _ = _kernel.run_kernel(
+    accel, vel, states, status, _ = _kernel.run_kernel(
         Abar, n, n_in, nodes, f0, mass, np.ascontiguousarray(inputs, dtype=float).reshape(-1, n_in),
         float(h), z0, 0, store, int(max_events),
     )
@@ -136,6 +167,8 @@ def run_piecewise_linear(
             f"more than {max_events} friction switches within one sample interval; "
             "the record or the parameters make the contacts chatter"
         )
+    if sampling == "mean":
+        accel = mean_acceleration(vel, h)
     return accel, states
 
 
@@ -148,6 +181,7 @@ def simulate_network(
     x0=None,
     v_eps: float = _stiff.V_EPS,
     rtol: float = _stiff.RTOL,
+    sampling: str = "instant",
 ) -> np.ndarray:
     """Acceleration (m/s^2) of the driven terminal of ``network`` under ``force`` (N).
 
@@ -158,17 +192,20 @@ def simulate_network(
     method : "auto", "exact" or "stiff" (see module docstring).
     x0 : initial state (see ``network.compile``); default at rest.
     v_eps, rtol : regularisation width (m/s) and relative tolerance of the stiff method.
+    sampling : "instant" (default) or "mean" (see module docstring).
     """
+    _check_sampling(sampling)
     t, (f,), h = check_record(time, force)
     compiled = network if isinstance(network, CompiledNetwork) else compile_network(network)
     if method == "auto":
         method = "exact" if compiled.all_coulomb else "stiff"
     if method == "exact":
         A, B = compiled.state_space(viscous=True)
-        accel, _ = run_piecewise_linear(compiled, A, B, f, h, x0=x0)
+        accel, _ = run_piecewise_linear(compiled, A, B, f, h, x0=x0, sampling=sampling)
         return accel
     if method == "stiff":
-        return _stiff.simulate_stiff(compiled, t, f, x0=x0, v_eps=v_eps, rtol=rtol)
+        accel, states = _stiff.simulate_stiff(compiled, t, f, x0=x0, v_eps=v_eps, rtol=rtol)
+        return mean_acceleration(states[:, 0], h) if sampling == "mean" else accel
     raise ValueError(f"unknown method {method!r}; choose auto, exact or stiff")
 
 
@@ -195,16 +232,17 @@ def simulate(
         callable mapping (Coulomb N, viscous N s/m) to a friction law.
     method : "auto" (exact kernel when it applies), "exact" or "stiff".
     x0 : initial state; default at rest.
-    options : passed to the network builder (``theta``, ``nut_share`` for "full") or to
-        the stiff method (``v_eps``, ``rtol``).
+    options : passed to the network builder (``theta``, ``nut_share`` for "full"), to
+        the stiff method (``v_eps``, ``rtol``), or ``sampling`` ("instant" or "mean",
+        see module docstring).
 
     Returns
     -------
-    accel : shape (K,), m/s^2, just after each sample instant.
+    accel : shape (K,), m/s^2, just after each sample instant (or its mean around it).
     """
     if not isinstance(params, InerterParameters):
         raise ValueError(f"params must be InerterParameters, got {type(params).__name__}")
     validate_parameters(params)
-    solver_opts = {k: options.pop(k) for k in ("v_eps", "rtol") if k in options}
+    solver_opts = {k: options.pop(k) for k in ("v_eps", "rtol", "sampling") if k in options}
     net = build_network(network, params, friction, **options)
     return simulate_network(net, time, force, method=method, x0=x0, **solver_opts)

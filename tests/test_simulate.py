@@ -66,6 +66,51 @@ def test_refining_the_record_changes_nothing():
     assert rel_error(a10, a) < 1e-6
 
 
+def test_mean_sampling_is_the_mean_of_the_acceleration():
+    """"mean" equals the average of the instantaneous acceleration over [t - h, t + h],
+    computed independently from a 64 times finer simulation of the same trajectory, on
+    a stick-slip record where the acceleration jumps at every switch."""
+    p = paper_parameters("A0")
+    t, f = inverse_dynamics_force(p, 0.5, duration=2.5, ramp=0.5)
+    f = 0.9 * f
+    mean = simulate(p, t, f, sampling="mean")
+    q = 64
+    tq = np.linspace(t[0], t[-1], q * (len(t) - 1) + 1)
+    aq = simulate(p, tq, np.interp(tq, t, f))
+    # trapezoid over the 2q fine intervals around each interior sample, divided by 2h
+    cum = np.concatenate([[0.0], np.cumsum(0.5 * (aq[1:] + aq[:-1]))]) / q
+    k = np.arange(1, len(t) - 1)
+    ref = (cum[(k + 1) * q] - cum[(k - 1) * q]) / 2
+    assert rel_error(mean[1:-1], ref) < 1e-3
+    # the instantaneous samples are not this mean: the jumps at the switches differ
+    assert rel_error(simulate(p, t, f)[1:-1], ref) > 10 * rel_error(mean[1:-1], ref)
+
+
+def test_mean_sampling_is_continuous_in_the_parameters():
+    """On a generated record, low-passed as the likelihood does: a tenfold smaller change
+    of the plate's Coulomb force changes the "mean" output tenfold less (Lipschitz) down
+    to 1e-7; the instantaneous output does not, since it jumps when a switch crosses a
+    sample instant (what made the likelihood rough)."""
+    from bayes_inerter.records import GeneratorSettings, generate_record, lowpass
+
+    p = paper_parameters("A1")
+    rec = generate_record(p, 1.0, rng=0, settings=GeneratorSettings(duration=4.0, ramp=1.0))
+
+    def change(eps, sampling):
+        a0 = simulate(p, rec.time, rec.force, sampling=sampling)
+        a1 = simulate(dataclasses.replace(p, f1_0=p.f1_0 * (1 + eps)), rec.time, rec.force, sampling=sampling)
+        return np.max(np.abs(lowpass(a1 - a0, rec.fs)))
+
+    def ratios(sampling):
+        return [change(10 * eps, sampling) / change(eps, sampling) for eps in (1e-7, 1e-6, 1e-5, 1e-4)]
+
+    mean = ratios("mean")
+    assert all(8 < r < 12 for r in mean), mean
+    assert max(ratios("instant")) > 15
+    with pytest.raises(ValueError, match="sampling"):
+        simulate(p, rec.time, rec.force, sampling="average")
+
+
 @pytest.mark.parametrize("setting", ["A0", "B2"])
 def test_linear_part_is_exact(setting):
     """Without contacts the kernel equals scipy's first-order-hold discretisation."""

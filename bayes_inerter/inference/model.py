@@ -27,7 +27,7 @@ from scipy import signal
 from ..device import TABLE_I, InerterParameters, setting as get_setting
 from ..records.conditioning import LOWPASS_HZ, lowpass
 from ..records.record import Record
-from ..simulate import SimulationError, check_record, simulate
+from ..simulate import SAMPLINGS, SimulationError, check_record, simulate
 from .priors import DEFAULT_PRIORS, NOISE_PRIORS, SPLIT_PRIORS
 
 __all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
@@ -64,6 +64,13 @@ class LikelihoodSettings:
         Default 2 (measured on a generated A3 record at 1 kHz, no noise: the residual
         at the true parameters falls from 2.0e-3 to 5.5e-4 m/s^2 rms); 1 is the paper's
         linear interpolation. It doubles the simulation cost.
+    sampling : how the simulated acceleration is sampled (``simulate``'s option):
+        "mean" (default), its mean around each sample instant, continuous in the
+        parameters; "instant", its value at the instant, which jumps by the Coulomb
+        force over the plate mass whenever a friction switch crosses a sample instant
+        and makes the likelihood rough (tens of nats for a 0.05 % change of the
+        Coulomb force, measured on a generated A1 record at 1 Hz; with "mean" the same
+        scan is a smooth parabola peaked at the truth).
     """
 
     residual: str = "ar1"
@@ -71,6 +78,7 @@ class LikelihoodSettings:
     stride: int | None = None
     edge: float = 0.25
     upsample: int = 2
+    sampling: str = "mean"
 
     def __post_init__(self) -> None:
         if self.residual not in ("ar1", "iid"):
@@ -83,6 +91,8 @@ class LikelihoodSettings:
             raise ValueError(f"edge must be non-negative, got {self.edge}")
         if not (isinstance(self.upsample, int) and 1 <= self.upsample <= 16):
             raise ValueError(f"upsample must be a whole number from 1 to 16, got {self.upsample!r}")
+        if self.sampling not in SAMPLINGS:
+            raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}, got {self.sampling!r}")
 
 
 def record_masses(record: Record, m_s: float | None = None, m_B: float | None = None) -> tuple[float, float]:
@@ -245,7 +255,8 @@ class PosteriorModel:
 
     def simulate_lp(self, theta) -> np.ndarray:
         """Low-passed simulated acceleration over the whole record."""
-        a = simulate(self.parameters(theta), self._sim_time, self._sim_force, network=self.network)
+        a = simulate(self.parameters(theta), self._sim_time, self._sim_force, network=self.network,
+                     sampling=self.likelihood.sampling)
         q = self.likelihood.upsample
         if q > 1:
             a = signal.resample_poly(a, 1, q)[: len(self.record.time)]

@@ -24,7 +24,7 @@ from .. import _stiff
 from ..device import FREQUENCIES_HZ, SETTINGS, InerterParameters, paper_parameters
 from ..models import build_network
 from ..network import Backlash, Deformation, Network, compile_network
-from ..simulate import run_piecewise_linear
+from ..simulate import mean_acceleration, run_piecewise_linear
 from .record import Record
 
 __all__ = ["GeneratorSettings", "generate_record", "paper_grid", "STIFF_RTOL"]
@@ -152,10 +152,14 @@ def _simulate_servo(params, freq, s: GeneratorSettings):
     B = np.zeros((n, 2))
     B[0] = [s.k_p * inv_m0, s.k_d * inv_m0]
     inputs = np.column_stack([x_ref, v_ref])
+    # The sensor sees the continuous acceleration, which jumps at every Coulomb switch:
+    # its fine-rate samples are means over +-1/fine around each instant (the velocity's
+    # central difference), not point values, so a jump is not aliased onto one sample.
     if exact:
-        accel, states = run_piecewise_linear(compiled, A, B, inputs, 1.0 / fine, store=True)
+        _, states = run_piecewise_linear(compiled, A, B, inputs, 1.0 / fine, store=True)
     else:
-        accel, states = _stiff.run_stiff(compiled, A, B, t, inputs, rtol=STIFF_RTOL)
+        _, states = _stiff.run_stiff(compiled, A, B, t, inputs, rtol=STIFF_RTOL)
+    accel = mean_acceleration(states[:, 0], 1.0 / fine)
     disp = states[:, pos]
     force = s.k_p * (x_ref - disp) + s.k_d * (v_ref - states[:, 0])
     return t, force, accel, disp
