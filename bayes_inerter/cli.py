@@ -201,12 +201,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="output folder (a checkpoint there is continued)")
     p.add_argument("--m-s", type=_positive_float, help="screw mass m_s, kg (else from the record's metadata)")
     p.add_argument("--model", choices=("two-port", "rigid", "linear"), default="two-port", help="model (%(default)s)")
-    p.add_argument("--walkers", type=_positive_int, help="walkers (default 4 x parameters)")
+    p.add_argument("--walkers", type=_positive_int, help="walkers (default 2 x parameters + 2)")
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
     p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")
     p.add_argument("--residual", choices=("ar1", "iid"), default="ar1", help="residual model (%(default)s)")
-    p.add_argument("--upsample", type=_positive_int, default=2,
-                   help="force reconstruction rate / record rate before simulating (%(default)s; 1: linear interpolation)")
+    p.add_argument("--upsample", type=_positive_int, default=1,
+                   help="force reconstruction rate / record rate before simulating (%(default)s: linear interpolation)")
     p.add_argument("--processes", type=_positive_int, help="worker processes (default: up to 2)")
     p.add_argument("--fresh", action="store_true", help="start over instead of continuing the checkpoint")
     p.set_defaults(func=cmd_fit)
