@@ -27,7 +27,7 @@ from ..records.conditioning import lowpass
 from .model import PosteriorModel
 from .priors import RHO_BOUNDS
 
-__all__ = ["find_start", "rigid_guess", "velocity_estimate", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER"]
+__all__ = ["find_start", "laplace_ensemble", "sse", "rigid_guess", "velocity_estimate", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER"]
 
 DE_POPSIZE = 8  # population per parameter
 DE_MAXITER = 40  # generations
@@ -120,18 +120,30 @@ def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_POPSIZE, maxiter=DE_MAXITER):
-    """Return (theta, log posterior) of a quick optimum."""
+def sse(model: PosteriorModel, phys: np.ndarray) -> float:
+    """Sum of squared kept residuals at the physical part of theta (stage 1's objective)."""
+    return _sse(model, phys)
+
+
+def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_POPSIZE, maxiter=DE_MAXITER,
+               sse_many=None):
+    """Return (theta, log posterior) of a quick optimum.
+
+    ``sse_many``: optional callable mapping a list of physical parameter vectors to
+    their :func:`sse` values (for example on a process pool): differential evolution
+    then evaluates each generation through it. The result does not depend on it.
+    """
     nphys = model.n_phys
     bounds = model.bounds()
     # the noise entries are not optimised in stage 1: fix them mid-prior so the prior is finite
     x0 = _initial_point(model)
+    workers = (lambda _func, xs: sse_many(list(xs))) if sse_many is not None else 1
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         de = differential_evolution(
             lambda x: _sse(model, x), bounds[:nphys], popsize=popsize, maxiter=maxiter,
             seed=rng, polish=False, init="sobol", tol=1e-8, updating="deferred",
-            x0=x0,
+            x0=x0, workers=workers,
         )
     phys = min(_swaps(model, de.x) + _swaps(model, x0), key=lambda x: _sse(model, x))
     _, _, sim = model.evaluate(np.concatenate([phys, [0.0, 0.0][: model.ndim - nphys]]))
@@ -150,3 +162,91 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     res = minimize(neg, theta, method="Nelder-Mead", options={"maxiter": NM_MAXITER, "xatol": 1e-6, "fatol": 1e-6})
     best = res.x if res.fun < neg(theta) else theta
     return best, model.log_prob(best)[0]
+
+
+#: Initial walkers whose log posterior falls more than this many sd of a chi-square's
+#: half below the optimum's are drawn again (see :func:`laplace_ensemble`).
+INIT_SD = 4.0
+
+
+def _unit(model: PosteriorModel):
+    """Map theta to the prior's unit box and back (the Hessian is taken there)."""
+    bounds = model.bounds()
+    lo, width = bounds[:, 0], bounds[:, 1] - bounds[:, 0]
+    return (lambda theta: (theta - lo) / width), (lambda u: lo + u * width)
+
+
+def _fd_steps(f, u0: np.ndarray, f0: float) -> np.ndarray:
+    """Per coordinate, a step that lowers f by about one nat (halving from a quarter of
+    the unit box; flat coordinates keep the quarter)."""
+    steps = np.full(len(u0), 0.25)
+    for i in range(len(u0)):
+        h = 0.25
+        for _ in range(40):
+            drops = []
+            for sgn in (1.0, -1.0):
+                u = u0.copy()
+                u[i] += sgn * h
+                drops.append(f0 - f(u) if 0.0 <= u[i] <= 1.0 else np.inf)
+            if min(drops) <= 2.0:
+                break
+            h *= 0.5
+        steps[i] = h
+    return steps
+
+
+def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rng: np.random.Generator):
+    """Initial walkers spread like the posterior near the optimum ``theta``.
+
+    The Hessian of the log posterior at ``theta`` is taken by central differences in
+    the prior's unit box, with a step per coordinate that lowers it by about one nat.
+    Its inverse is the covariance of a normal approximation, where every direction the
+    data leave flat (or curved the wrong way) gets the spread of the prior (variance
+    1/12 of the box). Walkers are drawn from it, and a draw outside the prior or whose
+    log posterior lies more than ``INIT_SD`` sd of chi-square(ndim)/2 below the
+    optimum's is drawn again (the spread is halved after every 20 x nwalkers tries).
+
+    Walkers started in a tiny ball must first expand across the directions the data do
+    not fix (bearing damping, nut stiffness, the viscous split, spanning orders of
+    magnitude), which lengthens the burn-in and inflates the autocorrelation estimate;
+    walkers started like this begin near equilibrium.
+    Returns (nwalkers, ndim) and the number of log-posterior evaluations spent.
+    """
+    to_u, from_u = _unit(model)
+    n_evals = [0]
+
+    def f(u):
+        n_evals[0] += 1
+        if np.any(u < 0.0) or np.any(u > 1.0):
+            return -np.inf
+        lp, _ = model.log_prob(from_u(u))
+        return lp
+
+    u0 = to_u(np.asarray(theta, dtype=float))
+    f0 = f(u0)
+    d = len(u0)
+    h = _fd_steps(f, u0, f0)
+    H = np.zeros((d, d))
+    for i in range(d):
+        e_i = np.zeros(d)
+        e_i[i] = h[i]
+        fp, fm = f(u0 + e_i), f(u0 - e_i)
+        H[i, i] = (fp - 2 * f0 + fm) / h[i] ** 2 if np.isfinite(fp + fm) else 0.0
+        for j in range(i):
+            e_j = np.zeros(d)
+            e_j[j] = h[j]
+            quad = [f(u0 + e_i + e_j), f(u0 + e_i - e_j), f(u0 - e_i + e_j), f(u0 - e_i - e_j)]
+            H[i, j] = H[j, i] = (quad[0] - quad[1] - quad[2] + quad[3]) / (4 * h[i] * h[j]) if np.all(np.isfinite(quad)) else 0.0
+    lam, vec = np.linalg.eigh(-0.5 * (H + H.T))
+    var = np.where(lam > 12.0, 1.0 / np.where(lam > 12.0, lam, 1.0), 1.0 / 12.0)
+    root = vec * np.sqrt(var)
+    floor = f0 - (0.5 * d + INIT_SD * math.sqrt(0.5 * d))
+    walkers, scale, tries = [], 1.0, 0
+    while len(walkers) < nwalkers:
+        u = u0 + scale * root @ rng.standard_normal(d)
+        if f(u) >= floor:
+            walkers.append(u)
+        tries += 1
+        if tries % (20 * nwalkers) == 0:
+            scale *= 0.5
+    return np.array([from_u(u) for u in walkers]), n_evals[0]

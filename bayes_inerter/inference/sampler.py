@@ -25,13 +25,19 @@ import emcee
 import numpy as np
 
 from .model import PosteriorModel
+from .optimize import find_start, laplace_ensemble, sse
 
 __all__ = ["Convergence", "CheckpointError", "SamplerRun", "run_sampler", "record_digest", "check_run_options"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
-#: Spread of the initial walker ball in theta (log space), around the optimum.
-BALL = 1e-3
+
+
+def default_walkers(ndim: int) -> int:
+    """Default walkers: twice the parameters plus two (24 for the two-port model's 11).
+    A converged run costs walkers x 50 tau evaluations, so the default is near the
+    fewest the moves need (2 ndim), with a margin; more walkers is an option."""
+    return 2 * ndim + 2
 
 
 class CheckpointError(ValueError):
@@ -117,6 +123,10 @@ def _log_prob(theta):
     return _MODEL.log_prob(theta)
 
 
+def _sse(phys):
+    return sse(_MODEL, phys)
+
+
 def _open_backend(path, model: PosteriorModel, nwalkers: int, fresh: bool):
     """An HDF backend ready to sample into, and the steps it already holds."""
     import h5py
@@ -152,12 +162,6 @@ def _open_backend(path, model: PosteriorModel, nwalkers: int, fresh: bool):
     return backend, iteration, digest
 
 
-def _initial_ball(theta: np.ndarray, model: PosteriorModel, nwalkers: int, rng: np.random.Generator):
-    bounds = model.bounds()
-    p0 = theta + BALL * rng.standard_normal((nwalkers, len(theta))) * (bounds[:, 1] - bounds[:, 0])
-    return np.clip(p0, bounds[:, 0] + 1e-9, bounds[:, 1] - 1e-9)
-
-
 def _diagnostics(sampler, conv: Convergence):
     from .diagnostics import rhat_ess
 
@@ -168,8 +172,9 @@ def _diagnostics(sampler, conv: Convergence):
 
 
 def check_run_options(ndim: int, nwalkers: int | None, steps: int | None) -> int:
-    """Validate walkers and steps; return the number of walkers (default 4 x ndim, even)."""
-    nwalkers = nwalkers or 2 * ((4 * ndim + 1) // 2)
+    """Validate walkers and steps; return the number of walkers (default
+    :func:`default_walkers`)."""
+    nwalkers = nwalkers or default_walkers(ndim)
     if nwalkers < 2 * ndim or nwalkers % 2:
         raise ValueError(f"walkers must be even and at least {2 * ndim} (twice the parameters), got {nwalkers}")
     if steps is not None and steps < 1:
@@ -195,14 +200,15 @@ def run_sampler(
 
     Parameters
     ----------
-    nwalkers : walkers (default: 4 x parameters, even).
+    nwalkers : walkers (default: twice the parameters plus two).
     steps : run exactly this many steps in all (continuing a checkpoint adds only what is
         missing); None runs until converged or ``convergence.max_steps``.
     seed : seeds the optimiser, the initial ball and the sampler's random state.
     fresh : start over even if the checkpoint holds steps.
     processes : worker processes evaluating walkers in parallel (1: none).
     progress : callable(iteration, target or None), called after each step.
-    start : optional (theta, log prob) to start from instead of the optimiser.
+    start : optional (theta, log prob) to start from instead of the optimiser; the
+        walkers are drawn around it by ``optimize.laplace_ensemble``.
     """
     from pathlib import Path
 
@@ -227,12 +233,11 @@ def run_sampler(
         if done == 0:
             rng = np.random.default_rng(seed)
             if start is None:
-                from .optimize import find_start
-
-                start = find_start(model, rng)
+                sse_many = (lambda xs: pool.map(_sse, xs)) if pool is not None else None
+                start = find_start(model, rng, sse_many=sse_many)
             start_theta = np.asarray(start[0], dtype=float)
             sampler.random_state = np.random.RandomState(seed).get_state()
-            state = _initial_ball(start_theta, model, nwalkers, rng)
+            state, _ = laplace_ensemble(model, start_theta, nwalkers, rng)
         else:
             # continue from the checkpoint's last state, with its random state
             state = backend.get_last_sample()

@@ -1,0 +1,48 @@
+"""The start: the initial ensemble drawn around the optimum (optimize.laplace_ensemble)."""
+
+import numpy as np
+
+from bayes_inerter.inference.optimize import laplace_ensemble
+
+
+class GaussianModel:
+    """A stand-in for PosteriorModel: a correlated normal in the first two coordinates,
+    flat in the third, inside a box (what laplace_ensemble uses of a model)."""
+
+    def __init__(self):
+        self.cov = np.array([[1e-4, 0.8e-4], [0.8e-4, 1e-4]])
+        self.prec = np.linalg.inv(self.cov)
+        self.mean = np.array([0.5, 0.2])
+        self.box = np.array([[0.0, 1.0], [-1.0, 1.0], [0.0, 10.0]])
+
+    def bounds(self):
+        return self.box
+
+    def log_prob(self, theta):
+        if np.any(theta < self.box[:, 0]) or np.any(theta > self.box[:, 1]):
+            return -np.inf, np.nan
+        d = theta[:2] - self.mean
+        return -0.5 * d @ self.prec @ d, 0.0
+
+
+def test_ensemble_has_the_posterior_spread():
+    model = GaussianModel()
+    start = np.array([0.5, 0.2, 3.0])
+    walkers, n_evals = laplace_ensemble(model, start, 400, np.random.default_rng(1))
+    assert walkers.shape == (400, 3)
+    assert n_evals > 400
+    cov = np.cov(walkers[:, :2].T)
+    # a normal truncated at 4 sd of chi-square(3)/2: nearly all of its mass is kept
+    assert np.allclose(np.sqrt(np.diag(cov)), 1e-2, rtol=0.15)
+    assert abs(cov[0, 1] / np.sqrt(cov[0, 0] * cov[1, 1]) - 0.8) < 0.08
+    # the flat coordinate gets the spread of its box (uniform: width / sqrt(12)), truncated by it
+    assert 1.5 < np.std(walkers[:, 2]) < 3.5
+    assert np.all((walkers >= model.box[:, 0]) & (walkers <= model.box[:, 1]))
+
+
+def test_same_generator_same_ensemble():
+    model = GaussianModel()
+    start = np.array([0.5, 0.2, 3.0])
+    a, _ = laplace_ensemble(model, start, 24, np.random.default_rng(7))
+    b, _ = laplace_ensemble(model, start, 24, np.random.default_rng(7))
+    assert np.array_equal(a, b)
