@@ -166,6 +166,59 @@ def cmd_fit(args) -> int:
     return EXIT_OK
 
 
+def cmd_study(args) -> int:
+    import os
+    from dataclasses import replace
+
+    from tqdm import tqdm
+
+    from .study import full_plan, quick_plan, run_study
+
+    plan = quick_plan() if args.quick else full_plan()
+    changes = {}
+    if args.steps is not None:
+        changes["steps"] = args.steps
+    if args.seed is not None:
+        changes["seed"] = args.seed
+    if args.records:
+        if not Path(args.records).is_dir():
+            raise CliError(f"--records {args.records}: not a folder of CSV records")
+        changes["records_dir"] = args.records
+    plan = replace(plan, **changes)
+    out = Path(args.out or Path("results") / plan.name)
+    processes = args.processes or min(2, os.cpu_count() or 1)
+    bar = tqdm(desc=f"study {plan.name}", unit="fit", file=sys.stderr, disable=None)
+
+    def on_jobs(n):
+        bar.total = n
+        bar.refresh()
+
+    def on_done(outcome):
+        bar.update(1)
+        if outcome["status"] == "failed":
+            bar.write(f"failed: {outcome['key']}: {outcome.get('error', '')}", file=sys.stderr)
+
+    try:
+        result = run_study(plan, out, processes=processes, scheduler=args.scheduler, on_done=on_done,
+                           on_jobs=on_jobs)
+    finally:
+        bar.close()
+    for row in result.tables["inertance"]:
+        print(f"{row['setting']}: b = {row['b_median']:.6g} kg (94 % {row['b_hdi_3%']:.6g} to "
+              f"{row['b_hdi_97%']:.6g}); theory {row['b_theory']:.6g}, paper {row['b_paper']:.6g}")
+    done = [o for o in result.outcomes if o["status"] != "failed"]
+    n_conv = sum(bool(o.get("converged")) for o in done)
+    if n_conv < len(done):
+        print(f"warning: {len(done) - n_conv} of {len(done)} chains not converged; the report says which")
+    print(f"wrote {result.report} and the tables and figures beside it ({result.seconds['total']:.0f} s)")
+    failed = [o for o in result.outcomes if o["status"] == "failed"]
+    if failed:
+        print(f"error: {len(failed)} of {len(result.outcomes)} fits failed: "
+              + ", ".join(o["key"] for o in failed), file=sys.stderr)
+        return EXIT_FAIL
+    return EXIT_OK
+
+
 def cmd_demo(args) -> int:
     from .demo import run_demo
 
@@ -210,6 +263,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--processes", type=_positive_int, help="worker processes (default: up to 2)")
     p.add_argument("--fresh", action="store_true", help="start over instead of continuing the checkpoint")
     p.set_defaults(func=cmd_fit)
+
+    p = sub.add_parser("study", help="posteriors of many records, theory against identification, a report")
+    p.add_argument("--quick", action="store_true",
+                   help="the quick study: 3 settings at 1 Hz, short chains (minutes, not converged)")
+    p.add_argument("--out", help="output folder (default results/quick or results/full); finished fits there are reused")
+    p.add_argument("--records", help="a folder of your CSV records to fit instead of generated ones")
+    p.add_argument("--steps", type=_positive_int, help="steps per chain (default: the plan's; full: until converged)")
+    p.add_argument("--seed", type=int, help="seed of the generated records' noise and of the chains (0)")
+    p.add_argument("--processes", type=_positive_int, help="local worker processes, one fit each (default: up to 2)")
+    p.add_argument("--scheduler", help="run the fits on this Dask scheduler (tcp://host:port) instead")
+    p.set_defaults(func=cmd_study)
 
     p = sub.add_parser("inspect", help="validate a record and print its summary")
     p.add_argument("record", help="record CSV file")

@@ -1,0 +1,222 @@
+"""From a study's finished fits to its tables: inertance per setting against theory,
+the inertance added per flywheel, the fit accuracy phi against the paper's Table 2,
+model comparison, and what the data identify.
+
+Combining records: each record's posterior is sampled on its own (its own frictions and
+deformations). A setting's inertance from its records at several frequencies is their
+product, taken in a normal approximation (precision-weighted mean and sd of the
+per-record posteriors); a chi-square of the per-record medians about it says whether
+they agree. The increments per flywheel come from a weighted least-squares regression
+of those per-setting normals on the numbers of small and big flywheels (a normal
+posterior for base, per-small and per-big inertance under flat priors).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
+
+__all__ = ["RecordFit", "collect", "inertance_table", "record_table", "flywheel_regression", "phi_table",
+           "model_comparison", "contraction_table", "write_csv", "Z94"]
+
+#: Half-width of a central 94 % interval of a normal, in sd.
+Z94 = 1.880793608151251
+
+
+@dataclass
+class RecordFit:
+    """One finished fit: its record's setting and frequency, model, summary rows, fit.json."""
+
+    name: str
+    setting: str | None
+    freq: float | None
+    model: str
+    folder: Path
+    summary: dict  # name -> row
+    info: dict  # fit.json
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.info.get("converged"))
+
+    def stat(self, name: str, column: str) -> float:
+        return float(self.summary[name][column])
+
+    def draws(self, name: str) -> np.ndarray:
+        """Posterior draws of ``name`` (from posterior.nc)."""
+        import arviz as az
+
+        idata = az.from_netcdf(str(self.folder / "posterior.nc"))
+        return np.asarray(idata.posterior[name]).ravel()
+
+
+def _read_summary(path: Path) -> dict:
+    with open(path, newline="") as f:
+        return {row["name"]: row for row in csv.DictReader(f)}
+
+
+def collect(fits_dir: Path) -> list[RecordFit]:
+    """Every finished fit under ``fits_dir``/<model>/<record>/ (summary.csv and fit.json)."""
+    out = []
+    for summary in sorted(Path(fits_dir).glob("*/*/summary.csv")):
+        folder = summary.parent
+        info = json.loads((folder / "fit.json").read_text())
+        meta = info.get("record_metadata") or {}
+        freq = meta.get("drive_frequency_hz")
+        out.append(RecordFit(folder.name, meta.get("setting"), float(freq) if freq else None, info["model"],
+                             folder, _read_summary(summary), info))
+    return out
+
+
+def _normal(fit: RecordFit) -> tuple[float, float]:
+    """Mean and sd of b (kg) from a fit's summary."""
+    return fit.stat("b", "mean"), fit.stat("b", "sd")
+
+
+def record_table(fits: list[RecordFit]) -> list[dict]:
+    """b and phi of every two-port fit, one row per record."""
+    rows = []
+    for f in fits:
+        if f.model != "two-port":
+            continue
+        rows.append({
+            "record": f.name, "setting": f.setting, "freq_hz": f.freq,
+            "b_mean": f.stat("b", "mean"), "b_sd": f.stat("b", "sd"),
+            "b_hdi_3%": f.stat("b", "hdi_3%"), "b_hdi_97%": f.stat("b", "hdi_97%"), "b_r_hat": f.stat("b", "r_hat"),
+            "phi_mean": f.stat("phi", "mean"), "phi_hdi_3%": f.stat("phi", "hdi_3%"),
+            "phi_hdi_97%": f.stat("phi", "hdi_97%"), "converged": f.converged,
+            "iterations": int(f.info["iterations"]),
+        })
+    return rows
+
+
+def _combine(normals):
+    """Product of normals: mean, sd, and the chi-square of the means about it."""
+    means = np.array([m for m, _ in normals])
+    prec = np.array([1.0 / s**2 for _, s in normals])
+    mean = float(np.sum(prec * means) / np.sum(prec))
+    chi2 = float(np.sum(prec * (means - mean) ** 2))
+    return mean, float(1.0 / math.sqrt(np.sum(prec))), chi2
+
+
+def inertance_table(fits: list[RecordFit], geometry=None) -> list[dict]:
+    """Per setting: theory, the paper's identified b, and the posterior (all its records).
+
+    Columns ``setting, b_theory, b_paper, b_median, b_hdi_3%, b_hdi_97%`` (the normal
+    approximation's median and central 94 % interval), then ``b_sd``, ``records``,
+    ``chi2`` (of the per-record means about the combined one; about records - 1 when
+    they agree) and ``converged`` (all its chains).
+    """
+    by_setting = {}
+    for f in fits:
+        if f.model == "two-port" and f.setting in SETTINGS:
+            by_setting.setdefault(f.setting, []).append(f)
+    rows = []
+    for name in SETTINGS:
+        group = by_setting.get(name)
+        if not group:
+            continue
+        mean, sd, chi2 = _combine([_normal(f) for f in group])
+        rows.append({
+            "setting": name, "b_theory": theoretical_inertance(name, geometry), "b_paper": SETTINGS[name].b_paper,
+            "b_median": mean, "b_hdi_3%": mean - Z94 * sd, "b_hdi_97%": mean + Z94 * sd, "b_sd": sd,
+            "records": len(group), "chi2": chi2, "converged": all(f.converged for f in group),
+        })
+    return rows
+
+
+def flywheel_regression(inertance: list[dict], geometry=None) -> list[dict]:
+    """Base, per-small and per-big-flywheel inertance: posterior (normal) against geometry.
+
+    Only the terms the settings can separate are estimated: the small (big) increment
+    needs a setting with small (big) flywheels, and the base needs more settings than
+    increments.
+    """
+    geometry = geometry or DEFAULT_GEOMETRY
+    if not inertance:
+        return []
+    ns = np.array([SETTINGS[r["setting"]].n_small for r in inertance], dtype=float)
+    nb = np.array([SETTINGS[r["setting"]].n_big for r in inertance], dtype=float)
+    terms = [("base (A0)", np.ones_like(ns), geometry.inertance(0, 0))]
+    if np.any(ns > 0):
+        terms.append(("per small flywheel", ns, geometry.inertance(1, 0) - geometry.inertance(0, 0)))
+    if np.any(nb > 0):
+        terms.append(("per big flywheel", nb, geometry.inertance(0, 1) - geometry.inertance(0, 0)))
+    X = np.column_stack([t[1] for t in terms])
+    if np.linalg.matrix_rank(X) < X.shape[1]:
+        return []
+    y = np.array([r["b_median"] for r in inertance])
+    w = 1.0 / np.array([r["b_sd"] for r in inertance]) ** 2
+    cov = np.linalg.inv(X.T @ (w[:, None] * X))
+    coef = cov @ (X.T @ (w * y))
+    rows = []
+    for (name, _, theory), c, var in zip(terms, coef, np.diag(cov)):
+        sd = math.sqrt(var)
+        rows.append({"term": name, "theory": theory, "mean": float(c), "sd": sd, "hdi_3%": c - Z94 * sd,
+                     "hdi_97%": c + Z94 * sd, "covers_theory": bool(abs(c - theory) <= Z94 * sd)})
+    return rows
+
+
+def phi_table(fits: list[RecordFit]) -> list[dict]:
+    """The fit accuracy phi per record (two-port), beside the paper's Table 2."""
+    rows = []
+    for f in fits:
+        if f.model != "two-port":
+            continue
+        paper = SETTINGS[f.setting].fit_paper.get(f.freq) if f.setting in SETTINGS else None
+        rows.append({"setting": f.setting, "freq_hz": f.freq, "phi_mean": f.stat("phi", "mean"),
+                     "phi_hdi_3%": f.stat("phi", "hdi_3%"), "phi_hdi_97%": f.stat("phi", "hdi_97%"),
+                     "phi_paper": paper})
+    return rows
+
+
+def model_comparison(fits: list[RecordFit]) -> list[dict]:
+    """Per record fitted with several models: LOO (arviz) and phi of each."""
+    import arviz as az
+
+    by_record = {}
+    for f in fits:
+        by_record.setdefault(f.name, []).append(f)
+    rows = []
+    paper = {"linear": 0.49, "rigid": 0.65, "two-port": 0.75}
+    for name, group in sorted(by_record.items()):
+        if len(group) < 2:
+            continue
+        for f in sorted(group, key=lambda g: list(paper).index(g.model)):
+            idata = az.from_netcdf(str(f.folder / "posterior.nc"))
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the Pareto k warning is kept in the table instead
+                loo = az.loo(idata, pointwise=True)
+            k_max = float(np.max(np.asarray(loo.pareto_k)))
+            rows.append({"record": name, "model": f.model, "elpd_loo": float(loo.elpd_loo), "elpd_se": float(loo.se),
+                         "p_loo": float(loo.p_loo), "pareto_k_max": k_max, "phi_mean": f.stat("phi", "mean"),
+                         "phi_paper_overall": paper[f.model], "converged": f.converged})
+    return rows
+
+
+def contraction_table(fits: list[RecordFit]) -> list[dict]:
+    """Posterior contraction of every sampled quantity, per two-port fit (from fit.json)."""
+    rows = []
+    for f in fits:
+        if f.model == "two-port" and f.info.get("contraction"):
+            rows.append({"record": f.name, **{k: round(float(v), 3) for k, v in f.info["contraction"].items()}})
+    return rows
+
+
+def write_csv(path: Path, rows: list[dict]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as f:
+        if not rows:
+            return
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        for row in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in row.items()})

@@ -1,0 +1,109 @@
+"""What a study fits: its records, models and sampler settings.
+
+A study is a list of fit jobs (one record under one model) plus where its records come
+from: the paper's grid of generated records (nine flywheel settings at 0.5, 1 and
+1.5 Hz, paper parameters) or a user's folder of CSV records. Two plans are built in:
+
+- :func:`quick_plan`: three settings (A0, A3, B2) at 1 Hz with the two-port model, and
+  the rigid-body and linear models on A3, each chain a fixed, short number of steps. It
+  runs on one core in minutes and is **not converged**: the report says so. It shows the
+  whole pipeline and the order of magnitude of every answer.
+- :func:`full_plan`: all 27 records with the two-port model until converged, and the
+  three nested models on the 1 Hz records for the comparison.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from ..device import FREQUENCIES_HZ, SETTINGS
+from ..inference.model import MODELS
+from ..records.generator import GeneratorSettings
+
+__all__ = ["FitJob", "StudyPlan", "quick_plan", "full_plan", "record_name"]
+
+
+def record_name(setting: str, freq: float) -> str:
+    """File stem of a generated record, e.g. ``A1_1Hz``."""
+    return f"{setting}_{freq:g}Hz"
+
+
+@dataclass(frozen=True)
+class FitJob:
+    """One posterior: a record (CSV path) under one model, written into ``out``."""
+
+    record: str
+    out: str
+    model: str = "two-port"
+    steps: int | None = None
+    walkers: int | None = None
+    seed: int = 0
+
+    @property
+    def key(self) -> str:
+        return f"{Path(self.record).stem}/{self.model}"
+
+
+@dataclass(frozen=True)
+class StudyPlan:
+    """A study's records and fits.
+
+    Attributes
+    ----------
+    name : the study's name (``results/<name>/`` by default).
+    settings, frequencies : the grid of generated records (ignored with ``records_dir``).
+    records_dir : a folder of the user's CSV records to fit instead of generated ones;
+        each needs ``setting`` (or ``m_s``) and ``drive_frequency_hz`` in its metadata.
+    generator : how generated records are made; ``seed`` seeds their noise.
+    steps : steps per chain; None runs each until converged.
+    comparison : (settings, frequencies) of the records also fitted with the rigid and
+        linear models.
+    walkers : walkers per chain (None: the package's default).
+    """
+
+    name: str
+    settings: tuple = tuple(SETTINGS)
+    frequencies: tuple = FREQUENCIES_HZ
+    records_dir: str | None = None
+    generator: GeneratorSettings = field(default_factory=GeneratorSettings)
+    seed: int = 0
+    steps: int | None = None
+    walkers: int | None = None
+    comparison: tuple = ((), ())
+
+    def __post_init__(self) -> None:
+        unknown = [s for s in self.settings if s not in SETTINGS]
+        if unknown:
+            raise ValueError(f"unknown flywheel settings {unknown}; choose from {', '.join(SETTINGS)}")
+        if self.steps is not None and not (isinstance(self.steps, int) and self.steps >= 1):
+            raise ValueError(f"steps must be a positive whole number or None, got {self.steps!r}")
+
+    def with_records(self, folder) -> StudyPlan:
+        return replace(self, records_dir=str(folder))
+
+    def jobs(self, records: dict, out: Path) -> list[FitJob]:
+        """Fit jobs for ``records`` (name -> (CSV path, setting, frequency))."""
+        jobs = []
+        comp_settings, comp_freqs = self.comparison
+        for i, (name, (path, setting, freq)) in enumerate(sorted(records.items())):
+            models = ["two-port"]
+            if setting in comp_settings and freq in comp_freqs:
+                models += [m for m in MODELS if m != "two-port"]
+            for model in models:
+                jobs.append(FitJob(str(path), str(out / "fits" / model / name), model, self.steps,
+                                   self.walkers, self.seed + i))
+        return jobs
+
+
+def quick_plan(**changes) -> StudyPlan:
+    """The quick study (see module docstring)."""
+    plan = StudyPlan(name="quick", settings=("A0", "A3", "B2"), frequencies=(1.0,), steps=400,
+                     comparison=(("A3",), (1.0,)))
+    return replace(plan, **changes)
+
+
+def full_plan(**changes) -> StudyPlan:
+    """The full study (see module docstring)."""
+    plan = StudyPlan(name="full", comparison=(tuple(SETTINGS), (1.0,)))
+    return replace(plan, **changes)

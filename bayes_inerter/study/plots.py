@@ -1,0 +1,97 @@
+"""A study's figures: theory against identification (the paper's Fig. 9 with
+uncertainty), the fit accuracy as a heat map beside Table 2, and model comparison."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..device import FREQUENCIES_HZ, SETTINGS
+
+__all__ = ["plot_inertance", "plot_phi_map", "plot_models"]
+
+
+def plot_inertance(rows: list[dict]):
+    """b per setting: theory, the paper's identified value, the posterior (median, 94 %);
+    below, each relative to theory."""
+    import matplotlib.pyplot as plt
+
+    fig, (ax, rel) = plt.subplots(2, 1, figsize=(8, 7), sharex=True, gridspec_kw={"height_ratios": [3, 2]})
+    x = np.arange(len(rows))
+    theory = np.array([r["b_theory"] for r in rows])
+    paper = np.array([r["b_paper"] for r in rows])
+    med = np.array([r["b_median"] for r in rows])
+    err = np.array([[r["b_median"] - r["b_hdi_3%"] for r in rows], [r["b_hdi_97%"] - r["b_median"] for r in rows]])
+    ax.plot(x, theory, "s", mfc="none", color="k", ms=9, label="theory (geometry)")
+    ax.plot(x, paper, "x", color="tab:red", ms=9, label="paper, identified by hand")
+    ax.errorbar(x, med, yerr=err, fmt="o", color="tab:blue", capsize=4, label="posterior median, 94 % interval")
+    ax.set_yscale("log")
+    ax.set_ylabel("inertance b (kg)")
+    ax.legend(loc="upper left")
+    ax.grid(alpha=0.3, which="both")
+    rel.axhline(0, color="k", lw=0.8)
+    rel.plot(x, 100 * (paper / theory - 1), "x", color="tab:red", ms=9)
+    rel.errorbar(x, 100 * (med / theory - 1), yerr=100 * err / theory, fmt="o", color="tab:blue", capsize=4)
+    rel.set_ylabel("relative to theory (%)")
+    rel.set_xticks(x, [r["setting"] for r in rows])
+    rel.set_xlabel("flywheel setting")
+    rel.grid(alpha=0.3)
+    ax.set_title("Inertance per flywheel setting: theory against identification")
+    fig.tight_layout()
+    return fig
+
+
+def plot_phi_map(rows: list[dict]):
+    """Posterior mean of phi per setting and frequency; each cell also shows the paper's."""
+    import matplotlib.pyplot as plt
+
+    settings = [s for s in SETTINGS if any(r["setting"] == s for r in rows)]
+    freqs = [f for f in FREQUENCIES_HZ if any(r["freq_hz"] == f for r in rows)]
+    grid = np.full((len(freqs), len(settings)), np.nan)
+    for r in rows:
+        if r["setting"] in settings and r["freq_hz"] in freqs:
+            grid[freqs.index(r["freq_hz"]), settings.index(r["setting"])] = 100 * r["phi_mean"]
+    fig, ax = plt.subplots(figsize=(1.1 * len(settings) + 2.5, 0.9 * len(freqs) + 1.8))
+    im = ax.imshow(grid, cmap="viridis", vmin=0, vmax=100, aspect="auto")
+    for i, f in enumerate(freqs):
+        for j, s in enumerate(settings):
+            paper = SETTINGS[s].fit_paper.get(f)
+            text = ("-" if np.isnan(grid[i, j]) else f"{grid[i, j]:.1f}") + (f"\n({100 * paper:.1f})" if paper else "")
+            ax.text(j, i, text, ha="center", va="center", fontsize=8,
+                    color="w" if np.nan_to_num(grid[i, j]) < 60 else "k")
+    ax.set_xticks(range(len(settings)), settings)
+    ax.set_yticks(range(len(freqs)), [f"{f:g} Hz" for f in freqs])
+    ax.set_title("fit accuracy phi (%): posterior mean, (paper's Table 2)")
+    fig.colorbar(im, ax=ax, label="phi (%)")
+    fig.tight_layout()
+    return fig
+
+
+def plot_models(rows: list[dict]):
+    """Per compared record: phi and LOO (elpd, relative to the best) of each model."""
+    import matplotlib.pyplot as plt
+
+    records = sorted({r["record"] for r in rows})
+    models = ["linear", "rigid", "two-port"]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    width = 0.8 / len(records)
+    for k, rec in enumerate(records):
+        sub = {r["model"]: r for r in rows if r["record"] == rec}
+        best = max(r["elpd_loo"] for r in sub.values())
+        x = np.arange(len(models)) + k * width
+        a1.bar(x, [100 * sub[m]["phi_mean"] if m in sub else np.nan for m in models], width, label=rec)
+        a2.bar(x, [sub[m]["elpd_loo"] - best if m in sub else np.nan for m in models], width,
+               yerr=[sub[m]["elpd_se"] if m in sub else 0 for m in models], label=rec)
+    paper = {"linear": 49, "rigid": 65, "two-port": 75}
+    a1.plot(np.arange(len(models)) + 0.4 - width / 2, [paper[m] for m in models], "x", color="tab:red", ms=10,
+            label="paper (all records)")
+    for ax in (a1, a2):
+        ax.set_xticks(np.arange(len(models)) + 0.4 - width / 2, models)
+        ax.grid(alpha=0.3, axis="y")
+    a1.set_ylabel("fit accuracy phi (%)")
+    a1.legend(fontsize=8)
+    a2.set_ylabel("elpd_loo - best (nats)")
+    a2.set_yscale("symlog")
+    a1.set_title("fit accuracy")
+    a2.set_title("LOO: expected log predictive density")
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,142 @@
+"""Run many fit jobs: on local worker processes (default) or on a Dask cluster.
+
+Each finished job leaves ``done.json`` in its folder (the job's settings and what came
+out); running the study again skips a job whose ``done.json`` matches it, and a job that
+was interrupted continues its emcee checkpoint (``fit_record`` does that). A job that
+fails, or whose worker process dies, is reported as failed and the others go on.
+
+Local runs give every job a process of its own (at most ``processes`` at a time), so a
+worker that dies takes only its own job with it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import multiprocessing
+import multiprocessing.connection
+import time
+import traceback
+from pathlib import Path
+
+from .plan import FitJob
+
+__all__ = ["run_job", "run_jobs", "finished", "DONE_FILE"]
+
+DONE_FILE = "done.json"
+
+
+def finished(job: FitJob) -> dict | None:
+    """The outcome recorded by an earlier run of ``job``, if it finished with the same settings."""
+    path = Path(job.out) / DONE_FILE
+    try:
+        done = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return done if done.get("job") == dataclasses.asdict(job) else None
+
+
+def run_job(job: FitJob) -> dict:
+    """Fit one job (in the calling process) and record its outcome in ``done.json``."""
+    from ..inference import fit_record
+    from ..records import read_record
+
+    t0 = time.perf_counter()
+    rec = read_record(job.record)
+    res = fit_record(rec, job.out, model=job.model, steps=job.steps, walkers=job.walkers, seed=job.seed,
+                     processes=1)
+    outcome = {
+        "key": job.key, "status": "done", "converged": bool(res.converged), "reason": res.reason,
+        "iterations": int(res.iterations), "seconds": time.perf_counter() - t0,
+        "timings": {k: float(v) for k, v in res.timings.items()},
+        "job": dataclasses.asdict(job),
+    }
+    (Path(job.out) / DONE_FILE).write_text(json.dumps(outcome, indent=2) + "\n")
+    return outcome
+
+
+def _failed(job: FitJob, error: str) -> dict:
+    return {"key": job.key, "status": "failed", "error": error, "job": dataclasses.asdict(job)}
+
+
+def _child(job: FitJob, conn) -> None:
+    try:
+        conn.send(run_job(job))
+    except BaseException as exc:  # reported to the parent, which goes on with the others
+        conn.send(_failed(job, f"{type(exc).__name__}: {exc}".strip() or traceback.format_exc(limit=1)))
+    finally:
+        conn.close()
+
+
+def _run_local(jobs, processes: int, on_done) -> list[dict]:
+    ctx = multiprocessing.get_context("fork")
+    pending = list(jobs)
+    running = {}  # sentinel -> (process, connection, job)
+    outcomes = []
+    try:
+        while pending or running:
+            while pending and len(running) < processes:
+                job = pending.pop(0)
+                recv, send = ctx.Pipe(duplex=False)
+                proc = ctx.Process(target=_child, args=(job, send), daemon=True)
+                proc.start()
+                send.close()
+                running[proc.sentinel] = (proc, recv, job)
+            ready = multiprocessing.connection.wait(list(running))
+            for sentinel in ready:
+                proc, recv, job = running.pop(sentinel)
+                outcome = recv.recv() if recv.poll() else None
+                proc.join()
+                recv.close()
+                if outcome is None:
+                    outcome = _failed(job, f"worker process died (exit code {proc.exitcode})")
+                outcomes.append(outcome)
+                on_done(outcome)
+    finally:
+        for proc, recv, _ in running.values():
+            proc.terminate()
+            proc.join()
+    return outcomes
+
+
+def _run_dask(jobs, scheduler: str, on_done) -> list[dict]:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise RuntimeError("running on a Dask cluster needs dask.distributed: pip install 'bayes-inerter[dask]'") from None
+    outcomes = []
+    with Client(scheduler) as client:
+        futures = {client.submit(run_job, job, pure=False): job for job in jobs}
+        for fut in as_completed(futures):
+            job = futures[fut]
+            try:
+                outcome = fut.result()
+            except Exception as exc:  # the job's error, or a worker lost mid-job
+                outcome = _failed(job, f"{type(exc).__name__}: {exc}")
+            outcomes.append(outcome)
+            on_done(outcome)
+    return outcomes
+
+
+def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=None) -> list[dict]:
+    """Run the jobs not finished before; return one outcome per job (in job order).
+
+    ``processes``: local worker processes at a time; ``scheduler``: the address of a
+    Dask scheduler (``tcp://host:port``) to run them there instead. ``on_done`` is called
+    with each outcome as it comes (skipped ones first).
+    """
+    if processes < 1:
+        raise ValueError(f"processes must be at least 1, got {processes}")
+    on_done = on_done or (lambda outcome: None)
+    outcomes = {}
+    todo = []
+    for job in jobs:
+        done = finished(job)
+        if done is not None:
+            outcomes[job.key] = {**done, "status": "skipped"}
+            on_done(outcomes[job.key])
+        else:
+            todo.append(job)
+    ran = _run_dask(todo, scheduler, on_done) if scheduler else _run_local(todo, processes, on_done)
+    outcomes.update((o["key"], o) for o in ran)
+    return [outcomes[job.key] for job in jobs]

@@ -1,0 +1,60 @@
+"""Study tables from synthetic fits (no sampling): combining records, the flywheel
+regression, and the report's sentences."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bayes_inerter.device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
+from bayes_inerter.study.analysis import Z94, RecordFit, flywheel_regression, inertance_table, phi_table
+
+
+def fake_fit(setting, freq, b_mean, b_sd, model="two-port", converged=True, phi=0.9):
+    row = lambda m, s: {"mean": m, "sd": s, "hdi_3%": m - Z94 * s, "hdi_97%": m + Z94 * s, "r_hat": 1.0}  # noqa: E731
+    return RecordFit(f"{setting}_{freq:g}Hz", setting, freq, model, Path("."),
+                     {"b": row(b_mean, b_sd), "phi": row(phi, 0.01)}, {"converged": converged, "iterations": 100})
+
+
+def test_records_of_a_setting_combine_as_a_product_of_normals():
+    fits = [fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1030.0, 20.0), fake_fit("A2", 1.0, 2000.0, 5.0),
+            fake_fit("A1", 1.0, 0.0, 1.0, model="rigid")]
+    rows = {r["setting"]: r for r in inertance_table(fits)}
+    a1 = rows["A1"]
+    # precisions 1/100 and 1/400: mean (1000*4 + 1030) / 5 = 1006, sd sqrt(80)
+    assert a1["b_median"] == pytest.approx(1006.0)
+    assert a1["b_sd"] == pytest.approx(np.sqrt(80.0))
+    assert a1["chi2"] == pytest.approx(6.0**2 / 100 + 24.0**2 / 400)
+    assert a1["records"] == 2 and rows["A2"]["records"] == 1
+    assert a1["b_theory"] == pytest.approx(theoretical_inertance("A1"))
+    assert a1["b_paper"] == SETTINGS["A1"].b_paper
+
+
+def test_regression_recovers_the_increments_it_was_made_with():
+    base, small, big = 700.0, 930.0, 10500.0
+    fits = []
+    for name in ("A0", "A2", "A5", "B1", "B2"):
+        s = SETTINGS[name]
+        fits.append(fake_fit(name, 1.0, base + s.n_small * small + s.n_big * big, 3.0))
+    rows = {r["term"]: r for r in flywheel_regression(inertance_table(fits))}
+    assert rows["base (A0)"]["mean"] == pytest.approx(base)
+    assert rows["per small flywheel"]["mean"] == pytest.approx(small)
+    assert rows["per big flywheel"]["mean"] == pytest.approx(big)
+    geo = DEFAULT_GEOMETRY
+    assert rows["per big flywheel"]["theory"] == pytest.approx(geo.inertance(0, 1) - geo.inertance(0, 0))
+    # 10500 is far from the geometry's 11393 kg given a 3 kg sd per setting
+    assert not rows["per big flywheel"]["covers_theory"]
+
+
+def test_regression_needs_settings_that_separate_the_terms():
+    # one setting cannot separate a base from an increment
+    assert flywheel_regression(inertance_table([fake_fit("A3", 1.0, 3500.0, 5.0)])) == []
+    # A0 and A1 fix base and small; no big flywheel, so no big term
+    rows = flywheel_regression(inertance_table([fake_fit("A0", 1.0, 750.0, 5.0), fake_fit("A1", 1.0, 1680.0, 5.0)]))
+    assert [r["term"] for r in rows] == ["base (A0)", "per small flywheel"]
+
+
+def test_phi_table_sits_beside_the_paper():
+    rows = phi_table([fake_fit("B2", 1.5, 20000.0, 50.0, phi=0.97)])
+    assert rows[0]["phi_paper"] == pytest.approx(0.845)
+    assert rows[0]["phi_mean"] == pytest.approx(0.97)

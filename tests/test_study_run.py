@@ -1,0 +1,97 @@
+"""A small study end to end: files, resume, a user's folder, failures, Dask."""
+
+import json
+import os
+import shutil
+import signal
+
+import pytest
+
+from bayes_inerter.cli import main
+from bayes_inerter.records import GeneratorSettings
+from bayes_inerter.study import FitJob, quick_plan, run_jobs, run_study
+from bayes_inerter.study import runner as runner_module
+
+TINY = GeneratorSettings(duration=2.0, ramp=0.6)
+
+
+def tiny_plan(**changes):
+    settings = dict(settings=("A0", "A2"), frequencies=(1.0,), steps=8, generator=TINY, comparison=(("A2",), (1.0,)))
+    return quick_plan(**{**settings, **changes})
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    out = tmp_path_factory.mktemp("study")
+    return run_study(tiny_plan(), out, processes=2)
+
+
+def test_study_writes_tables_figures_and_report(study):
+    out = study.out
+    for name in ("inertance.csv", "inertance_records.csv", "flywheels.csv", "phi.csv", "model_comparison.csv",
+                 "contraction.csv", "theory_vs_identified.png", "phi_map.png", "model_comparison.png", "REPORT.md",
+                 "study.json"):
+        assert (out / name).is_file(), name
+    header = (out / "inertance.csv").read_text().splitlines()[0]
+    assert header.startswith("setting,b_theory,b_paper,b_median,b_hdi_3%,b_hdi_97%")
+    assert [o["status"] for o in study.outcomes] == ["done"] * 4  # A0 two-port; A2 two-port, rigid, linear
+    report = (out / "REPORT.md").read_text()
+    assert "not converged" in report  # 8 steps: the report must say so
+    assert "bayes_inerter" in report and "Plan:" in report
+    assert {r["model"] for r in study.tables["models"]} == {"linear", "rigid", "two-port"}
+    info = json.loads((out / "study.json").read_text())
+    assert info["plan"]["steps"] == 8 and info["versions"]["emcee"]
+
+
+def test_running_again_reuses_finished_fits(study):
+    again = run_study(tiny_plan(), study.out, processes=1)
+    assert [o["status"] for o in again.outcomes] == ["skipped"] * 4
+    assert again.tables["inertance"] == study.tables["inertance"]
+
+
+def test_a_users_folder_of_records(study, tmp_path):
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    for name in ("A2_1Hz.csv", "A2_1Hz.json"):
+        shutil.copy(study.out / "records" / name, folder / name)
+    res = run_study(tiny_plan(records_dir=str(folder), comparison=((), ())), tmp_path / "out", processes=1)
+    assert [r["setting"] for r in res.tables["inertance"]] == ["A2"]
+    assert "the records in" in res.report.read_text()
+
+
+def test_failed_and_dying_jobs_are_reported_and_the_others_finish(study, tmp_path, monkeypatch):
+    good = FitJob(str(study.out / "records" / "A0_1Hz.csv"), str(tmp_path / "good"), steps=4)
+    missing = FitJob(str(tmp_path / "nope.csv"), str(tmp_path / "missing"), steps=4)
+    dying = FitJob(str(study.out / "records" / "A2_1Hz.csv"), str(tmp_path / "dying"), steps=4)
+    real = runner_module.run_job
+
+    def run_or_die(job):  # the forked worker of `dying` is killed outright
+        if job.out.endswith("dying"):
+            os.kill(os.getpid(), signal.SIGKILL)
+        return real(job)
+
+    monkeypatch.setattr(runner_module, "run_job", run_or_die)
+    by_out = {o["job"]["out"]: o for o in run_jobs([good, missing, dying], processes=2)}
+    assert by_out[good.out]["status"] == "done"
+    assert by_out[missing.out]["status"] == "failed" and "nope.csv" in by_out[missing.out]["error"]
+    assert by_out[dying.out]["status"] == "failed" and "died" in by_out[dying.out]["error"]
+
+
+def test_study_on_a_local_dask_cluster(study, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    folder = tmp_path / "recs"
+    folder.mkdir()
+    for name in ("A0_1Hz.csv", "A0_1Hz.json"):
+        shutil.copy(study.out / "records" / name, folder / name)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        res = run_study(tiny_plan(records_dir=str(folder), comparison=((), ())), tmp_path / "dask",
+                        scheduler=cluster.scheduler_address)
+    assert [o["status"] for o in res.outcomes] == ["done"]
+    assert (tmp_path / "dask" / "fits" / "two-port" / "A0_1Hz" / "done.json").is_file()
+
+
+def test_cli_study_refuses_a_missing_records_folder(tmp_path, capsys):
+    code = main(["study", "--records", str(tmp_path / "none"), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 1 and err.startswith("error:") and "not a folder" in err and "Traceback" not in err
+    assert not (tmp_path / "o").exists()
