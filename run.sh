@@ -3,6 +3,6 @@
 # Installs what it needs on first use (see scripts/env.sh).
 source "$(dirname "$0")/scripts/env.sh"
 if [ $# -eq 0 ]; then
-    set -- demo
+    set -- study --quick
 fi
 exec bayes-inerter "$@"

@@ -36,7 +36,8 @@ NM_MAXITER = 800  # Nelder-Mead iterations on the full posterior
 _BAD = 1e30
 
 
-def _sse(model: PosteriorModel, phys: np.ndarray) -> float:
+def sse(model: PosteriorModel, phys: np.ndarray) -> float:
+    """Sum of squared kept residuals at the physical part of theta (stage 1's objective)."""
     theta = np.concatenate([phys, [0.0, 0.0][: model.ndim - len(phys)]])
     _, ll, sim = model.evaluate(theta)
     if sim is None:
@@ -120,11 +121,6 @@ def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def sse(model: PosteriorModel, phys: np.ndarray) -> float:
-    """Sum of squared kept residuals at the physical part of theta (stage 1's objective)."""
-    return _sse(model, phys)
-
-
 def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_POPSIZE, maxiter=DE_MAXITER,
                sse_many=None):
     """Return (theta, log posterior) of a quick optimum.
@@ -141,11 +137,11 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         de = differential_evolution(
-            lambda x: _sse(model, x), bounds[:nphys], popsize=popsize, maxiter=maxiter,
+            lambda x: sse(model, x), bounds[:nphys], popsize=popsize, maxiter=maxiter,
             seed=rng, polish=False, init="sobol", tol=1e-8, updating="deferred",
             x0=x0, workers=workers,
         )
-    phys = min(_swaps(model, de.x) + _swaps(model, x0), key=lambda x: _sse(model, x))
+    phys = min(_swaps(model, de.x) + _swaps(model, x0), key=lambda x: sse(model, x))
     _, _, sim = model.evaluate(np.concatenate([phys, [0.0, 0.0][: model.ndim - nphys]]))
     r = sim[model.grid] - model.observed
     sigma = max(float(np.std(r)), 1e-5)

@@ -203,7 +203,7 @@ def run_sampler(
     nwalkers : walkers (default: twice the parameters plus two).
     steps : run exactly this many steps in all (continuing a checkpoint adds only what is
         missing); None runs until converged or ``convergence.max_steps``.
-    seed : seeds the optimiser, the initial ball and the sampler's random state.
+    seed : seeds the optimiser, the initial ensemble and the sampler's random state.
     fresh : start over even if the checkpoint holds steps.
     processes : worker processes evaluating walkers in parallel (1: none).
     progress : callable(iteration, target or None), called after each step.

@@ -79,8 +79,12 @@ def plot_models(rows: list[dict]):
         best = max(r["elpd_loo"] for r in sub.values())
         x = np.arange(len(models)) + k * width
         a1.bar(x, [100 * sub[m]["phi_mean"] if m in sub else np.nan for m in models], width, label=rec)
-        a2.bar(x, [sub[m]["elpd_loo"] - best if m in sub else np.nan for m in models], width,
-               yerr=[sub[m]["elpd_se"] if m in sub else 0 for m in models], label=rec)
+        diffs = [sub[m]["elpd_loo"] - best if m in sub else np.nan for m in models]
+        a2.bar(x, diffs, width, label=rec)
+        for xi, m, d in zip(x, models, diffs):
+            if m in sub:
+                a2.annotate(f"{d:.0f}\n(se {sub[m]['elpd_se']:.0f})", (xi, d), ha="center", va="top" if d < 0 else "bottom",
+                            fontsize=7, xytext=(0, -2 if d < 0 else 2), textcoords="offset points")
     paper = {"linear": 49, "rigid": 65, "two-port": 75}
     a1.plot(np.arange(len(models)) + 0.4 - width / 2, [paper[m] for m in models], "x", color="tab:red", ms=10,
             label="paper (all records)")
@@ -89,8 +93,7 @@ def plot_models(rows: list[dict]):
         ax.grid(alpha=0.3, axis="y")
     a1.set_ylabel("fit accuracy phi (%)")
     a1.legend(fontsize=8)
-    a2.set_ylabel("elpd_loo - best (nats)")
-    a2.set_yscale("symlog")
+    a2.set_ylabel("elpd_loo - best model's (nats; higher is better)")
     a1.set_title("fit accuracy")
     a2.set_title("LOO: expected log predictive density")
     fig.tight_layout()

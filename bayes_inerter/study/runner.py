@@ -16,7 +16,6 @@ import json
 import multiprocessing
 import multiprocessing.connection
 import time
-import traceback
 from pathlib import Path
 
 from .plan import FitJob
@@ -63,7 +62,7 @@ def _child(job: FitJob, conn) -> None:
     try:
         conn.send(run_job(job))
     except BaseException as exc:  # reported to the parent, which goes on with the others
-        conn.send(_failed(job, f"{type(exc).__name__}: {exc}".strip() or traceback.format_exc(limit=1)))
+        conn.send(_failed(job, f"{type(exc).__name__}: {exc}"))
     finally:
         conn.close()
 
