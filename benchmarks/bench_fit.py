@@ -22,7 +22,7 @@ import numpy as np
 
 import bayes_inerter.inference.model as model_module
 from bayes_inerter import paper_parameters, simulate
-from bayes_inerter.inference import fit_record
+from bayes_inerter.inference import Convergence, fit_record
 from bayes_inerter.inference.model import PosteriorModel
 from bayes_inerter.records import generate_record
 
@@ -46,6 +46,8 @@ def main():
     ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--profile-steps", type=int, default=200)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--max-steps", type=int, default=None,
+                    help="stop the end-to-end chain here if not converged (default: the package's 20,000)")
     args = ap.parse_args()
 
     truth = paper_parameters(args.setting)
@@ -84,7 +86,8 @@ def main():
 
     with tempfile.TemporaryDirectory() as d:
         t0 = time.perf_counter()
-        res = fit_record(rec, d, seed=args.seed, processes=args.processes)
+        conv = Convergence(max_steps=args.max_steps) if args.max_steps else None
+        res = fit_record(rec, d, seed=args.seed, processes=args.processes, convergence=conv)
         wall = time.perf_counter() - t0
     b = res.row("b")
     print(f"end to end, {args.processes} processes: {wall:.0f} s wall = {wall / TARGET_S:.2f} x the "

@@ -58,3 +58,14 @@ def test_phi_table_sits_beside_the_paper():
     rows = phi_table([fake_fit("B2", 1.5, 20000.0, 50.0, phi=0.97)])
     assert rows[0]["phi_paper"] == pytest.approx(0.845)
     assert rows[0]["phi_mean"] == pytest.approx(0.97)
+
+
+def test_regression_reports_the_generating_values():
+    truth = {"A0": 750.0, "A3": 3530.0, "B2": 20300.0}
+    fits = [fake_fit(n, 1.0, b + 2.0, 4.0) for n, b in truth.items()]
+    rows = flywheel_regression(inertance_table(fits), truth_b=truth)
+    by = {r["term"]: r for r in rows}
+    assert by["base (A0)"]["truth"] == pytest.approx(750.0)
+    assert by["per small flywheel"]["truth"] == pytest.approx((3530.0 - 750.0) / 3)
+    assert by["per big flywheel"]["truth"] == pytest.approx((20300.0 - 750.0) / 2)
+    assert all(r["covers_truth"] for r in rows)

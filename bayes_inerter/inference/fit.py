@@ -128,6 +128,13 @@ def fit_record(
                      info["timings_s"], shrink)
 
 
+def _residual_sd(sample) -> float:
+    """Posterior median of the residual's marginal sd, sigma / sqrt(1 - rho^2)."""
+    vals = sample.as_dict()
+    rho = vals.get("rho", np.zeros_like(vals["sigma"]))
+    return float(np.median(vals["sigma"] / np.sqrt(1.0 - rho**2)))
+
+
 def _write_plots(out: Path, pm: PosteriorModel, sample, sims) -> None:
     import matplotlib.pyplot as plt
 
@@ -143,8 +150,8 @@ def _write_plots(out: Path, pm: PosteriorModel, sample, sims) -> None:
                                   title=f"{label}: {pm.model} model"),
         # inside the likelihood's window: the low-pass rings at the record's ends
         "bands.png": plot_bands(pm.record.time[pm.window], pm.measured_lp[pm.window], sims[:, pm.window],
-                                freq=pm.record.drive_frequency,
-                                title=f"{label}: posterior predictive acceleration ({pm.model}), "
+                                freq=pm.record.drive_frequency, noise_sd=_residual_sd(sample),
+                                title=f"{label}: predicted acceleration ({pm.model}), "
                                       f"{pm.likelihood.edge:g} s cut at each end"),
         "trace.png": plot_trace(sample.theta, sample.names, burn=sample.burn, thin=sample.thin),
         "phi.png": plot_phi(sample.phi, title=f"{label}: fit accuracy"),

@@ -58,12 +58,22 @@ def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: st
     """Corner plot of (n, ndim) draws in SI units, drawn in log10 (rho as is)."""
     import corner
 
+    import logging
+
     x = np.column_stack([_to_plot(n, values[:, i]) for i, n in enumerate(names)])
-    fig = corner.corner(
-        x, labels=[_label(n) for n in names], truths=truths, truth_color="tab:blue",
-        quantiles=[0.03, 0.5, 0.97], show_titles=True, title_fmt=".3g",
-        title_kwargs={"fontsize": 8}, label_kwargs={"fontsize": 8}, plot_datapoints=False,
-    )
+    # corner logs "Too few points to create valid contours" to the root logger for
+    # panels of a parameter pinned to a point; the panel shows that plainly already
+    root = logging.getLogger()
+    level = root.level
+    root.setLevel(logging.ERROR)
+    try:
+        fig = corner.corner(
+            x, labels=[_label(n) for n in names], truths=truths, truth_color="tab:blue",
+            quantiles=[0.03, 0.5, 0.97], show_titles=True, title_fmt=".3g",
+            title_kwargs={"fontsize": 8}, label_kwargs={"fontsize": 8}, plot_datapoints=False,
+        )
+    finally:
+        root.setLevel(level)
     if paper is not None and any(p is not None for p in paper):
         corner.overplot_lines(fig, [np.nan if p is None else p for p in paper], color="tab:red", ls="--")
     fig.suptitle(title + "\nblue: truth of a generated record; red dashed: the paper's values", fontsize=10)
@@ -85,17 +95,26 @@ def _reversal_time(time, accel_lp, freq):
     return time[crossings[0]] if len(crossings) else time[-1] - period
 
 
-def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, title: str = ""):
-    """Median, 50 % and 94 % bands of simulated low-passed acceleration over the
-    measured one: the whole record and a zoom on a velocity reversal."""
+def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, noise_sd: float | None = None, title: str = ""):
+    """Median, 50 % and 94 % credible bands of the simulated low-passed acceleration
+    (parameter uncertainty) over the measured one, and, given ``noise_sd`` (the residual
+    model's marginal sd), the 94 % predictive band that adds the residual's spread to
+    the simulations' (normal approximation): the whole record and a zoom on a velocity
+    reversal."""
     q = np.percentile(sims, [3, 25, 50, 75, 97], axis=0)
     t_rev = _reversal_time(time, measured_lp, freq)
     span = 0.12 / (freq or 1.0)
     fig, axes = plt.subplots(2, 1, figsize=(10, 7), layout="constrained")
     for ax, window in zip(axes, (None, (t_rev - span, t_rev + span))):
         sel = slice(None) if window is None else (time >= window[0]) & (time <= window[1])
-        ax.fill_between(time[sel], q[0][sel], q[4][sel], color="tab:orange", alpha=0.3, lw=0, label="94 % band")
-        ax.fill_between(time[sel], q[1][sel], q[3][sel], color="tab:orange", alpha=0.6, lw=0, label="50 % band")
+        if noise_sd is not None:
+            half = 1.880794 * np.sqrt(((q[4] - q[0]) / (2 * 1.880794)) ** 2 + noise_sd**2)
+            ax.fill_between(time[sel], (q[2] - half)[sel], (q[2] + half)[sel], color="tab:blue", alpha=0.15, lw=0,
+                            label="94 % predictive band (with residual noise)")
+        ax.fill_between(time[sel], q[0][sel], q[4][sel], color="tab:orange", alpha=0.3, lw=0,
+                        label="94 % credible band (parameters)")
+        ax.fill_between(time[sel], q[1][sel], q[3][sel], color="tab:orange", alpha=0.6, lw=0,
+                        label="50 % credible band")
         ax.plot(time[sel], q[2][sel], color="tab:red", lw=0.8, label="posterior median")
         ax.plot(time[sel], measured_lp[sel], color="k", lw=0.8, label="measured")
         ax.set_ylabel("acceleration, low-passed (m/s²)")

@@ -133,12 +133,14 @@ def inertance_table(fits: list[RecordFit], geometry=None) -> list[dict]:
     return rows
 
 
-def flywheel_regression(inertance: list[dict], geometry=None) -> list[dict]:
+def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | None = None) -> list[dict]:
     """Base, per-small and per-big-flywheel inertance: posterior (normal) against geometry.
 
     Only the terms the settings can separate are estimated: the small (big) increment
     needs a setting with small (big) flywheels, and the base needs more settings than
-    increments.
+    increments. With ``truth_b`` (setting -> the b its records were generated with), the
+    same regression of those values is given as ``truth`` and whether the interval
+    holds it (``covers_truth``).
     """
     geometry = geometry or DEFAULT_GEOMETRY
     if not inertance:
@@ -157,11 +159,17 @@ def flywheel_regression(inertance: list[dict], geometry=None) -> list[dict]:
     w = 1.0 / np.array([r["b_sd"] for r in inertance]) ** 2
     cov = np.linalg.inv(X.T @ (w[:, None] * X))
     coef = cov @ (X.T @ (w * y))
+    truth = None
+    if truth_b and all(r["setting"] in truth_b for r in inertance):
+        truth = cov @ (X.T @ (w * np.array([truth_b[r["setting"]] for r in inertance])))
     rows = []
-    for (name, _, theory), c, var in zip(terms, coef, np.diag(cov)):
+    for k, ((name, _, theory), c, var) in enumerate(zip(terms, coef, np.diag(cov))):
         sd = math.sqrt(var)
-        rows.append({"term": name, "theory": theory, "mean": float(c), "sd": sd, "hdi_3%": c - Z94 * sd,
-                     "hdi_97%": c + Z94 * sd, "covers_theory": bool(abs(c - theory) <= Z94 * sd)})
+        row = {"term": name, "theory": theory, "mean": float(c), "sd": sd, "hdi_3%": c - Z94 * sd,
+               "hdi_97%": c + Z94 * sd, "covers_theory": bool(abs(c - theory) <= Z94 * sd)}
+        if truth is not None:
+            row.update(truth=float(truth[k]), covers_truth=bool(abs(c - truth[k]) <= Z94 * sd))
+        rows.append(row)
     return rows
 
 

@@ -105,8 +105,9 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     t2 = time.perf_counter()
     fits = collect(out / "fits")
     inert = inertance_table(fits)
+    truth_b = None if plan.records_dir else {s: paper_parameters(s).b for s in plan.settings}
     tables = {
-        "records": record_table(fits), "inertance": inert, "regression": flywheel_regression(inert),
+        "records": record_table(fits), "inertance": inert, "regression": flywheel_regression(inert, truth_b=truth_b),
         "phi": phi_table(fits), "models": model_comparison(fits), "contraction": contraction_table(fits),
     }
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
@@ -120,7 +121,6 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
             fig = plot(rows)
             fig.savefig(out / name, dpi=110)
             plt.close(fig)
-    truth_b = None if plan.records_dir else {s: paper_parameters(s).b for s in plan.settings}
     versions = _versions()
     report = write_report(out, plan, tables, outcomes, versions, truth_b)
     t3 = time.perf_counter()
