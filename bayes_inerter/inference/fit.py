@@ -22,7 +22,7 @@ from .model import LikelihoodSettings, PosteriorModel
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_summary
 from .sampler import Convergence, check_run_options, run_sampler
 
-__all__ = ["fit_record", "FitResult", "check_output_folder"]
+__all__ = ["fit_record", "FitResult", "check_output_folder", "versions"]
 
 
 @dataclass
@@ -55,7 +55,8 @@ def check_output_folder(out: Path) -> None:
         raise ValueError(f"{out}: cannot write there (permission denied); choose another --out")
 
 
-def _versions() -> dict:
+def versions() -> dict:
+    """Versions of the package, Python and the libraries that shape its numbers."""
     import arviz
     import emcee
     import numba
@@ -120,7 +121,7 @@ def fit_record(
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "contraction": shrink,
         "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total},
-        "versions": _versions(),
+        "versions": versions(),
         "record_metadata": record.metadata,
     }
     (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")

@@ -60,22 +60,6 @@ def prepare_records(plan: StudyPlan, out: Path) -> dict:
     return records
 
 
-def _versions() -> dict:
-    import platform
-
-    import arviz
-    import emcee
-    import numba
-    import numpy
-    import scipy
-
-    from .. import __version__
-
-    return {"bayes_inerter": __version__, "python": platform.python_version(), "numpy": numpy.__version__,
-            "scipy": scipy.__version__, "numba": numba.__version__, "emcee": emcee.__version__,
-            "arviz": arviz.__version__}
-
-
 def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None = None, on_done=None,
               on_jobs=None) -> StudyResult:
     """Run ``plan`` into ``out``: records, fits, tables (CSV), figures (PNG), REPORT.md.
@@ -90,6 +74,7 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     import matplotlib.pyplot as plt
 
     from ..inference.fit import check_output_folder
+    from ..inference.fit import versions as fit_versions  # one list of versions for fits and studies
     from .plots import plot_inertance, plot_models, plot_phi_map
     from .report import write_report
 
@@ -121,7 +106,7 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
             fig = plot(rows)
             fig.savefig(out / name, dpi=110)
             plt.close(fig)
-    versions = _versions()
+    versions = fit_versions()
     report = write_report(out, plan, tables, outcomes, versions, truth_b)
     t3 = time.perf_counter()
     seconds = {"records": t1 - t0, "fits": t2 - t1, "analysis_and_report": t3 - t2, "total": t3 - t0}
