@@ -84,7 +84,10 @@ def _run_local(jobs, processes: int, on_done) -> list[dict]:
             ready = multiprocessing.connection.wait(list(running))
             for sentinel in ready:
                 proc, recv, job = running.pop(sentinel)
-                outcome = recv.recv() if recv.poll() else None
+                try:  # a worker that died before sending leaves the pipe at end-of-file
+                    outcome = recv.recv() if recv.poll() else None
+                except EOFError:
+                    outcome = None
                 proc.join()
                 recv.close()
                 if outcome is None:
