@@ -49,6 +49,15 @@ def test_running_again_reuses_finished_fits(study):
     assert again.tables["inertance"] == study.tables["inertance"]
 
 
+def test_a_fit_whose_posterior_file_is_gone_runs_again(study, tmp_path):
+    """A fresh clone has done.json and the tables' files but not posterior.nc (not
+    committed): the study must fit again, not fail."""
+    out = tmp_path / "copy"
+    shutil.copytree(study.out, out, ignore=shutil.ignore_patterns("posterior.nc", "chain.h5"))
+    again = run_study(tiny_plan(), out, processes=2)
+    assert [o["status"] for o in again.outcomes] == ["done"] * 4
+
+
 def test_a_users_folder_of_records(study, tmp_path):
     folder = tmp_path / "mine"
     folder.mkdir()

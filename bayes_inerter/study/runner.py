@@ -25,9 +25,17 @@ __all__ = ["run_job", "run_jobs", "finished", "DONE_FILE"]
 DONE_FILE = "done.json"
 
 
+#: What a finished fit must still have for the study's tables (``posterior.nc`` is not
+#: committed with results: a fresh clone runs its fits again).
+NEEDED = ("summary.csv", "fit.json", "posterior.nc")
+
+
 def finished(job: FitJob) -> dict | None:
-    """The outcome recorded by an earlier run of ``job``, if it finished with the same settings."""
+    """The outcome recorded by an earlier run of ``job``, if it finished with the same
+    settings and its outputs are all still there."""
     path = Path(job.out) / DONE_FILE
+    if not all((Path(job.out) / name).is_file() for name in NEEDED):
+        return None
     try:
         done = json.loads(path.read_text())
     except (OSError, ValueError):
