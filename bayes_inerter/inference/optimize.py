@@ -12,7 +12,9 @@ are unidentified), so a local optimiser from a guess is not enough. Two stages:
 2. the noise parameters from that residual (sigma its sd, rho its lag-one
    correlation), then Nelder-Mead on the full log posterior.
 
-Seeded: the same Generator gives the same optimum.
+Then :func:`laplace_ensemble` draws the walkers from a normal approximation there.
+
+Seeded: the same Generator gives the same optimum and the same walkers.
 """
 
 from __future__ import annotations
