@@ -50,13 +50,6 @@ class RecordFit:
     def stat(self, name: str, column: str) -> float:
         return float(self.summary[name][column])
 
-    def draws(self, name: str) -> np.ndarray:
-        """Posterior draws of ``name`` (from posterior.nc)."""
-        import arviz as az
-
-        idata = az.from_netcdf(str(self.folder / "posterior.nc"))
-        return np.asarray(idata.posterior[name]).ravel()
-
 
 def _read_summary(path: Path) -> dict:
     with open(path, newline="") as f:

@@ -79,9 +79,6 @@ class StudyPlan:
         if self.steps is not None and not (isinstance(self.steps, int) and self.steps >= 1):
             raise ValueError(f"steps must be a positive whole number or None, got {self.steps!r}")
 
-    def with_records(self, folder) -> StudyPlan:
-        return replace(self, records_dir=str(folder))
-
     def jobs(self, records: dict, out: Path) -> list[FitJob]:
         """Fit jobs for ``records`` (name -> (CSV path, setting, frequency))."""
         jobs = []

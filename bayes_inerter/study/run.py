@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..device import SETTINGS, paper_parameters
-from ..records import generate_record, read_record, write_record
+from ..records import paper_grid, read_record, write_record
 from .analysis import (collect, contraction_table, flywheel_regression, inertance_table, model_comparison,
                        phi_table, record_table, write_csv)
 from .plan import StudyPlan, record_name
@@ -42,21 +42,14 @@ def prepare_records(plan: StudyPlan, out: Path) -> dict:
             setting = str(setting).upper() if setting else None
             records[path.stem] = (path, setting if setting in SETTINGS else None, rec.drive_frequency)
         return records
-    import numpy as np
-
     folder = out / "records"
-    seeds = np.random.SeedSequence(plan.seed).spawn(len(plan.settings) * len(plan.frequencies))
-    i = 0
-    for setting in plan.settings:
-        for freq in plan.frequencies:
-            name = record_name(setting, freq)
-            path = folder / f"{name}.csv"
-            if not path.exists():
-                rec = generate_record(paper_parameters(setting), freq, settings=plan.generator,
-                                      rng=np.random.default_rng(seeds[i]), setting_name=setting)
-                write_record(path, rec)
-            records[name] = (path, setting, float(freq))
-            i += 1
+    grid = paper_grid(settings=plan.generator, seed=plan.seed, frequencies=plan.frequencies, names=plan.settings)
+    for setting, freq, rec in grid:  # 0.15 s a record: regenerating is cheaper than bookkeeping
+        name = record_name(setting, freq)
+        path = folder / f"{name}.csv"
+        if not path.exists():
+            write_record(path, rec)
+        records[name] = (path, setting, float(freq))
     return records
 
 
