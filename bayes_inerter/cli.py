@@ -180,6 +180,10 @@ def cmd_study(args) -> int:
         changes["steps"] = args.steps
     if args.seed is not None:
         changes["seed"] = args.seed
+    if args.joint_steps is not None:
+        changes["joint_steps"] = args.joint_steps
+    if args.no_joint:
+        changes["joint"] = False
     if args.records:
         if not Path(args.records).is_dir():
             raise CliError(f"--records {args.records}: not a folder of CSV records")
@@ -198,11 +202,21 @@ def cmd_study(args) -> int:
         if outcome["status"] == "failed":
             bar.write(f"failed: {outcome['key']}: {outcome.get('error', '')}", file=sys.stderr)
 
+    joint_bar = []
+
+    def on_joint_step(iteration, target):
+        if not joint_bar:
+            bar.close()
+            joint_bar.append(tqdm(total=target, desc="joint model", unit="step", file=sys.stderr, disable=None))
+        joint_bar[0].update(iteration - joint_bar[0].n)
+
     try:
         result = run_study(plan, out, processes=processes, scheduler=args.scheduler, on_done=on_done,
-                           on_jobs=on_jobs)
+                           on_jobs=on_jobs, on_joint_step=on_joint_step)
     finally:
         bar.close()
+        for b in joint_bar:
+            b.close()
     for row in result.tables["inertance"]:
         print(f"{row['setting']}: b = {row['b_median']:.6g} kg (94 % {row['b_hdi_3%']:.6g} to "
               f"{row['b_hdi_97%']:.6g}); theory {row['b_theory']:.6g}, paper {row['b_paper']:.6g}")
@@ -271,6 +285,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--records", help="a folder of your CSV records to fit instead of generated ones")
     p.add_argument("--steps", type=_positive_int, help="steps per chain (default: the plan's; full: until converged)")
     p.add_argument("--seed", type=int, help="seed of the generated records' noise and of the chains (0)")
+    p.add_argument("--joint-steps", type=_positive_int,
+                   help="steps of the joint model's chain (full study; default: until converged)")
+    p.add_argument("--no-joint", action="store_true", help="skip the joint model of all records")
     p.add_argument("--processes", type=_positive_int, help="local worker processes, one fit each (default: up to 2)")
     p.add_argument("--scheduler", help="run the fits on this Dask scheduler (tcp://host:port) instead")
     p.set_defaults(func=cmd_study)

@@ -16,7 +16,8 @@ TINY = GeneratorSettings(duration=2.0, ramp=0.6)
 
 
 def tiny_plan(**changes):
-    settings = dict(settings=("A0", "A2"), frequencies=(1.0,), steps=8, generator=TINY, comparison=(("A2",), (1.0,)))
+    settings = dict(settings=("A0", "A2"), frequencies=(1.0,), steps=8, generator=TINY, comparison=(("A2",), (1.0,)),
+                    joint=True, joint_steps=6)
     return quick_plan(**{**settings, **changes})
 
 
@@ -41,6 +42,11 @@ def test_study_writes_tables_figures_and_report(study):
     assert {r["model"] for r in study.tables["models"]} == {"linear", "rigid", "two-port"}
     info = json.loads((out / "study.json").read_text())
     assert info["plan"]["steps"] == 8 and info["versions"]["emcee"]
+    # the joint model of both records: one b per setting beside the single-record ones
+    assert (out / "joint" / "summary.csv").is_file() and (out / "flywheels_joint.csv").is_file()
+    assert [r["setting"] for r in study.tables["joint"]] == ["A0", "A2"]
+    assert "b_joint_mean" in (out / "inertance.csv").read_text().splitlines()[0]
+    assert "Joint model" in report and json.loads((out / "joint" / "fit.json").read_text())["iterations"] == 6
 
 
 def test_running_again_reuses_finished_fits(study):

@@ -22,7 +22,7 @@ from .model import LikelihoodSettings, PosteriorModel
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_summary
 from .sampler import Convergence, check_run_options, run_sampler
 
-__all__ = ["fit_record", "FitResult", "check_output_folder", "versions"]
+__all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions"]
 
 
 @dataclass
@@ -114,7 +114,7 @@ def fit_record(
     t_total = time.perf_counter() - t0
     info = {
         "model": model, "converged": run.converged, "reason": run.reason,
-        "iterations": run.iteration, "walkers": run.sampler.nwalkers, "seed": seed,
+        "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
         "tau": dict(zip(pm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
         "m_s": pm.m_s, "m_B": pm.m_B, "likelihood": dataclasses.asdict(pm.likelihood),
         "stride": pm.stride, "priors": {n: p.describe() for n, p in pm.all_priors.items()},
@@ -127,6 +127,82 @@ def fit_record(
     (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
     return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, idata,
                      info["timings_s"], shrink)
+
+
+def fit_joint(
+    records,
+    out,
+    *,
+    centres: list[dict] | None = None,
+    walkers: int | None = None,
+    steps: int | None = None,
+    seed: int = 0,
+    processes: int = 1,
+    likelihood: LikelihoodSettings | None = None,
+    priors: dict | None = None,
+    convergence: Convergence | None = None,
+    progress=None,
+    plots: bool = True,
+) -> FitResult:
+    """Sample the joint posterior of several records (``joint.JointModel``: shared
+    frictions and deformations, one b per flywheel setting) into ``out``: chain.h5,
+    summary.csv, fit.json, corner.png (the b's), trace.png.
+
+    ``centres``: one dict of single-record posterior centres (sampled values by name) per
+    record; the run starts from ``JointModel.start`` of them. Without them the start is
+    each record's own optimum found first (``optimize.find_start``, minutes a record).
+    """
+    from .joint import JointModel
+    from .optimize import find_start
+
+    out = Path(out)
+    jm = JointModel(tuple(records), priors=priors or {}, likelihood=likelihood or LikelihoodSettings())
+    check_run_options(jm.ndim, walkers, steps)
+    check_output_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    if centres is None:
+        rng = np.random.default_rng(seed)
+        centres = [part.values(find_start(part, rng)[0]) for part in jm.parts]
+    theta0 = jm.start(centres)
+    run = run_sampler(jm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, processes=processes,
+                      convergence=convergence, progress=progress, start=(theta0, jm.log_prob(theta0)[0]))
+    t_sample = time.perf_counter() - t0
+    sample = posterior_sample(jm, run.sampler, run.tau)
+    rows = summary_rows(sample)
+    shrink = contraction(jm, sample)
+    write_summary(out / "summary.csv", rows)
+    if plots:
+        import matplotlib.pyplot as plt
+
+        from .plots import plot_corner, plot_trace
+
+        nb = len(jm.settings)
+        flat = sample.values.reshape(-1, jm.ndim)
+        truths = [rec.metadata.get("true_parameters", {}).get("b") for rec in
+                  (next(r for r, s in zip(jm.records, jm.setting_of) if s == name) for name in jm.settings)]
+        figs = {"corner.png": plot_corner(flat[:, :nb], jm.names[:nb],
+                                          truths=truths if all(t is not None for t in truths) else None,
+                                          title=f"joint model, {len(jm.records)} records: inertance per setting"),
+                "trace.png": plot_trace(sample.theta, jm.names, burn=sample.burn, thin=sample.thin)}
+        for name, fig in figs.items():
+            fig.savefig(out / name, dpi=100)
+            plt.close(fig)
+    t_total = time.perf_counter() - t0
+    info = {
+        "model": "joint", "converged": run.converged, "reason": run.reason,
+        "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
+        "tau": dict(zip(jm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
+        "records": [f"{s} {f:g} Hz" for s, f in zip(jm.setting_of, jm.freq_of)],
+        "likelihood": dataclasses.asdict(jm.likelihood),
+        "priors": {n: p.describe() for n, p in jm.all_priors.items()},
+        "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
+        "contraction": shrink,
+        "timings_s": {"sampling": t_sample, "total": t_total},
+        "versions": versions(),
+    }
+    (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
+    return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"], shrink)
 
 
 def _residual_sd(sample) -> float:

@@ -18,12 +18,18 @@ UNITS = {"b": "kg", "f1_0": "N", "c_f1": "N s/m", "f2_0": "N", "c_f2": "N s/m", 
 LINEAR = ("rho", "f_share", "c_share")  # drawn as is; everything else in log10
 
 
+def _linear(name: str) -> bool:
+    """Drawn as is (shares, AR(1) coefficients: the joint model's ``rho_<f>Hz`` too)."""
+    return name in LINEAR or name.startswith("rho_")
+
+
 def _label(name: str) -> str:
-    return name if name in LINEAR else f"log10 {name} [{UNITS.get(name, '')}]"
+    unit = UNITS.get("b" if name.startswith("b_") else name, "")  # the joint model's b_<setting>
+    return name if _linear(name) else f"log10 {name} [{unit}]"
 
 
 def _to_plot(name, x):
-    return x if name in LINEAR else np.log10(x)
+    return x if _linear(name) else np.log10(x)
 
 
 def reference_values(model, metadata: dict):
@@ -135,7 +141,7 @@ def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1):
     axes = np.atleast_1d(axes)
     steps = burn + thin * np.arange(theta.shape[1])
     for i, ax in enumerate(axes):
-        y = theta[:, :, i] / (1 if names[i] in LINEAR else np.log(10))
+        y = theta[:, :, i] / (1 if _linear(names[i]) else np.log(10))
         ax.plot(steps, y.T, lw=0.4, alpha=0.5)
         ax.set_ylabel(_label(names[i]), fontsize=7)
         ax.tick_params(labelsize=7)

@@ -81,13 +81,18 @@ class SamplerRun:
 
 
 def record_digest(model: PosteriorModel) -> str:
-    """Identity of the data a checkpoint belongs to (record arrays and model settings)."""
+    """Identity of the data a checkpoint belongs to (record arrays and model settings);
+    for a joint model (``model.parts``), of every record's part and the joint names."""
     h = hashlib.sha256()
-    rec = model.record
-    for arr in (rec.time, rec.force, rec.accel):
-        h.update(np.ascontiguousarray(arr, dtype=float).tobytes())
-    h.update(repr((model.model, model.names, model.m_s, model.m_B, model.likelihood, sorted(
-        (k, repr(v)) for k, v in model.all_priors.items()))).encode())
+    parts = getattr(model, "parts", None)
+    for part in parts or [model]:
+        rec = part.record
+        for arr in (rec.time, rec.force, rec.accel):
+            h.update(np.ascontiguousarray(arr, dtype=float).tobytes())
+        h.update(repr((part.model, part.names, part.m_s, part.m_B, part.likelihood, sorted(
+            (k, repr(v)) for k, v in part.all_priors.items()))).encode())
+    if parts:
+        h.update(repr(("joint", model.names)).encode())
     return h.hexdigest()[:16]
 
 

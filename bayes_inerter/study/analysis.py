@@ -24,7 +24,8 @@ import numpy as np
 
 from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
 
-__all__ = ["RecordFit", "collect", "inertance_table", "record_table", "flywheel_regression", "phi_table",
+__all__ = ["RecordFit", "collect", "inertance_table", "joint_inertance", "record_table", "flywheel_regression",
+           "phi_table",
            "model_comparison", "contraction_table", "write_csv", "Z94"]
 
 #: Half-width of a central 94 % interval of a normal, in sd.
@@ -123,6 +124,28 @@ def inertance_table(fits: list[RecordFit], geometry=None) -> list[dict]:
             "b_median": mean, "b_hdi_3%": mean - Z94 * sd, "b_hdi_97%": mean + Z94 * sd, "b_sd": sd,
             "records": len(group), "chi2": chi2, "converged": all(f.converged for f in group),
         })
+    return rows
+
+
+def joint_inertance(joint_rows: list[dict], inertance: list[dict], truth_b: dict | None = None) -> list[dict]:
+    """Per setting, the joint model's b (posterior mean, sd, 94 % HDI) beside theory and
+    the single-record combination; adds ``b_joint_mean``, ``b_joint_hdi_3%`` and
+    ``b_joint_hdi_97%`` to the ``inertance`` rows too. ``covers_truth`` with ``truth_b``."""
+    by_name = {r["name"]: r for r in joint_rows}
+    rows = []
+    for row in inertance:
+        j = by_name.get(f"b_{row['setting']}")
+        if j is None:
+            continue
+        out = {"setting": row["setting"], "b_theory": row["b_theory"], "b_joint_mean": float(j["mean"]),
+               "b_joint_sd": float(j["sd"]), "b_joint_hdi_3%": float(j["hdi_3%"]),
+               "b_joint_hdi_97%": float(j["hdi_97%"]), "r_hat": float(j["r_hat"]), "ess_bulk": float(j["ess_bulk"]),
+               "b_single_median": row["b_median"]}
+        if truth_b and row["setting"] in truth_b:
+            t = truth_b[row["setting"]]
+            out.update(b_truth=t, covers_truth=bool(out["b_joint_hdi_3%"] <= t <= out["b_joint_hdi_97%"]))
+        row.update({k: out[k] for k in ("b_joint_mean", "b_joint_hdi_3%", "b_joint_hdi_97%")})
+        rows.append(out)
     return rows
 
 

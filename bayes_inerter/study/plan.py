@@ -8,8 +8,9 @@ from: the paper's grid of generated records (nine flywheel settings at 0.5, 1 an
   the rigid-body and linear models on A3, each chain a fixed, short number of steps. It
   runs on one core in minutes and is **not converged**: the report says so. It shows the
   whole pipeline and the order of magnitude of every answer.
-- :func:`full_plan`: all 27 records with the two-port model until converged, and the
-  three nested models on the 1 Hz records for the comparison.
+- :func:`full_plan`: all 27 records with the two-port model until converged, the
+  three nested models on the 1 Hz records for the comparison, and the joint model of
+  all 27 records (one b per setting, everything else shared).
 """
 
 from __future__ import annotations
@@ -60,6 +61,10 @@ class StudyPlan:
     comparison : (settings, frequencies) of the records also fitted with the rigid and
         linear models.
     walkers : walkers per chain (None: the package's default).
+    joint : also sample the joint model (shared frictions and deformations, one b per
+        setting) on all the two-port records, started from their single-record
+        posteriors, into ``<out>/joint``.
+    joint_steps : steps of the joint chain; None: until converged.
     """
 
     name: str
@@ -71,13 +76,17 @@ class StudyPlan:
     steps: int | None = None
     walkers: int | None = None
     comparison: tuple = ((), ())
+    joint: bool = False
+    joint_steps: int | None = None
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.settings if s not in SETTINGS]
         if unknown:
             raise ValueError(f"unknown flywheel settings {unknown}; choose from {', '.join(SETTINGS)}")
-        if self.steps is not None and not (isinstance(self.steps, int) and self.steps >= 1):
-            raise ValueError(f"steps must be a positive whole number or None, got {self.steps!r}")
+        for name in ("steps", "joint_steps"):
+            value = getattr(self, name)
+            if value is not None and not (isinstance(value, int) and value >= 1):
+                raise ValueError(f"{name} must be a positive whole number or None, got {value!r}")
 
     def jobs(self, records: dict, out: Path) -> list[FitJob]:
         """Fit jobs for ``records`` (name -> (CSV path, setting, frequency))."""
@@ -102,5 +111,5 @@ def quick_plan(**changes) -> StudyPlan:
 
 def full_plan(**changes) -> StudyPlan:
     """The full study (see module docstring)."""
-    plan = StudyPlan(name="full", comparison=(tuple(SETTINGS), (1.0,)))
+    plan = StudyPlan(name="full", comparison=(tuple(SETTINGS), (1.0,)), joint=True)
     return replace(plan, **changes)

@@ -50,6 +50,31 @@ def _inertance_text(rows, truth_b: dict | None) -> str:
     return text
 
 
+def _joint_section(rows, reg, info) -> list[str]:
+    status = ("converged" if info["converged"] else
+              f"**not converged** after {info['iterations']} steps ({info['reason']}): read it as indicative")
+    text = ("One set of friction and deformation parameters for every record and one b per setting, as the paper "
+            f"tuned them (`joint/`, `joint_inertance.csv`); the chain is {status}. ")
+    if "covers_truth" in rows[0]:
+        held = sum(r["covers_truth"] for r in rows)
+        text += f"Its 94 % interval holds the generating b for {held} of {len(rows)} settings. "
+    text += ("The joint b's are correlated through the shared parameters; the regression below treats them as "
+             "independent normals, an approximation.")
+    out = ["## Joint model: all records at once", "", text, "",
+           _table(rows, [c for c in ("setting", "b_theory", "b_truth", "b_single_median", "b_joint_mean",
+                                     "b_joint_hdi_3%", "b_joint_hdi_97%", "r_hat", "ess_bulk", "covers_truth")
+                         if c in rows[0]],
+                  {c: "{:.1f}" for c in ("b_theory", "b_truth", "b_single_median", "b_joint_mean", "b_joint_hdi_3%",
+                                         "b_joint_hdi_97%")} | {"r_hat": "{:.3f}", "ess_bulk": "{:.0f}"}), "",
+           "![joint posterior of b](joint/corner.png)", ""]
+    if reg:
+        out += ["Inertance added per flywheel from the joint b's (`flywheels_joint.csv`):", "",
+                _table(reg, [c for c in ("term", "theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%",
+                                         "covers_theory", "covers_truth") if c in reg[0]],
+                       {c: "{:.1f}" for c in ("theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%")}), ""]
+    return out
+
+
 def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: dict, truth_b: dict | None) -> Path:
     """Write ``out``/REPORT.md from the study's tables; return its path."""
     inert, reg, phi, comp, contr, recs = (tables.get(k, []) for k in
@@ -96,6 +121,8 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
                   "The records were generated with the paper's identified b per setting, not the geometry's: "
                   "`truth` is what the regression gives on those values, `theory` the geometry."
                   if "truth" in reg[0] else "", ""]
+    if tables.get("joint"):
+        lines += _joint_section(tables["joint"], tables.get("joint_regression", []), tables["joint_info"])
     if phi:
         lines += ["## Fit accuracy phi (the paper's Table 2, with uncertainty)", "",
                   "phi (eq. 5) on the 30 Hz low-passed accelerations inside the likelihood's window, for every "

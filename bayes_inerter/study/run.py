@@ -10,12 +10,12 @@ from pathlib import Path
 
 from ..device import SETTINGS, paper_parameters
 from ..records import paper_grid, read_record, write_record
-from .analysis import (collect, contraction_table, flywheel_regression, inertance_table, model_comparison,
-                       phi_table, record_table, write_csv)
+from .analysis import (collect, contraction_table, flywheel_regression, inertance_table, joint_inertance,
+                       model_comparison, phi_table, record_table, write_csv)
 from .plan import StudyPlan, record_name
 from .runner import run_jobs
 
-__all__ = ["run_study", "StudyResult", "prepare_records"]
+__all__ = ["run_study", "run_joint", "StudyResult", "prepare_records"]
 
 
 @dataclass
@@ -53,13 +53,32 @@ def prepare_records(plan: StudyPlan, out: Path) -> dict:
     return records
 
 
+def run_joint(plan: StudyPlan, out: Path, fits: list, records: dict, *, processes: int = 1, progress=None):
+    """The joint model of the study's two-port records (``plan.joint``), into
+    ``out``/joint, started from each record's posterior means; an earlier run's chain
+    there is continued. Returns the FitResult, or None with fewer than two records."""
+    from ..inference.fit import fit_joint
+    from ..inference.model import PosteriorModel
+
+    chosen = [f for f in fits if f.model == "two-port" and f.name in records]
+    if len(chosen) < 2:
+        return None
+    recs = [read_record(records[f.name][0]) for f in chosen]
+    names = PosteriorModel(recs[0]).names
+    centres = [{n: f.stat(n, "mean") for n in names} for f in chosen]
+    return fit_joint(recs, out / "joint", centres=centres, steps=plan.joint_steps, seed=plan.seed,
+                     processes=processes, progress=progress)
+
+
 def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None = None, on_done=None,
-              on_jobs=None) -> StudyResult:
+              on_jobs=None, on_joint_step=None) -> StudyResult:
     """Run ``plan`` into ``out``: records, fits, tables (CSV), figures (PNG), REPORT.md.
 
     ``processes`` local worker processes (one fit each) or a Dask ``scheduler`` address.
     ``on_jobs(n)`` is told the number of fits before they start; ``on_done(outcome)``
-    hears each one as it ends. Fits finished by an earlier run are reused.
+    hears each one as it ends. Fits finished by an earlier run are reused. The joint
+    model (``plan.joint``) runs here after them, its walkers on ``processes`` local
+    processes (also with a scheduler); ``on_joint_step(iteration, target)`` hears its steps.
     """
     import matplotlib
 
@@ -82,6 +101,8 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     outcomes = run_jobs(jobs, processes=processes, scheduler=scheduler, on_done=on_done)
     t2 = time.perf_counter()
     fits = collect(out / "fits")
+    joint = run_joint(plan, out, fits, records, processes=processes, progress=on_joint_step) if plan.joint else None
+    t_joint = time.perf_counter()
     inert = inertance_table(fits)
     truth_b = None if plan.records_dir else {s: paper_parameters(s).b for s in plan.settings}
     tables = {
@@ -90,6 +111,13 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     }
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
              "phi": "phi.csv", "models": "model_comparison.csv", "contraction": "contraction.csv"}
+    if joint is not None:
+        tables["joint"] = joint_inertance(joint.summary, inert, truth_b=truth_b)
+        tables["joint_regression"] = flywheel_regression(
+            [{"setting": r["setting"], "b_median": r["b_joint_mean"], "b_sd": r["b_joint_sd"]} for r in tables["joint"]],
+            truth_b=truth_b)
+        tables["joint_info"] = {k: joint.__dict__[k] for k in ("converged", "reason", "iterations")}
+        files.update(joint="joint_inertance.csv", joint_regression="flywheels_joint.csv")
     for key, name in files.items():
         write_csv(out / name, tables[key])
     figures = {"theory_vs_identified.png": (plot_inertance, inert), "phi_map.png": (plot_phi_map, tables["phi"]),
@@ -102,7 +130,8 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     versions = fit_versions()
     report = write_report(out, plan, tables, outcomes, versions, truth_b)
     t3 = time.perf_counter()
-    seconds = {"records": t1 - t0, "fits": t2 - t1, "analysis_and_report": t3 - t2, "total": t3 - t0}
+    seconds = {"records": t1 - t0, "fits": t2 - t1, "joint": t_joint - t2, "analysis_and_report": t3 - t_joint,
+               "total": t3 - t0}
     info = {"plan": dataclasses.asdict(plan), "versions": versions, "seconds": seconds,
             "processes": processes, "scheduler": scheduler,
             "outcomes": [{k: v for k, v in o.items() if k != "job"} for o in outcomes]}

@@ -1,0 +1,171 @@
+"""The joint model: all records at once, one inertance per flywheel setting.
+
+The paper tuned one set of friction and deformation parameters for every flywheel
+setting and one inertance per setting (its Tables I and 2). The joint model says the same:
+
+- shared by all records: the two-port model's friction sums and shares, the nut and
+  bearing stiffness and damping (``f_0, f_share, c_f, c_share, c_n, k_n, c_B, k_B``);
+- one ``b_<setting>`` per flywheel setting among the records;
+- the residual of each record is the single-record model's AR(1) process with its own
+  scale sigma, **marginalised analytically** under the scale-invariant prior
+  p(sigma) ~ 1/sigma (the single-record prior is log-uniform, the same law with bounds
+  far from the data), so 27 records do not add 27 dimensions:
+
+      log p(r | rho) = 0.5 log(1 - rho^2) + lgamma(n/2) - log 2 - (n/2) log(pi S),
+      S = (1 - rho^2) r_0^2 + sum_t (r_t - rho r_{t-1})^2
+
+- one AR(1) coefficient ``rho_<f>Hz`` per drive frequency (an **assumption**: the
+  residual's correlation is set by the signal's spectrum, which the frequency sets; a
+  record's own rho differs from its frequency's by a few hundredths in the single-record
+  fits).
+
+The masses m_s and m_B of each record come from its metadata as in the single-record
+model. ``log_prob`` returns (log posterior, mean phi over the records).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..device import SETTINGS
+from .model import LikelihoodSettings, PosteriorModel
+from .priors import NOISE_PRIORS
+
+__all__ = ["JointModel", "ar1_marginal"]
+
+
+def ar1_marginal(residual: np.ndarray, rho: float) -> float:
+    """log p(residual | rho) of an AR(1) process with its scale marginalised under the
+    prior 1/sigma (see module docstring)."""
+    r = np.asarray(residual, dtype=float)
+    n = len(r)
+    one = 1.0 - rho * rho
+    innov = r[1:] - rho * r[:-1]
+    s = one * r[0] * r[0] + float(innov @ innov)
+    if not s > 0:
+        return -math.inf
+    return 0.5 * math.log(one) + math.lgamma(0.5 * n) - math.log(2.0) - 0.5 * n * math.log(math.pi * s)
+
+
+@dataclass
+class JointModel:
+    """Log-posterior of several records of one device (see module docstring).
+
+    ``records`` are :class:`Record` objects whose metadata name their flywheel
+    ``setting`` (the grid's records do; a user's need it).
+    """
+
+    records: tuple
+    priors: dict = field(default_factory=dict)
+    likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
+
+    def __post_init__(self) -> None:
+        self.records = tuple(self.records)
+        if len(self.records) < 2:
+            raise ValueError("the joint model needs at least two records")
+        settings, freqs = [], []
+        for i, rec in enumerate(self.records):
+            s = str(rec.metadata.get("setting") or "").upper()
+            if s not in SETTINGS:
+                raise ValueError(f"record {i}: its metadata must name a flywheel setting ({', '.join(SETTINGS)})")
+            settings.append(s)
+            freqs.append(float(rec.drive_frequency))
+        self.setting_of = settings
+        self.freq_of = freqs
+        self.settings = [s for s in SETTINGS if s in settings]
+        self.frequencies = sorted(set(freqs))
+        parts = [PosteriorModel(rec, "two-port", priors=self.priors, likelihood=self.likelihood)
+                 for rec in self.records]
+        self.parts = parts
+        first = parts[0]
+        shared = [n for n in first.names[: first.n_phys] if n != "b"]
+        self.shared = shared
+        self.rhos = [f"rho_{f:g}Hz" for f in self.frequencies] if self.likelihood.residual == "ar1" else []
+        self.names = [f"b_{s}" for s in self.settings] + shared + self.rhos
+        self.derived_names = []
+        base = first.all_priors
+        self.all_priors = {**{n: base[n] for n in shared},
+                           **{f"b_{s}": base["b"] for s in self.settings},
+                           **{n: NOISE_PRIORS["rho"] for n in self.rhos}}
+        self._log = np.array([self.all_priors[n].log_scale for n in self.names])
+        # where each part's theta comes from: index into the joint theta (sigma: none)
+        pos = {n: i for i, n in enumerate(self.names)}
+        self._maps = []
+        for part, s, f in zip(parts, self.setting_of, self.freq_of):
+            idx = []
+            for n in part.names:
+                if n == "b":
+                    idx.append(pos[f"b_{s}"])
+                elif n == "sigma":
+                    idx.append(-1)
+                elif n == "rho":
+                    idx.append(pos[f"rho_{f:g}Hz"])
+                else:
+                    idx.append(pos[n])
+            self._maps.append(np.array(idx))
+
+    @property
+    def ndim(self) -> int:
+        return len(self.names)
+
+    def bounds(self) -> np.ndarray:
+        return np.array([self.all_priors[n].bounds for n in self.names])
+
+    def to_values(self, theta):
+        theta = np.asarray(theta, dtype=float)
+        return np.where(self._log, np.exp(np.where(self._log, theta, 0.0)), theta)
+
+    def part_theta(self, theta, k: int) -> np.ndarray:
+        """Record ``k``'s single-record theta (its sigma set to 1: marginalised here)."""
+        idx = self._maps[k]
+        return np.where(idx >= 0, np.asarray(theta, dtype=float)[idx], 0.0)
+
+    def log_prior(self, theta) -> float:
+        return float(sum(self.all_priors[n].logpdf(t) for n, t in zip(self.names, theta)))
+
+    def log_prob(self, theta):
+        """(log posterior, mean phi over the records) at theta."""
+        theta = np.asarray(theta, dtype=float)
+        lp = self.log_prior(theta)
+        if not math.isfinite(lp):
+            return -math.inf, math.nan
+        phis = []
+        rho_ar1 = self.likelihood.residual == "ar1"
+        for k, part in enumerate(self.parts):
+            t = self.part_theta(theta, k)
+            _, ll, sim = part.evaluate(t)
+            if ll is None:
+                return -math.inf, math.nan
+            rho = float(t[-1]) if rho_ar1 else 0.0
+            lp += ar1_marginal(sim[part.grid] - part.observed, rho)
+            phis.append(part.phi(sim))
+        if not math.isfinite(lp):
+            return -math.inf, math.nan
+        return lp, float(np.mean(phis))
+
+    def start(self, medians: list[dict]) -> np.ndarray:
+        """A starting theta from single-record posterior medians (one dict of sampled
+        values per record, in the records' order): each shared parameter's median over
+        the records (in the sampled scale), each b the median over its setting's
+        records, each rho the median over its frequency's."""
+        if len(medians) != len(self.records):
+            raise ValueError(f"need one median per record ({len(self.records)}), got {len(medians)}")
+
+        def scale(name, values):
+            x = np.asarray(values, dtype=float)
+            return float(np.median(np.log(x) if self.all_priors[name].log_scale else x))
+
+        theta = []
+        for n in self.names:
+            if n.startswith("b_"):
+                vals = [m["b"] for m, s in zip(medians, self.setting_of) if s == n[2:]]
+            elif n.startswith("rho_"):
+                vals = [m["rho"] for m, f in zip(medians, self.freq_of) if f"rho_{f:g}Hz" == n]
+            else:
+                vals = [m[n] for m in medians]
+            theta.append(scale(n, vals))
+        lo, hi = self.bounds().T
+        return np.clip(np.array(theta), lo, hi)

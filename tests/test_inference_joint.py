@@ -1,0 +1,93 @@
+"""The joint model: one b per setting, shared frictions and deformations, sigma marginalised."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+from bayes_inerter import paper_parameters
+from bayes_inerter.inference import PosteriorModel
+from bayes_inerter.inference.fit import fit_joint
+from bayes_inerter.inference.joint import JointModel, ar1_marginal
+from bayes_inerter.inference.sampler import record_digest
+from bayes_inerter.records import GeneratorSettings, generate_record
+
+SHORT = GeneratorSettings(duration=2.0, ramp=0.6)
+
+
+@pytest.fixture(scope="module")
+def records():
+    grid = [("A0", 1.0, 1), ("A2", 1.0, 2), ("A2", 1.5, 3)]
+    return [generate_record(paper_parameters(s), f, settings=SHORT, rng=seed, setting_name=s) for s, f, seed in grid]
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.6, -0.3])
+def test_marginal_equals_the_integral_over_sigma(rho, records):
+    """The closed form against quadrature of the single-record likelihood times 1/sigma."""
+    part = PosteriorModel(records[0])
+    r = np.random.default_rng(1).normal(size=60) * 0.02
+
+    def integrand(log_sigma):  # d log sigma = d sigma / sigma: the 1/sigma prior
+        return math.exp(part.pointwise_loglik(r, math.exp(log_sigma), rho).sum())
+
+    value, _ = integrate.quad(integrand, math.log(1e-4), math.log(10.0), points=[math.log(0.02)], limit=200)
+    assert ar1_marginal(r, rho) == pytest.approx(math.log(value), abs=1e-8)
+
+
+def test_names_and_each_records_parameters(records):
+    jm = JointModel(records)
+    assert jm.names == ["b_A0", "b_A2", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B",
+                        "rho_1Hz", "rho_1.5Hz"]
+    rho = {1.0: 0.3, 1.5: 0.5}
+    centres = []
+    for rec in records:
+        pm = PosteriorModel(rec)
+        centres.append(pm.values(pm.to_theta(paper_parameters(rec.metadata["setting"]), 1.0,
+                                             rho[rec.drive_frequency])))
+    theta = jm.start(centres)
+    for k, rec in enumerate(records):  # the joint theta gives each record its own setting's b and frequency's rho
+        pm = jm.parts[k]
+        expected = pm.to_theta(paper_parameters(rec.metadata["setting"]), 1.0, rho[rec.drive_frequency])
+        np.testing.assert_allclose(jm.part_theta(theta, k), expected, rtol=1e-12, atol=1e-12)
+    lp, phi = jm.log_prob(theta)
+    by_hand = jm.log_prior(theta)
+    for k, part in enumerate(jm.parts):
+        _, _, sim = part.evaluate(jm.part_theta(theta, k))
+        by_hand += ar1_marginal(sim[part.grid] - part.observed, jm.part_theta(theta, k)[-1])
+    assert lp == pytest.approx(by_hand, rel=1e-12) and 0.9 < phi <= 1.0
+    # a wrong b for one setting costs likelihood
+    off = theta.copy()
+    off[1] += math.log(1.1)
+    assert jm.log_prob(off)[0] < lp - 10
+
+
+def test_refuses_what_it_cannot_use(records):
+    with pytest.raises(ValueError, match="at least two"):
+        JointModel(records[:1])
+    bare = dataclasses.replace(records[0], metadata={k: v for k, v in records[0].metadata.items() if k != "setting"})
+    with pytest.raises(ValueError, match="flywheel setting"):
+        JointModel([bare, records[1]])
+    with pytest.raises(ValueError, match="one median per record"):
+        JointModel(records).start([{}])
+
+
+def test_checkpoint_identity_depends_on_every_record(records):
+    a, b = JointModel(records), JointModel([records[0], records[1]])
+    assert record_digest(a) != record_digest(b)
+    assert record_digest(a) == record_digest(JointModel(records))
+
+
+def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
+    centres = []
+    for rec in records:
+        pm = PosteriorModel(rec)
+        centres.append(pm.values(pm.to_theta(paper_parameters(rec.metadata["setting"]), 1.0, 0.3)))
+    res = fit_joint(records, tmp_path / "joint", centres=centres, steps=6, plots=False)
+    assert res.iterations == 6 and not res.converged
+    assert (tmp_path / "joint" / "summary.csv").is_file() and (tmp_path / "joint" / "fit.json").is_file()
+    names = [r["name"] for r in res.summary]
+    assert names[:2] == ["b_A0", "b_A2"] and "phi" in names
+    again = fit_joint(records, tmp_path / "joint", centres=centres, steps=9, plots=False)
+    assert again.iterations == 9  # continued the checkpoint, not started over
