@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from bayes_inerter.inference.optimize import laplace_ensemble
+from bayes_inerter.inference.optimize import laplace_covariance, laplace_ensemble
 
 
 class GaussianModel:
@@ -46,3 +46,12 @@ def test_same_generator_same_ensemble():
     a, _ = laplace_ensemble(model, start, 24, np.random.default_rng(7))
     b, _ = laplace_ensemble(model, start, 24, np.random.default_rng(7))
     assert np.array_equal(a, b)
+
+
+def test_laplace_covariance_is_the_normal_and_the_prior_where_flat():
+    model = GaussianModel()
+    cov = laplace_covariance(model, np.array([0.5, 0.2, 3.0]))
+    np.testing.assert_allclose(cov[:2, :2], model.cov, rtol=0.02, atol=1e-7)
+    # the flat coordinate: a uniform prior's variance, width^2 / 12, uncorrelated with the rest
+    assert abs(cov[2, 2] / (100.0 / 12.0) - 1) < 1e-9
+    assert np.allclose(cov[2, :2], 0.0, atol=1e-9)

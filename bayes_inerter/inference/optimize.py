@@ -29,7 +29,7 @@ from ..records.conditioning import lowpass
 from .model import PosteriorModel
 from .priors import RHO_BOUNDS
 
-__all__ = ["find_start", "laplace_ensemble", "sse", "rigid_guess", "velocity_estimate", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER"]
+__all__ = ["find_start", "local_optimum", "laplace_ensemble", "laplace_covariance", "sse", "rigid_guess", "velocity_estimate", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER"]
 
 DE_POPSIZE = 8  # population per parameter
 DE_MAXITER = 40  # generations
@@ -151,13 +151,19 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     if model.likelihood.residual == "ar1":
         rho = float(np.corrcoef(r[1:], r[:-1])[0, 1]) if np.std(r) > 0 else 0.0
         theta.append(float(np.clip(rho, RHO_BOUNDS[0] + 0.01, RHO_BOUNDS[1] - 0.01)))
-    theta = np.array(theta)
+    return local_optimum(model, np.array(theta))
+
+
+def local_optimum(model: PosteriorModel, theta: np.ndarray, *, maxiter: int = NM_MAXITER):
+    """(theta, log posterior) of the optimum Nelder-Mead reaches from ``theta`` (or
+    ``theta`` itself if it finds nothing better)."""
 
     def neg(x):
         lp, _ = model.log_prob(x)
         return -lp if math.isfinite(lp) else _BAD
 
-    res = minimize(neg, theta, method="Nelder-Mead", options={"maxiter": NM_MAXITER, "xatol": 1e-6, "fatol": 1e-6})
+    theta = np.asarray(theta, dtype=float)
+    res = minimize(neg, theta, method="Nelder-Mead", options={"maxiter": maxiter, "xatol": 1e-6, "fatol": 1e-6})
     best = res.x if res.fun < neg(theta) else theta
     return best, model.log_prob(best)[0]
 
@@ -193,6 +199,57 @@ def _fd_steps(f, u0: np.ndarray, f0: float) -> np.ndarray:
     return steps
 
 
+def _unit_objective(model, theta):
+    """The log posterior on the prior's unit box (-inf outside), counting its calls."""
+    to_u, from_u = _unit(model)
+    n_evals = [0]
+
+    def f(u):
+        n_evals[0] += 1
+        if np.any(u < 0.0) or np.any(u > 1.0):
+            return -np.inf
+        lp, _ = model.log_prob(from_u(u))
+        return lp
+
+    return f, to_u(np.asarray(theta, dtype=float)), from_u, n_evals
+
+
+def _hessian(f, u0: np.ndarray, f0: float) -> np.ndarray:
+    """Central-difference Hessian of f at u0 with steps from :func:`_fd_steps`."""
+    d = len(u0)
+    h = _fd_steps(f, u0, f0)
+    H = np.zeros((d, d))
+    for i in range(d):
+        e_i = np.zeros(d)
+        e_i[i] = h[i]
+        fp, fm = f(u0 + e_i), f(u0 - e_i)
+        H[i, i] = (fp - 2 * f0 + fm) / h[i] ** 2 if np.isfinite(fp + fm) else 0.0
+        for j in range(i):
+            e_j = np.zeros(d)
+            e_j[j] = h[j]
+            quad = [f(u0 + e_i + e_j), f(u0 + e_i - e_j), f(u0 - e_i + e_j), f(u0 - e_i - e_j)]
+            H[i, j] = H[j, i] = (quad[0] - quad[1] - quad[2] + quad[3]) / (4 * h[i] * h[j]) if np.all(np.isfinite(quad)) else 0.0
+    return H
+
+
+def _laplace_root(H: np.ndarray) -> np.ndarray:
+    """A square root of the normal approximation's covariance in the unit box: the
+    inverse of -H where the data curve the log posterior by more than the prior's
+    variance would (eigenvalue > 12), the prior's variance 1/12 elsewhere."""
+    lam, vec = np.linalg.eigh(-0.5 * (H + H.T))
+    var = np.where(lam > 12.0, 1.0 / np.where(lam > 12.0, lam, 1.0), 1.0 / 12.0)
+    return vec * np.sqrt(var)
+
+
+def laplace_covariance(model: PosteriorModel, theta: np.ndarray) -> np.ndarray:
+    """Covariance of theta in the normal (Laplace) approximation at ``theta``, with every
+    direction the data leave flat given the prior's spread (see :func:`laplace_ensemble`)."""
+    f, u0, _, _ = _unit_objective(model, theta)
+    root = _laplace_root(_hessian(f, u0, f(u0)))
+    width = np.diff(model.bounds(), axis=1)[:, 0]
+    return (root @ root.T) * np.outer(width, width)
+
+
 def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rng: np.random.Generator):
     """Initial walkers spread like the posterior near the optimum ``theta``.
 
@@ -210,34 +267,10 @@ def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rn
     walkers started like this begin near equilibrium.
     Returns (nwalkers, ndim) and the number of log-posterior evaluations spent.
     """
-    to_u, from_u = _unit(model)
-    n_evals = [0]
-
-    def f(u):
-        n_evals[0] += 1
-        if np.any(u < 0.0) or np.any(u > 1.0):
-            return -np.inf
-        lp, _ = model.log_prob(from_u(u))
-        return lp
-
-    u0 = to_u(np.asarray(theta, dtype=float))
+    f, u0, from_u, n_evals = _unit_objective(model, theta)
     f0 = f(u0)
     d = len(u0)
-    h = _fd_steps(f, u0, f0)
-    H = np.zeros((d, d))
-    for i in range(d):
-        e_i = np.zeros(d)
-        e_i[i] = h[i]
-        fp, fm = f(u0 + e_i), f(u0 - e_i)
-        H[i, i] = (fp - 2 * f0 + fm) / h[i] ** 2 if np.isfinite(fp + fm) else 0.0
-        for j in range(i):
-            e_j = np.zeros(d)
-            e_j[j] = h[j]
-            quad = [f(u0 + e_i + e_j), f(u0 + e_i - e_j), f(u0 - e_i + e_j), f(u0 - e_i - e_j)]
-            H[i, j] = H[j, i] = (quad[0] - quad[1] - quad[2] + quad[3]) / (4 * h[i] * h[j]) if np.all(np.isfinite(quad)) else 0.0
-    lam, vec = np.linalg.eigh(-0.5 * (H + H.T))
-    var = np.where(lam > 12.0, 1.0 / np.where(lam > 12.0, lam, 1.0), 1.0 / 12.0)
-    root = vec * np.sqrt(var)
+    root = _laplace_root(_hessian(f, u0, f0))
     floor = f0 - (0.5 * d + INIT_SD * math.sqrt(0.5 * d))
     walkers, scale, tries = [], 1.0, 0
     while len(walkers) < nwalkers:

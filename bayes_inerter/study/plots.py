@@ -7,7 +7,7 @@ import numpy as np
 
 from ..device import FREQUENCIES_HZ, SETTINGS
 
-__all__ = ["plot_inertance", "plot_phi_map", "plot_models"]
+__all__ = ["plot_inertance", "plot_phi_map", "plot_models", "plot_design"]
 
 
 def plot_inertance(rows: list[dict]):
@@ -96,5 +96,31 @@ def plot_models(rows: list[dict]):
     a2.set_ylabel("elpd_loo - best model's (nats; higher is better)")
     a1.set_title("fit accuracy")
     a2.set_title("LOO: expected log predictive density")
+    fig.tight_layout()
+    return fig
+
+
+def plot_design(rows: list[dict], names: list[str]):
+    """Laplace contraction of each parameter (columns) under each design (rows), one
+    panel per flywheel setting."""
+    import matplotlib.pyplot as plt
+
+    settings = list(dict.fromkeys(r["setting"] for r in rows))
+    designs = list(dict.fromkeys(r["design"] for r in rows))
+    fig, axes = plt.subplots(1, len(settings), figsize=(0.55 * len(names) * len(settings) + 4, 0.42 * len(designs) + 2),
+                             sharey=True, squeeze=False)
+    for ax, s in zip(axes[0], settings):
+        grid = np.array([[next(r[n] for r in rows if r["setting"] == s and r["design"] == d) for n in names]
+                         for d in designs])
+        im = ax.imshow(np.clip(grid, 0, 1), cmap="viridis", vmin=0, vmax=1, aspect="auto")
+        for i in range(len(designs)):
+            for j in range(len(names)):
+                ax.text(j, i, f"{grid[i, j]:.2f}", ha="center", va="center", fontsize=6,
+                        color="w" if grid[i, j] < 0.6 else "k")
+        ax.set_xticks(range(len(names)), names, rotation=60, fontsize=8)
+        ax.set_title(f"setting {s}", fontsize=9)
+    axes[0, 0].set_yticks(range(len(designs)), designs, fontsize=8)
+    fig.colorbar(im, ax=axes[0, -1], label="contraction (Laplace)")
+    fig.suptitle("What each experiment would identify: 1 - var(posterior) / var(prior)", fontsize=10)
     fig.tight_layout()
     return fig

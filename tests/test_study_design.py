@@ -1,0 +1,53 @@
+"""Design sensitivity and richer-truth shifts (Laplace approximations)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from bayes_inerter import paper_parameters
+from bayes_inerter.inference import PosteriorModel
+from bayes_inerter.records import GeneratorSettings, generate_record
+from bayes_inerter.study.design import Design, design_contraction, noise_at, richer_truth_shift, run_design
+
+SHORT = GeneratorSettings(duration=3.0, ramp=1.0)
+
+
+def test_noise_at_the_truth_is_the_low_passed_sensor_noise():
+    """White accelerometer noise of sd s, low-passed to 30 Hz of a 500 Hz band, has sd
+    s sqrt(30 / 500) (the residual at the truth is nearly all noise)."""
+    gen = GeneratorSettings(duration=3.0, ramp=1.0, force_noise=0.0, accel_noise=0.02)
+    rec = generate_record(paper_parameters("A1"), 1.0, settings=gen, rng=5, setting_name="A1")
+    pm = PosteriorModel(rec)
+    sigma, rho = noise_at(pm, pm.to_theta(paper_parameters("A1"), 1.0, 0.0))
+    marginal = sigma / math.sqrt(1 - rho**2)
+    assert marginal == pytest.approx(0.02 * math.sqrt(30 / 500), rel=0.2)
+
+
+def test_a_quieter_sensor_identifies_b_better():
+    loud = design_contraction(Design("loud", accel_noise=0.04), "A1", generator=SHORT)
+    quiet = design_contraction(Design("quiet", accel_noise=0.004), "A1", generator=SHORT)
+    assert quiet["b_rel_sd"] < loud["b_rel_sd"]
+    for row in (loud, quiet):
+        assert all(row[n] <= 1.0 for n in ("b", "f_0", "k_n", "c_B"))
+        assert row["force_peak"] > 0
+
+
+def test_run_design_writes_tables_figure_and_report(tmp_path):
+    res = run_design(tmp_path / "design", settings=("A1",), designs=(Design("base"), Design("2 Hz", freq=2.0)),
+                     richer=({},), richer_settings=("A1",), generator=SHORT, maxiter=150)
+    for name in ("design.csv", "richer_truth.csv", "design.png", "REPORT.md"):
+        assert (tmp_path / "design" / name).is_file()
+    (own,) = res["richer"]
+    assert own["truth"] == "model's own"
+    # the model's own device: the optimum lies within a few Laplace sd of the generating b
+    assert abs(own["shift_sd"]) < 4
+    assert "richer device" in res["report"].read_text()
+    assert [r["design"] for r in res["design"]] == ["base", "2 Hz"]
+
+
+@pytest.mark.slow
+def test_a_stribeck_device_is_fitted_too():
+    """The truth simulator takes minutes on a Stribeck record (small steps at each stick)."""
+    row = richer_truth_shift("A1", 1.0, {"friction": "stribeck"}, generator=SHORT, maxiter=150)
+    assert row["truth"] == "friction=stribeck" and np.isfinite(row["shift_sd"]) and row["b_sd"] > 0
