@@ -152,3 +152,28 @@ def test_start_guess_finds_the_basin(record):
         g = rigid_guess(model)
         assert g["b"] == pytest.approx(p.b, rel=0.05)
         assert g["f1_0"] + g["f2_0"] == pytest.approx(p.f1_0 + p.f2_0, rel=0.15)
+
+
+def test_edges_of_the_prior_give_a_number_or_minus_infinity(record):
+    """At corners of the prior box (every parameter at a bound) the simulator either
+    returns finite accelerations or refuses (SimulationError, e.g. contacts chattering);
+    the log posterior is then -inf, never NaN. Its work per sample is capped by the
+    kernel's MAX_EVENTS_PER_STEP, so no corner can make it run away."""
+    from bayes_inerter.simulate import SimulationError, simulate
+
+    m = PosteriorModel(record)
+    lo, hi = m.bounds().T
+    rng = np.random.default_rng(11)
+    corners = [lo, hi] + [np.where(rng.random(m.ndim) < 0.5, lo, hi) for _ in range(30)]
+    finite = 0
+    for theta in corners:
+        lp, phi = m.log_prob(theta)
+        assert not math.isnan(lp)
+        assert lp == -math.inf or (math.isfinite(lp) and math.isfinite(phi))
+        finite += math.isfinite(lp)
+        try:
+            a = simulate(m.parameters(theta), record.time, record.force, sampling="mean")
+        except SimulationError:
+            continue
+        assert np.all(np.isfinite(a))
+    assert finite > 0  # the corners are not all refused: the check above did run on numbers
