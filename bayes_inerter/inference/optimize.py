@@ -38,9 +38,16 @@ NM_MAXITER = 800  # Nelder-Mead iterations on the full posterior
 _BAD = 1e30
 
 
+def _with_noise(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
+    """theta with the noise entries (sigma, rho) at the middle of their prior's bounds:
+    they change neither the simulation nor the residual, only keep the prior finite."""
+    mid = model.bounds()[len(phys):].mean(axis=1)
+    return np.concatenate([phys, mid])
+
+
 def sse(model: PosteriorModel, phys: np.ndarray) -> float:
     """Sum of squared kept residuals at the physical part of theta (stage 1's objective)."""
-    theta = np.concatenate([phys, [0.0, 0.0][: model.ndim - len(phys)]])
+    theta = _with_noise(model, phys)
     _, ll, sim = model.evaluate(theta)
     if sim is None:
         return _BAD
@@ -144,7 +151,7 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
             x0=x0, workers=workers,
         )
     phys = min(_swaps(model, de.x) + _swaps(model, x0), key=lambda x: sse(model, x))
-    _, _, sim = model.evaluate(np.concatenate([phys, [0.0, 0.0][: model.ndim - nphys]]))
+    _, _, sim = model.evaluate(_with_noise(model, phys))
     r = sim[model.grid] - model.observed
     sigma = max(float(np.std(r)), 1e-5)
     theta = list(phys) + [math.log(sigma)]

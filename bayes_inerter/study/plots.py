@@ -7,7 +7,7 @@ import numpy as np
 
 from ..device import FREQUENCIES_HZ, SETTINGS
 
-__all__ = ["plot_inertance", "plot_phi_map", "plot_models", "plot_design"]
+__all__ = ["plot_inertance", "plot_phi_map", "plot_models", "plot_design", "plot_ranks"]
 
 
 def plot_inertance(rows: list[dict]):
@@ -122,5 +122,31 @@ def plot_design(rows: list[dict], names: list[str]):
     axes[0, 0].set_yticks(range(len(designs)), designs, fontsize=8)
     fig.colorbar(im, ax=axes[0, -1], label="contraction (Laplace)")
     fig.suptitle("What each experiment would identify: 1 - var(posterior) / var(prior)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def plot_ranks(ranks: dict, L: int, *, bins: int = 10, title: str = ""):
+    """SBC rank histograms, one panel per parameter, with the band a uniform histogram
+    stays inside 99 % of the time (per bin, binomial)."""
+    import matplotlib.pyplot as plt
+    from scipy import stats
+
+    names = list(ranks)
+    cols = min(4, len(names))
+    rows = -(-len(names) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.4 * rows + 0.6), squeeze=False)
+    for ax, name in zip(axes.flat, names):
+        r = np.asarray(ranks[name])
+        n = len(r)
+        lo, hi = stats.binom.ppf([0.005, 0.995], n, 1.0 / bins)
+        ax.axhspan(lo, hi, color="0.85")
+        ax.axhline(n / bins, color="0.5", lw=0.8)
+        ax.hist(r, bins=bins, range=(0, L + 1), color="tab:blue", edgecolor="w")
+        ax.set_title(name, fontsize=9)
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(names):]:
+        ax.axis("off")
+    fig.suptitle(title + "\ngrey: 99 % band of a uniform histogram", fontsize=9)
     fig.tight_layout()
     return fig

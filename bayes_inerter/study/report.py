@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["write_report", "design_report", "NOT_IDENTIFIED"]
+__all__ = ["write_report", "design_report", "calibration_report", "NOT_IDENTIFIED"]
 
 #: Contraction below which a parameter is reported as not identified by the records.
 NOT_IDENTIFIED = 0.5
@@ -208,6 +208,36 @@ def design_report(out: Path, rows: list[dict], shifts: list[dict], names: list[s
                               "phi"], {"b_true": "{:.1f}", "b_optimum": "{:.1f}", "b_sd": "{:.1f}",
                                        "shift_pct": "{:+.2f}", "shift_sd": "{:+.1f}", "phi": "{:.4f}"}), "",
               "Versions: " + ", ".join(f"{k} {v}" for k, v in versions.items()) + ".", ""]
+    path = Path(out) / "REPORT.md"
+    path.write_text("\n".join(lines))
+    return path
+
+
+def calibration_report(out: Path, cs, table: list[dict], n_ok: int, failed: list[dict], versions: dict) -> Path:
+    """``out``/REPORT.md of a simulation-based calibration run, written from its table."""
+    lines = ["# Simulation-based calibration", "",
+             f"{n_ok} replicates (truth: `{cs.truth}`; residual model `{cs.residual}`; setting {cs.setting} at "
+             f"{cs.freq:g} Hz; {cs.steps} steps per chain; ranks among {cs.draws} posterior draws; seed {cs.seed})."
+             + (f" {len(failed)} replicates failed: " + "; ".join(f"{r['replicate']}: {r['error']}" for r in failed)
+                if failed else ""), ""]
+    if table:
+        def off(r, q):
+            return abs(r[f"coverage_{q}"] - q / 100) > 2 * r[f"se_{q}"]
+
+        bad = [r["parameter"] for r in table if off(r, 50) or off(r, 90)]
+        nonuniform = [r["parameter"] for r in table if r["rank_chi2_p"] < 0.01]
+        lines += ["A calibrated posterior holds the truth in its central 50 % and 90 % intervals 50 % and 90 % of "
+                  "the time (binomial se beside each), and its ranks are uniform. "
+                  + (f"Coverage more than 2 se from nominal: {', '.join(bad)}. " if bad else
+                     "Every parameter's coverage lies within 2 se of nominal. ")
+                  + (f"Ranks not uniform (chi-square p < 0.01): {', '.join(nonuniform)}." if nonuniform else
+                     "No rank histogram departs from uniform at p < 0.01."), "",
+                  _table(table, ["parameter", "replicates", "coverage_50", "se_50", "coverage_90", "se_90",
+                                 "rank_chi2_p"], {c: "{:.3f}" for c in ("coverage_50", "se_50", "coverage_90",
+                                                                         "se_90", "rank_chi2_p")}), "",
+                  "![ranks](ranks.png)", ""]
+    lines += ["Versions: " + ", ".join(f"{k} {v}" for k, v in versions.items()) + ".", "",
+              f"Settings: `{cs!r}`", ""]
     path = Path(out) / "REPORT.md"
     path.write_text("\n".join(lines))
     return path

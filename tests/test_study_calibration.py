@@ -1,0 +1,54 @@
+"""Simulation-based calibration: the small version CI runs (the pipeline, not the verdict;
+results/calibration holds the study's run)."""
+
+import json
+
+import pytest
+
+from bayes_inerter.records import GeneratorSettings
+from bayes_inerter.study.calibration import CalibrationSettings, coverage_table, replicate, run_calibration
+
+TINY = CalibrationSettings(steps=30, draws=9, generator=GeneratorSettings(duration=2.0, ramp=0.6))
+
+
+@pytest.fixture(scope="module")
+def calibration(tmp_path_factory):
+    out = tmp_path_factory.mktemp("sbc")
+    return out, run_calibration(TINY, out, 4, processes=2)
+
+
+def test_writes_ranks_coverage_and_report(calibration):
+    out, res = calibration
+    for name in ("ranks.csv", "coverage.csv", "ranks.png", "REPORT.md", "settings.json"):
+        assert (out / name).is_file()
+    assert res["replicates"] == 4 and not res["failed"]
+    names = [r["parameter"] for r in res["coverage"]]
+    assert names == ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B", "sigma", "rho"]
+    for k in range(4):
+        rep = json.loads((out / "replicates" / f"{k:04d}.json").read_text())
+        assert all(0 <= r <= TINY.draws for r in rep["ranks"].values())
+        assert all(rep["in50"][n] <= rep["in90"][n] for n in rep["in50"])  # the 50 % interval lies inside the 90 %
+
+
+def test_same_seed_same_replicate_and_a_rerun_reuses_them(calibration):
+    out, res = calibration
+    stamp = {p.name: p.stat().st_mtime_ns for p in (out / "replicates").iterdir()}
+    again = run_calibration(TINY, out, 4, processes=1)
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "replicates").iterdir()} == stamp
+    assert again["coverage"] == res["coverage"]
+    assert replicate(TINY, 1) == json.loads((out / "replicates" / "0001.json").read_text())
+
+
+def test_other_settings_in_the_same_folder_are_refused(calibration):
+    out, _ = calibration
+    with pytest.raises(ValueError, match="other calibration settings"):
+        run_calibration(CalibrationSettings(steps=31, draws=9), out, 1)
+
+
+def test_coverage_counts():
+    reps = [{"replicate": k, "L": 9, "ranks": {"b": k % 10}, "in50": {"b": k < 5}, "in90": {"b": k < 9}}
+            for k in range(10)]
+    (row,) = coverage_table(reps + [{"replicate": 10, "error": "boom"}])
+    assert row["replicates"] == 10 and row["coverage_50"] == 0.5 and row["coverage_90"] == 0.9
+    assert row["se_90"] == pytest.approx((0.9 * 0.1 / 10) ** 0.5)
+    assert row["rank_chi2_p"] == pytest.approx(1.0)  # one draw in each of the 10 bins: perfectly uniform
