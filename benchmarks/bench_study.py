@@ -1,0 +1,94 @@
+"""Benchmark: the full study's wall time on this machine, its split, and what converging
+every chain would take.
+
+Run by hand after a study: ``python benchmarks/bench_study.py [results/full]``.
+
+1. Measured, from the study's own records (``study.json`` and every ``fit.json``):
+   wall time of the fits, the joint model and the analysis; per fit, the time in
+   sampling (the start-up optimiser and Laplace start included), in posterior draws (predictive simulations, LOO) and in writing plots
+   and files.
+2. Measured here, side by side on one of the study's records: one log-probability
+   evaluation against one simulation (medians of 30): the simulator's share of the
+   sampler's time.
+3. Projected: each chain needs 50 times its largest autocorrelation time to meet the
+   convergence criteria; the sampling time scaled to that length, summed, over the
+   study's worker processes, against the 30-minute target. A projection from tau
+   estimated on unconverged chains (which underestimates it), not a measurement.
+
+The machine is shared and noisy: read the ratios.
+"""
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bayes_inerter import simulate
+from bayes_inerter.inference.model import PosteriorModel
+from bayes_inerter.records import read_record
+
+TARGET_S = 30 * 60.0
+
+
+def median_time(fn, repeats=30):
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def main():
+    out = Path(sys.argv[1] if len(sys.argv) > 1 else "results/full")
+    study = json.loads((out / "study.json").read_text())
+    fits = [json.loads(p.read_text()) | {"_dir": p.parent} for p in sorted(out.glob("fits/*/*/fit.json"))]
+    if not fits:
+        sys.exit(f"{out}: no fits")
+    sec = study["seconds"]
+    procs = study.get("processes") or 1
+    print(f"study {out}: {len(fits)} fits on {procs} processes")
+    print("1. measured wall time (s): " + ", ".join(f"{k} {v:.0f}" for k, v in sec.items()))
+    samp = sum(f["timings_s"]["sampling"] for f in fits)
+    post = sum(f["timings_s"].get("posterior_draws", 0.0) for f in fits)
+    total = sum(f["timings_s"]["total"] for f in fits)
+    print(f"   summed over fits (CPU-process s): sampling {samp:.0f} ({100 * samp / total:.0f} %), posterior draws "
+          f"{post:.0f} ({100 * post / total:.0f} %), plots and files {total - samp - post:.0f} "
+          f"({100 * (total - samp - post) / total:.0f} %)")
+
+    rec_path = next(iter(sorted((out / "records").glob("*.csv"))), None)
+    if rec_path is not None:
+        rec = read_record(rec_path)
+        model = PosteriorModel(rec)
+        f2p = next(f for f in fits if f["model"] == "two-port")
+        summ = {r.split(",")[0]: float(r.split(",")[1]) for r in
+                (f2p["_dir"] / "summary.csv").read_text().splitlines()[1:]}
+        theta = np.array([np.log(summ[n]) if lg else summ[n] for n, lg in zip(model.names, model._log)])
+        params = model.parameters(theta)
+        t_lp = median_time(lambda: model.log_prob(theta))
+        t_sim = median_time(lambda: simulate(params, rec.time, rec.force, sampling="mean"))
+        print(f"2. {rec_path.name}: log_prob {1e3 * t_lp:.2f} ms, simulate {1e3 * t_sim:.2f} ms "
+              f"(simulator share {t_sim / t_lp:.2f})")
+
+    need = []
+    for f in fits:
+        tau = [t for t in f["tau"].values() if np.isfinite(t)]
+        it = int(f["iterations"])
+        steps = max(50 * max(tau), it) if tau else float("nan")
+        need.append(f["timings_s"]["sampling"] * steps / it)
+    proj = np.nansum(need) / procs + sec.get("analysis_and_report", 0.0)
+    conv = sum(bool(f["converged"]) for f in fits)
+    print(f"3. converged chains: {conv} of {len(fits)}. Projected wall time with every chain at 50 tau "
+          f"(single-record fits only): {proj / 60:.0f} min, {proj / TARGET_S:.1f} x the 30-minute target")
+    if (out / "joint" / "fit.json").exists():
+        j = json.loads((out / "joint" / "fit.json").read_text())
+        tau = max(t for t in j["tau"].values() if np.isfinite(t))
+        print(f"   joint model: {j['iterations']} steps in {j['timings_s']['sampling']:.0f} s, largest tau {tau:.0f}: "
+              f"50 tau would take {j['timings_s']['sampling'] * 50 * tau / j['iterations'] / 60:.0f} min more or less")
+
+
+if __name__ == "__main__":
+    main()
