@@ -156,7 +156,10 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
                      "Their intervals are the prior's, not a finding." if weak else
                      "Every sampled quantity contracted by more than "
                      f"{NOT_IDENTIFIED} on every record."), "",
-                  _table(contr, ["record"] + names, {n: "{:.2f}" for n in names}), ""]
+                  _table(contr, ["record"] + names, {n: "{:.2f}" for n in names}), "",
+                  "What other experiments (frequency, amplitude, accelerometer band and noise) would identify, and "
+                  "what a Stribeck hump or nut backlash does to b: `python studies/design.py`, written to "
+                  "`results/design/REPORT.md`.", ""]
     lines += ["## Per-record figures", "",
               "Each fit's folder under `fits/<model>/<record>/` holds its corner plot (`corner.png`), credible "
               "bands on the acceleration (`bands.png`), traces and phi.", "",
