@@ -21,22 +21,14 @@ import time
 import numpy as np
 
 import bayes_inerter.inference.model as model_module
+from _timing import median_time
+
 from bayes_inerter import paper_parameters, simulate
 from bayes_inerter.inference import Convergence, fit_record
 from bayes_inerter.inference.model import PosteriorModel
 from bayes_inerter.records import generate_record
 
 TARGET_S = 120.0
-
-
-def median_time(fn, repeats=30):
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def main():

@@ -20,26 +20,17 @@ The machine is shared and noisy: read the ratios.
 
 import json
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
+
+from _timing import median_time
 
 from bayes_inerter import simulate
 from bayes_inerter.inference.model import PosteriorModel
 from bayes_inerter.records import read_record
 
 TARGET_S = 30 * 60.0
-
-
-def median_time(fn, repeats=30):
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def main():
