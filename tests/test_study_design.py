@@ -51,3 +51,14 @@ def test_a_stribeck_device_is_fitted_too():
     """The truth simulator takes minutes on a Stribeck record (small steps at each stick)."""
     row = richer_truth_shift("A1", 1.0, {"friction": "stribeck"}, generator=SHORT, maxiter=150)
     assert row["truth"] == "friction=stribeck" and np.isfinite(row["shift_sd"]) and row["b_sd"] > 0
+
+
+def test_run_design_reuses_its_cases_and_refuses_other_settings(tmp_path):
+    kw = dict(settings=("A1",), designs=(Design("base"),), richer=(), generator=SHORT, maxiter=50)
+    first = run_design(tmp_path / "d", **kw)
+    (case,) = (tmp_path / "d" / "cases").glob("*.json")
+    stamp = case.stat().st_mtime_ns
+    again = run_design(tmp_path / "d", **kw)
+    assert again["design"] == first["design"] and case.stat().st_mtime_ns == stamp  # read, not computed again
+    with pytest.raises(ValueError, match="other settings"):
+        run_design(tmp_path / "d", **{**kw, "seed": 1})

@@ -75,6 +75,16 @@ def _joint_section(rows, reg, info) -> list[str]:
     return out
 
 
+def _record_coverage(recs, truth_b) -> str:
+    """', whose 94 % intervals hold the generating b for n of m records (missed: ...)'."""
+    known = [r for r in recs if truth_b and r["setting"] in truth_b]
+    if not known:
+        return ""
+    missed = [r["record"] for r in known if not r["b_hdi_3%"] <= truth_b[r["setting"]] <= r["b_hdi_97%"]]
+    return (f", whose 94 % intervals hold the generating b for {len(known) - len(missed)} of {len(known)} records"
+            + (f" (missed: {', '.join(missed)})" if missed else ""))
+
+
 def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: dict, truth_b: dict | None) -> Path:
     """Write ``out``/REPORT.md from the study's tables; return its path."""
     inert, reg, phi, comp, contr, recs = (tables.get(k, []) for k in
@@ -103,7 +113,7 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
                                  "converged"], {c: "{:.1f}" for c in ("b_theory", "b_paper", "b_median",
                                                                      "b_hdi_3%", "b_hdi_97%")}), "",
                   "![theory against identification](theory_vs_identified.png)", "",
-                  "Per record (`inertance_records.csv`):", "",
+                  "Per record (`inertance_records.csv`)" + _record_coverage(recs, truth_b) + ":", "",
                   _table(recs, ["record", "b_mean", "b_hdi_3%", "b_hdi_97%", "b_r_hat", "iterations", "converged"],
                          {c: "{:.1f}" for c in ("b_mean", "b_hdi_3%", "b_hdi_97%")}), ""]
     if reg:
