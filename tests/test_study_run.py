@@ -8,6 +8,7 @@ import signal
 import pytest
 
 from bayes_inerter.cli import main
+from bayes_inerter.device import setting as get_setting
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study import FitJob, quick_plan, run_jobs, run_study
 from bayes_inerter.study import runner as runner_module
@@ -72,6 +73,22 @@ def test_a_users_folder_of_records(study, tmp_path):
     res = run_study(tiny_plan(records_dir=str(folder), comparison=((), ())), tmp_path / "out", processes=1)
     assert [r["setting"] for r in res.tables["inertance"]] == ["A2"]
     assert "the records in" in res.report.read_text()
+
+
+def test_the_joint_model_takes_only_records_that_name_their_setting(study, tmp_path):
+    """A record known only by its screw mass has no setting to share a b with: the joint
+    model leaves it out (here that leaves one record, so no joint model), and the study
+    still finishes."""
+    folder = tmp_path / "mixed"
+    folder.mkdir()
+    for name in ("A2_1Hz.csv", "A2_1Hz.json", "A0_1Hz.csv"):
+        shutil.copy(study.out / "records" / name, folder / name)
+    meta = json.loads((study.out / "records" / "A0_1Hz.json").read_text())
+    meta["m_s"] = get_setting(meta.pop("setting")).m_s
+    (folder / "A0_1Hz.json").write_text(json.dumps(meta))
+    res = run_study(tiny_plan(records_dir=str(folder), comparison=((), ())), tmp_path / "out", processes=2)
+    assert [o["status"] for o in res.outcomes] == ["done", "done"]
+    assert "joint" not in res.tables and not (tmp_path / "out" / "joint").exists()
 
 
 def test_failed_and_dying_jobs_are_reported_and_the_others_finish(study, tmp_path, monkeypatch):

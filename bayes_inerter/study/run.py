@@ -56,11 +56,13 @@ def prepare_records(plan: StudyPlan, out: Path) -> dict:
 def run_joint(plan: StudyPlan, out: Path, fits: list, records: dict, *, processes: int = 1, progress=None):
     """The joint model of the study's two-port records (``plan.joint``), into
     ``out``/joint, started from each record's posterior means; an earlier run's chain
-    there is continued. Returns the FitResult, or None with fewer than two records."""
+    there is continued. Only records that name their flywheel setting take part (the
+    joint model has one b per setting). Returns the FitResult, or None with fewer than
+    two such records."""
     from ..inference.fit import fit_joint
     from ..inference.model import PosteriorModel
 
-    chosen = [f for f in fits if f.model == "two-port" and f.name in records]
+    chosen = [f for f in fits if f.model == "two-port" and f.name in records and records[f.name][1] in SETTINGS]
     if len(chosen) < 2:
         return None
     recs = [read_record(records[f.name][0]) for f in chosen]
