@@ -71,8 +71,10 @@ class CalibrationSettings:
     ----------
     truth : "model" or "generator" (see module docstring).
     setting, freq : the flywheel setting (masses) and drive frequency of the records.
-    generator : how records are made (the force template, and the data for "generator").
-    steps : steps per chain (default 1500).
+    generator : how records are made (the force template, and the data for "generator");
+        default 2 s records with a 0.6 s ramp, so a hundred replicates fit in an hour on
+        two cores (an **assumption** of the calibration: shorter than the paper's records).
+    steps : steps per chain (default 800).
     draws : L, the posterior draws each truth is ranked among (default 99).
     residual : the likelihood's residual model, "ar1" (default) or "iid".
     seed : replicate k uses the seed sequence (seed, k).
@@ -81,8 +83,8 @@ class CalibrationSettings:
     truth: str = "model"
     setting: str = "A1"
     freq: float = 1.0
-    generator: GeneratorSettings = field(default_factory=lambda: GeneratorSettings(duration=4.0, ramp=1.0))
-    steps: int = 1500
+    generator: GeneratorSettings = field(default_factory=lambda: GeneratorSettings(duration=2.0, ramp=0.6))
+    steps: int = 800
     draws: int = 99
     residual: str = "ar1"
     seed: int = 0
