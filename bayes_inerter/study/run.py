@@ -118,7 +118,7 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
         tables["joint_regression"] = flywheel_regression(
             [{"setting": r["setting"], "b_median": r["b_joint_mean"], "b_sd": r["b_joint_sd"]} for r in tables["joint"]],
             truth_b=truth_b)
-        tables["joint_info"] = {k: joint.__dict__[k] for k in ("converged", "reason", "iterations")}
+        tables["joint_info"] = {"converged": joint.converged, "reason": joint.reason, "iterations": joint.iterations}
         files.update(joint="joint_inertance.csv", joint_regression="flywheels_joint.csv")
     for key, name in files.items():
         write_csv(out / name, tables[key])
