@@ -43,9 +43,12 @@ def main():
     procs = study.get("processes") or 1
     print(f"study {out}: {len(fits)} fits on {procs} processes")
     print("1. measured wall time (s): " + ", ".join(f"{k} {v:.0f}" for k, v in sec.items()))
-    samp = sum(f["timings_s"]["sampling"] for f in fits)
+    def sampling(f):  # over every run that built the chain (a resumed chain's runs add up)
+        return f["timings_s"].get("sampling_all_runs", f["timings_s"]["sampling"])
+
+    samp = sum(sampling(f) for f in fits)
     post = sum(f["timings_s"].get("posterior_draws", 0.0) for f in fits)
-    total = sum(f["timings_s"]["total"] for f in fits)
+    total = sum(sampling(f) + f["timings_s"]["total"] - f["timings_s"]["sampling"] for f in fits)
     print(f"   summed over fits (CPU-process s): sampling {samp:.0f} ({100 * samp / total:.0f} %), posterior draws "
           f"{post:.0f} ({100 * post / total:.0f} %), plots and files {total - samp - post:.0f} "
           f"({100 * (total - samp - post) / total:.0f} %)")
@@ -69,7 +72,7 @@ def main():
         tau = [t for t in f["tau"].values() if np.isfinite(t)]
         it = int(f["iterations"])
         steps = max(50 * max(tau), it) if tau else float("nan")
-        need.append(f["timings_s"]["sampling"] * steps / it)
+        need.append(sampling(f) * steps / it)
     proj = np.nansum(need) / procs + sec.get("analysis_and_report", 0.0)
     conv = sum(bool(f["converged"]) for f in fits)
     print(f"3. converged chains: {conv} of {len(fits)}. Projected wall time with every chain at 50 tau "
@@ -77,8 +80,9 @@ def main():
     if (out / "joint" / "fit.json").exists():
         j = json.loads((out / "joint" / "fit.json").read_text())
         tau = max(t for t in j["tau"].values() if np.isfinite(t))
-        print(f"   joint model: {j['iterations']} steps in {j['timings_s']['sampling']:.0f} s, largest tau {tau:.0f}: "
-              f"50 tau would take {j['timings_s']['sampling'] * 50 * tau / j['iterations'] / 60:.0f} min more or less")
+        t = sampling(j)
+        print(f"   joint model: {j['iterations']} steps in {t:.0f} s, largest tau {tau:.0f}: "
+              f"50 tau would take {t * 50 * tau / j['iterations'] / 60:.0f} min")
 
 
 if __name__ == "__main__":

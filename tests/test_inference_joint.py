@@ -91,3 +91,5 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     assert names[:2] == ["b_A0", "b_A2"] and "phi" in names
     again = fit_joint(records, tmp_path / "joint", centres=centres, steps=9, plots=False)
     assert again.iterations == 9  # continued the checkpoint, not started over
+    # the sampling time of the chain adds up over the two runs that built it
+    assert again.timings["sampling_all_runs"] == pytest.approx(res.timings["sampling"] + again.timings["sampling"])

@@ -120,7 +120,8 @@ def fit_record(
         "stride": pm.stride, "priors": {n: p.describe() for n, p in pm.all_priors.items()},
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "contraction": shrink,
-        "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total},
+        "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total,
+                      "sampling_all_runs": _sampling_all_runs(out, t_sample, fresh)},
         "versions": versions(),
         "record_metadata": record.metadata,
     }
@@ -198,11 +199,26 @@ def fit_joint(
         "priors": {n: p.describe() for n, p in jm.all_priors.items()},
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "contraction": shrink,
-        "timings_s": {"sampling": t_sample, "total": t_total},
+        "timings_s": {"sampling": t_sample, "total": t_total,
+                      "sampling_all_runs": _sampling_all_runs(out, t_sample, False)},
         "versions": versions(),
     }
     (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
     return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"], shrink)
+
+
+def _sampling_all_runs(out: Path, t_sample: float, fresh: bool) -> float:
+    """Sampling seconds of the chain in all runs that built it: this run's plus what the
+    previous fit.json recorded, unless the chain started over (a run that continues a
+    checkpoint, or finds it complete, would otherwise report only its own share)."""
+    previous = out / "fit.json"
+    if fresh or not previous.exists():
+        return t_sample
+    try:
+        timings = json.loads(previous.read_text()).get("timings_s", {})
+    except (OSError, ValueError):
+        return t_sample
+    return t_sample + float(timings.get("sampling_all_runs", timings.get("sampling", 0.0)))
 
 
 def _residual_sd(sample) -> float:
