@@ -24,6 +24,13 @@ def plot_inertance(rows: list[dict]):
     ax.plot(x, theory, "s", mfc="none", color="k", ms=9, label="theory (geometry)")
     ax.plot(x, paper, "x", color="tab:red", ms=9, label="paper, identified by hand")
     ax.errorbar(x, med, yerr=err, fmt="o", color="tab:blue", capsize=4, label="posterior median, 94 % interval")
+    joint = "b_joint_mean" in rows[0]
+    if joint:  # the joint model's b beside the single-record combination
+        jm = np.array([r["b_joint_mean"] for r in rows])
+        jerr = np.array([[r["b_joint_mean"] - r["b_joint_hdi_3%"] for r in rows],
+                         [r["b_joint_hdi_97%"] - r["b_joint_mean"] for r in rows]])
+        ax.errorbar(x + 0.2, jm, yerr=jerr, fmt="D", color="tab:green", capsize=4, ms=5,
+                    label="joint model (all records), mean, 94 % interval")
     ax.set_yscale("log")
     ax.set_ylabel("inertance b (kg)")
     ax.legend(loc="upper left")
@@ -31,6 +38,9 @@ def plot_inertance(rows: list[dict]):
     rel.axhline(0, color="k", lw=0.8)
     rel.plot(x, 100 * (paper / theory - 1), "x", color="tab:red", ms=9)
     rel.errorbar(x, 100 * (med / theory - 1), yerr=100 * err / theory, fmt="o", color="tab:blue", capsize=4)
+    if joint:
+        rel.errorbar(x + 0.2, 100 * (jm / theory - 1), yerr=100 * jerr / theory, fmt="D", color="tab:green",
+                     capsize=4, ms=5)
     rel.set_ylabel("relative to theory (%)")
     rel.set_xticks(x, [r["setting"] for r in rows])
     rel.set_xlabel("flywheel setting")
