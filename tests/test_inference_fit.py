@@ -59,30 +59,39 @@ def test_same_seed_same_summary(tmp_path, record_file):
     assert c.summary[0]["mean"] != a.summary[0]["mean"]
 
 
-def test_resume_after_sigkill(tmp_path, record_file):
-    """Killed part-way and run again: exactly the requested steps, earlier steps kept, and
-    the same chain as a run that was never interrupted."""
-    out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
-           "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
+def _run_until_killed(cmd, chain_file, at_least: int) -> None:
+    """Start ``cmd`` and SIGKILL it once its checkpoint holds ``at_least`` steps."""
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    chain_file = out / "chain.h5"
     deadline = time.time() + 300
-    seen = 0
     while time.time() < deadline and proc.poll() is None:
-        time.sleep(0.2)
+        time.sleep(0.05)
         try:
-            with h5py.File(chain_file, "r") as f:
+            with h5py.File(chain_file, "r", locking=False) as f:
                 seen = int(f["mcmc"].attrs["iteration"])
         except (OSError, KeyError):
             continue
-        if seen >= 8:
+        if seen >= at_least:
             break
     assert proc.poll() is None, "the run ended before it could be killed"
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
-    before = _chain(chain_file)
-    assert 8 <= len(before) < 40
+
+
+def test_resume_after_sigkill_several_times(tmp_path, record_file):
+    """Killed three times in a row at random steps and run again: exactly the requested
+    steps, every earlier step kept, and the same chain as a run never interrupted."""
+    out = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
+           "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
+    chain_file = out / "chain.h5"
+    before = None
+    for at in sorted(np.random.default_rng(2).integers(4, 34, size=3)):
+        _run_until_killed(cmd, chain_file, int(at))
+        now = _chain(chain_file)
+        assert at <= len(now) < 40
+        if before is not None:  # nothing written before this kill was lost or changed
+            np.testing.assert_array_equal(now[: len(before)], before)
+        before = now
     assert subprocess.run(cmd, capture_output=True).returncode == 0
     after = _chain(chain_file)
     assert len(after) == 40
@@ -122,6 +131,19 @@ def test_checkpoint_mismatch_and_corruption(tmp_path, record_file, capsys):
     err = capsys.readouterr().err
     assert "unreadable or truncated" in err and err.count("\n") == 1
     assert ck.read_bytes() == data[: len(data) // 3]  # not overwritten
+    # damaged inside the stored steps (a valid HDF5 file whose numbers changed): refused too
+    ck.write_bytes(data)
+    with h5py.File(ck, "r") as f:
+        offset = f["mcmc/chain"].id.get_chunk_info(0).byte_offset
+    damaged = bytearray(data)
+    damaged[offset + 8 : offset + 16] = b"\x7f" * 8
+    ck.write_bytes(bytes(damaged))
+    assert main(["fit", str(record_file), "--out", str(out), "--steps", "10", "--walkers", "24", "--processes", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "do not match their checksum" in err and err.count("\n") == 1
+    assert ck.read_bytes() == bytes(damaged)
+    ck.write_bytes(data)  # the intact checkpoint continues
+    assert main(["fit", str(record_file), "--out", str(out), "--steps", "10", "--walkers", "24", "--processes", "1"]) == 0
 
 
 def test_unwritable_output_refused(tmp_path, record_file, capsys):

@@ -4,7 +4,9 @@ The chain is written to an HDF5 file (emcee's ``HDFBackend``) at every step, wit
 sampler's random state, so a run that is killed can be continued: running again with the
 same checkpoint adds only the missing steps, and the steps already taken are kept as
 they are. A checkpoint written for another model, record or number of walkers is
-refused with a one-line error rather than overwritten.
+refused with a one-line error rather than overwritten, and so is one damaged on disk:
+every step is sealed into a running sha256 checksum stored with the chain, checked
+before a run continues it.
 
 Convergence (documented defaults, :class:`Convergence`): emcee's integrated
 autocorrelation time tau (``get_autocorr_time(tol=0)``) per parameter, checked every
@@ -164,7 +166,53 @@ def _open_backend(path, model: PosteriorModel, nwalkers: int, fresh: bool):
             f"{path}: checkpoint has {shape[0]} walkers and {shape[1]} parameters, this run "
             f"{nwalkers} and {model.ndim}; use the same --walkers, or --fresh"
         )
+    try:
+        intact = _checksum_holds(backend)
+    except Exception:  # a damaged dataset fails here rather than at the first write
+        intact = False
+    if not intact:
+        raise CheckpointError(
+            f"{path}: checkpoint's steps do not match their checksum (damaged on disk); it is left "
+            "as it is: move it away to keep it, or run with --fresh to start over"
+        )
     return backend, iteration, digest
+
+
+#: The checkpoint's running checksum: sha256 chained over every step's positions and
+#: log probabilities (h_k = sha256(h_{k-1} + chain[k] + log_prob[k])), and the steps it covers.
+_SUM, _SUMMED = "bayes_inerter_chain_sha256", "bayes_inerter_summed_steps"
+
+
+def _step_hash(h: bytes, chain_row: np.ndarray, lp_row: np.ndarray) -> bytes:
+    return hashlib.sha256(h + np.ascontiguousarray(chain_row).tobytes() + np.ascontiguousarray(lp_row).tobytes()).digest()
+
+
+def _seal(backend) -> None:
+    """Extend the checksum over the steps written since the last seal (after every step;
+    a run killed between a step and its seal leaves at most that step unsummed)."""
+    with backend.open("a") as f:
+        g = f[backend.name]
+        n, k = int(g.attrs["iteration"]), int(g.attrs.get(_SUMMED, 0))
+        h = bytes.fromhex(g.attrs.get(_SUM, ""))
+        for i in range(k, n):
+            h = _step_hash(h, g["chain"][i], g["log_prob"][i])
+        g.attrs[_SUM] = h.hex()
+        g.attrs[_SUMMED] = n
+
+
+def _checksum_holds(backend) -> bool:
+    """Whether the summed steps still match their checksum (True for a checkpoint written
+    before checksums existed)."""
+    with backend.open("r") as f:
+        g = f[backend.name]
+        if _SUM not in g.attrs:
+            return True
+        k = int(g.attrs[_SUMMED])
+        chain, lp = g["chain"][:k], g["log_prob"][:k]
+        h = b""
+        for i in range(k):
+            h = _step_hash(h, chain[i], lp[i])
+        return h.hex() == g.attrs[_SUM]
 
 
 def _diagnostics(sampler, conv: Convergence):
@@ -252,6 +300,7 @@ def run_sampler(
             n_more = steps - done
             if n_more > 0:
                 for _ in sampler.sample(state, iterations=n_more, store=True):
+                    _seal(backend)
                     if progress:
                         progress(sampler.iteration, target)
             tau, rhat, ess = _diagnostics(sampler, conv)
@@ -263,6 +312,7 @@ def run_sampler(
             chunk = min(conv.check_every, conv.max_steps - sampler.iteration)
             if chunk > 0:
                 for _ in sampler.sample(state, iterations=chunk, store=True):
+                    _seal(backend)
                     if progress:
                         progress(sampler.iteration, None)
                 state = sampler.get_last_sample()
