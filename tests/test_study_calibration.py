@@ -14,17 +14,17 @@ TINY = CalibrationSettings(steps=30, draws=9, generator=GeneratorSettings(durati
 @pytest.fixture(scope="module")
 def calibration(tmp_path_factory):
     out = tmp_path_factory.mktemp("sbc")
-    return out, run_calibration(TINY, out, 4, processes=2)
+    return out, run_calibration(TINY, out, 3, processes=2)
 
 
 def test_writes_ranks_coverage_and_report(calibration):
     out, res = calibration
     for name in ("ranks.csv", "coverage.csv", "ranks.png", "REPORT.md", "settings.json"):
         assert (out / name).is_file()
-    assert res["replicates"] == 4 and not res["failed"]
+    assert res["replicates"] == 3 and not res["failed"]
     names = [r["parameter"] for r in res["coverage"]]
     assert names == ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B", "sigma", "rho"]
-    for k in range(4):
+    for k in range(3):
         rep = json.loads((out / "replicates" / f"{k:04d}.json").read_text())
         assert all(0 <= r <= TINY.draws for r in rep["ranks"].values())
         assert all(rep["in50"][n] <= rep["in90"][n] for n in rep["in50"])  # the 50 % interval lies inside the 90 %
@@ -33,7 +33,7 @@ def test_writes_ranks_coverage_and_report(calibration):
 def test_same_seed_same_replicate_and_a_rerun_reuses_them(calibration):
     out, res = calibration
     stamp = {p.name: p.stat().st_mtime_ns for p in (out / "replicates").iterdir()}
-    again = run_calibration(TINY, out, 4, processes=1)
+    again = run_calibration(TINY, out, 3, processes=1)
     assert {p.name: p.stat().st_mtime_ns for p in (out / "replicates").iterdir()} == stamp
     assert again["coverage"] == res["coverage"]
     assert replicate(TINY, 1) == json.loads((out / "replicates" / "0001.json").read_text())
