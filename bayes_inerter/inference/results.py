@@ -24,7 +24,7 @@ import numpy as np
 
 from .model import PosteriorModel
 
-__all__ = ["PosteriorSample", "posterior_sample", "contraction", "to_inference_data", "summary_rows", "write_summary",
+__all__ = ["PosteriorSample", "ar1_noise", "posterior_sample", "contraction", "to_inference_data", "summary_rows", "write_summary",
            "SUMMARY_COLUMNS", "MAX_DRAWS"]
 
 SUMMARY_COLUMNS = ("name", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail")
@@ -107,7 +107,7 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
                 continue
             loglik[w, d] = ll
             sigma, rho = model.noise(theta[w, d])
-            pred[w, d] = sim[model.grid] + _ar1_noise(rng, n_grid, sigma, rho)
+            pred[w, d] = sim[model.grid] + ar1_noise(rng, n_grid, sigma, rho)
             if k % sim_every == 0:
                 sims.append(sim)
             k += 1
@@ -128,7 +128,8 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
     return idata, np.array(sims)
 
 
-def _ar1_noise(rng, n, sigma, rho):
+def ar1_noise(rng, n, sigma, rho):
+    """A stationary AR(1) series of length n: innovations N(0, sigma^2), coefficient rho."""
     e = rng.standard_normal(n) * sigma
     if rho == 0.0:
         return e

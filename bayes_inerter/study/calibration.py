@@ -41,7 +41,7 @@ import numpy as np
 from ..device import TABLE_I, paper_parameters
 from ..inference.model import LikelihoodSettings, PosteriorModel
 from ..inference.priors import LogNormal, LogUniform, Uniform
-from ..inference.results import _ar1_noise, posterior_sample
+from ..inference.results import ar1_noise, posterior_sample
 from ..inference.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
@@ -125,7 +125,7 @@ def replicate(cs: CalibrationSettings, k: int, checkpoint=None) -> dict:
                     continue
                 sigma, rho = base.noise(theta)
                 model = copy.copy(base)
-                model.observed = sim[base.grid] + _ar1_noise(rng, len(base.grid), sigma, rho)
+                model.observed = sim[base.grid] + ar1_noise(rng, len(base.grid), sigma, rho)
             else:
                 rec = generate_record(base.parameters(theta), cs.freq, settings=cs.generator, rng=rng,
                                       setting_name=cs.setting)
