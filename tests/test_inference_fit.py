@@ -77,6 +77,19 @@ def _run_until_killed(cmd, chain_file, at_least: int) -> None:
     proc.wait()
 
 
+def _finish_and_compare(cmd, chain_file, before, tmp_path, record_file) -> None:
+    """Run ``cmd`` to the end: exactly 40 steps, the killed runs' steps kept, and the same
+    chain as a run never interrupted."""
+    assert subprocess.run(cmd, capture_output=True).returncode == 0
+    after = _chain(chain_file)
+    assert len(after) == 40
+    np.testing.assert_array_equal(after[: len(before)], before)
+    ref = tmp_path / "uninterrupted"
+    assert main(["fit", str(record_file), "--out", str(ref), "--steps", "40", "--walkers", "24",
+                 "--processes", "1", "--seed", "3"]) == 0
+    np.testing.assert_array_equal(_chain(ref / "chain.h5"), after)
+
+
 def test_resume_after_sigkill(tmp_path, record_file):
     """Killed part-way and run again: exactly the requested steps, earlier steps kept, and
     the same chain as a run that was never interrupted."""
@@ -86,14 +99,7 @@ def test_resume_after_sigkill(tmp_path, record_file):
     _run_until_killed(cmd, out / "chain.h5", 8)
     before = _chain(out / "chain.h5")
     assert 8 <= len(before) < 40
-    assert subprocess.run(cmd, capture_output=True).returncode == 0
-    after = _chain(out / "chain.h5")
-    assert len(after) == 40
-    np.testing.assert_array_equal(after[: len(before)], before)
-    ref = tmp_path / "uninterrupted"
-    assert main(["fit", str(record_file), "--out", str(ref), "--steps", "40", "--walkers", "24",
-                 "--processes", "1", "--seed", "3"]) == 0
-    np.testing.assert_array_equal(_chain(ref / "chain.h5"), after)
+    _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
 
 
 @pytest.mark.slow
@@ -116,14 +122,7 @@ def test_resume_after_sigkill_several_times(tmp_path, record_file):
         if before is not None:  # nothing written before this kill was lost or changed
             np.testing.assert_array_equal(now[: len(before)], before)
         before = now
-    assert subprocess.run(cmd, capture_output=True).returncode == 0
-    after = _chain(chain_file)
-    assert len(after) == 40
-    np.testing.assert_array_equal(after[: len(before)], before)
-    ref = tmp_path / "uninterrupted"
-    assert main(["fit", str(record_file), "--out", str(ref), "--steps", "40", "--walkers", "24",
-                 "--processes", "1", "--seed", "3"]) == 0
-    np.testing.assert_array_equal(_chain(ref / "chain.h5"), after)
+    _finish_and_compare(cmd, chain_file, before, tmp_path, record_file)
 
 
 def test_bad_record_refused_before_sampling(tmp_path, capsys):
