@@ -152,6 +152,8 @@ def cmd_fit(args) -> int:
         )
     finally:
         bar.close()
+    if result.recovered:
+        print(f"note: checkpoint damaged, recovered: {result.recovered}")
     b = result.row("b")
     print(f"b = {b['mean']:.6g} kg (94 % HDI {b['hdi_3%']:.6g} to {b['hdi_97%']:.6g}), "
           f"{result.iterations} steps")
@@ -162,7 +164,7 @@ def cmd_fit(args) -> int:
     else:
         print(f"warning: {result.reason}; do not trust these intervals yet "
               "(run again with more --steps, or without --steps)")
-    print(f"wrote {args.out}/summary.csv, posterior.nc, chain.h5, corner.png, bands.png, trace.png, phi.png, fit.json")
+    print(f"wrote {args.out}/summary.csv, posterior.nc, chain.h5 (and its twin), corner.png, bands.png, trace.png, phi.png, fit.json")
     return EXIT_OK
 
 

@@ -38,6 +38,8 @@ class FitResult:
     idata: object
     timings: dict = field(default_factory=dict)
     contraction: dict = field(default_factory=dict)
+    #: what was done to continue a damaged checkpoint ("" when nothing was)
+    recovered: str = ""
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -114,6 +116,7 @@ def fit_record(
     t_total = time.perf_counter() - t0
     info = {
         "model": model, "converged": run.converged, "reason": run.reason,
+        "checkpoint_recovered": run.recovered,
         "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
         "tau": dict(zip(pm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
         "m_s": pm.m_s, "m_B": pm.m_B, "likelihood": dataclasses.asdict(pm.likelihood),
@@ -127,7 +130,7 @@ def fit_record(
     }
     (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
     return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, idata,
-                     info["timings_s"], shrink)
+                     info["timings_s"], shrink, run.recovered)
 
 
 def fit_joint(
@@ -192,6 +195,7 @@ def fit_joint(
     t_total = time.perf_counter() - t0
     info = {
         "model": "joint", "converged": run.converged, "reason": run.reason,
+        "checkpoint_recovered": run.recovered,
         "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
         "tau": dict(zip(jm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
         "records": [f"{s} {f:g} Hz" for s, f in zip(jm.setting_of, jm.freq_of)],
@@ -204,7 +208,8 @@ def fit_joint(
         "versions": versions(),
     }
     (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
-    return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"], shrink)
+    return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"], shrink,
+                     run.recovered)
 
 
 def _sampling_all_runs(out: Path, t_sample: float, fresh: bool) -> float:

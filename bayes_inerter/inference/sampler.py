@@ -1,12 +1,13 @@
 """Sampling with emcee: HDF5 checkpoints, resume, and a convergence loop.
 
-The chain is written to an HDF5 file (emcee's ``HDFBackend``) at every step, with the
-sampler's random state, so a run that is killed can be continued: running again with the
-same checkpoint adds only the missing steps, and the steps already taken are kept as
-they are. A checkpoint written for another model, record or number of walkers is
-refused with a one-line error rather than overwritten, and so is one damaged on disk:
-every step is sealed into a running sha256 checksum stored with the chain, checked
-before a run continues it.
+The chain is written at every step, with the sampler's random state, to two HDF5 files
+in turn (``chain.h5`` and ``chain.twin.h5``, see :mod:`.checkpoint`), so a run that is
+killed, even inside a write, can be continued: running again adds only the missing
+steps, keeps the steps already taken as they are, and gives the chain an uninterrupted
+run gives. A checkpoint written for another model, record or number of walkers is
+refused with a one-line error rather than overwritten; a damaged file is moved aside and
+the run continues from its intact twin, or, with no intact copy left, stops with a
+one-line error.
 
 Convergence (documented defaults, :class:`Convergence`): emcee's integrated
 autocorrelation time tau (``get_autocorr_time(tol=0)``) per parameter, checked every
@@ -26,6 +27,7 @@ from dataclasses import dataclass
 import emcee
 import numpy as np
 
+from .checkpoint import CheckpointError, new_checkpoint, open_checkpoint
 from .model import PosteriorModel
 from .optimize import find_start, laplace_ensemble, sse
 
@@ -40,10 +42,6 @@ def default_walkers(ndim: int) -> int:
     A converged run costs walkers x 50 tau evaluations, so the default is near the
     fewest the moves need (2 ndim), with a margin; more walkers is an option."""
     return 2 * ndim + 2
-
-
-class CheckpointError(ValueError):
-    """A checkpoint that cannot be continued (corrupt, or made for another run)."""
 
 
 @dataclass(frozen=True)
@@ -76,6 +74,8 @@ class SamplerRun:
     tau: np.ndarray
     reason: str
     start_theta: np.ndarray | None = None
+    #: what was done to continue a damaged checkpoint ("" when nothing was)
+    recovered: str = ""
 
     @property
     def iteration(self) -> int:
@@ -98,29 +98,6 @@ def record_digest(model: PosteriorModel) -> str:
     return h.hexdigest()[:16]
 
 
-class _Backend(emcee.backends.HDFBackend):
-    """emcee's HDF5 backend, opening the file without HDF5's advisory lock.
-
-    With the lock, anyone reading ``chain.h5`` while a run writes it (h5py, a viewer)
-    makes the run's next write fail with BlockingIOError and the run stop (seen here).
-    A reader may then see a step half-written; the writer never fails. Same logic as
-    ``HDFBackend.open`` (emcee 3.1) otherwise.
-    """
-
-    def open(self, mode="r"):
-        import h5py
-
-        if self.read_only and mode != "r":
-            raise RuntimeError("the backend is read-only")
-        f = h5py.File(self.filename, mode, locking=False)
-        if not self.dtype_set and self.name in f:
-            g = f[self.name]
-            if "chain" in g:
-                self.dtype = g["chain"].dtype
-                self.dtype_set = True
-        return f
-
-
 # The log-probability for worker processes: a top-level function over a module global set
 # before the pool forks, so that only the parameter vector is pickled per call.
 _MODEL: PosteriorModel | None = None
@@ -132,87 +109,6 @@ def _log_prob(theta):
 
 def _sse(phys):
     return sse(_MODEL, phys)
-
-
-def _open_backend(path, model: PosteriorModel, nwalkers: int, fresh: bool):
-    """An HDF backend ready to sample into, and the steps it already holds."""
-    import h5py
-
-    digest = record_digest(model)
-    if fresh and path.exists():
-        path.unlink()  # the user asked to start over
-    backend = _Backend(str(path), name="mcmc")
-    if not path.exists():
-        return backend, 0, digest
-    try:
-        with h5py.File(path, "r", locking=False) as f:
-            if "mcmc" not in f:
-                return backend, 0, digest
-            attrs = dict(f["mcmc"].attrs)
-        iteration = backend.iteration
-        shape = backend.shape
-    except Exception as exc:  # h5py raises OSError, KeyError, ValueError for damaged files
-        raise CheckpointError(
-            f"{path}: checkpoint is unreadable or truncated ({type(exc).__name__}); "
-            "move it away to keep it, or run with --fresh to start over"
-        ) from None
-    if attrs.get("bayes_inerter_digest") != digest:
-        raise CheckpointError(
-            f"{path}: checkpoint belongs to another record, model or settings; "
-            "use another output folder, or --fresh to start over"
-        )
-    if shape != (nwalkers, model.ndim):
-        raise CheckpointError(
-            f"{path}: checkpoint has {shape[0]} walkers and {shape[1]} parameters, this run "
-            f"{nwalkers} and {model.ndim}; use the same --walkers, or --fresh"
-        )
-    try:
-        intact = _checksum_holds(backend)
-    except Exception:  # a damaged dataset fails here rather than at the first write
-        intact = False
-    if not intact:
-        raise CheckpointError(
-            f"{path}: checkpoint's steps do not match their checksum (damaged on disk); it is left "
-            "as it is: move it away to keep it, or run with --fresh to start over"
-        )
-    return backend, iteration, digest
-
-
-#: The checkpoint's running checksum: sha256 chained over every step's positions and
-#: log probabilities (h_k = sha256(h_{k-1} + chain[k] + log_prob[k])), and the steps it covers.
-_SUM, _SUMMED = "bayes_inerter_chain_sha256", "bayes_inerter_summed_steps"
-
-
-def _step_hash(h: bytes, chain_row: np.ndarray, lp_row: np.ndarray) -> bytes:
-    return hashlib.sha256(h + np.ascontiguousarray(chain_row).tobytes() + np.ascontiguousarray(lp_row).tobytes()).digest()
-
-
-def _seal(backend) -> None:
-    """Extend the checksum over the steps written since the last seal (after every step;
-    a run killed between a step and its seal leaves at most that step unsummed)."""
-    with backend.open("a") as f:
-        g = f[backend.name]
-        n, k = int(g.attrs["iteration"]), int(g.attrs.get(_SUMMED, 0))
-        h = bytes.fromhex(g.attrs.get(_SUM, ""))
-        for i in range(k, n):
-            h = _step_hash(h, g["chain"][i], g["log_prob"][i])
-        g.attrs[_SUM] = h.hex()
-        g.attrs[_SUMMED] = n
-
-
-def _checksum_holds(backend) -> bool:
-    """Whether the summed steps still match their checksum (True for a checkpoint written
-    before checksums existed)."""
-    with backend.open("r") as f:
-        g = f[backend.name]
-        if _SUM not in g.attrs:
-            return True
-        k = int(g.attrs[_SUMMED])
-        chain, lp = g["chain"][:k], g["log_prob"][:k]
-        h = b""
-        for i in range(k):
-            h = _step_hash(h, chain[i], lp[i])
-        return h.hex() == g.attrs[_SUM]
 
 
 def _diagnostics(sampler, conv: Convergence):
@@ -269,12 +165,15 @@ def run_sampler(
     conv = convergence or Convergence()
     checkpoint = Path(checkpoint)
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
-    backend, done, digest = _open_backend(checkpoint, model, nwalkers, fresh)
-    if done == 0:
-        backend.reset(nwalkers, model.ndim)
-        with backend.open("a") as f:
-            f["mcmc"].attrs["bayes_inerter_digest"] = digest
-            f["mcmc"].attrs["parameter_names"] = ",".join(model.names)
+    digest = record_digest(model)
+    opened = open_checkpoint(checkpoint, digest=digest, nwalkers=nwalkers, ndim=model.ndim, fresh=fresh)
+    if opened is None or opened.steps == 0:
+        backend, done, recovered = new_checkpoint(
+            checkpoint, nwalkers=nwalkers, ndim=model.ndim,
+            attrs={"bayes_inerter_digest": digest, "parameter_names": ",".join(model.names)}), 0, \
+            opened.recovered if opened else ""
+    else:
+        backend, done, recovered = opened.backend, opened.steps, opened.recovered
     _MODEL = model
     pool = multiprocessing.get_context("fork").Pool(processes) if processes > 1 else None
     try:
@@ -300,27 +199,27 @@ def run_sampler(
             n_more = steps - done
             if n_more > 0:
                 for _ in sampler.sample(state, iterations=n_more, store=True):
-                    _seal(backend)
+                    backend.seal()
                     if progress:
                         progress(sampler.iteration, target)
             tau, rhat, ess = _diagnostics(sampler, conv)
             ok = _is_converged(sampler.iteration, tau, None, rhat, ess, conv)
             reason = "converged" if ok else _why_not(sampler.iteration, tau, rhat, ess, conv)
-            return SamplerRun(sampler, ok, tau, reason, start_theta)
+            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered)
         previous = None
         while True:
             chunk = min(conv.check_every, conv.max_steps - sampler.iteration)
             if chunk > 0:
                 for _ in sampler.sample(state, iterations=chunk, store=True):
-                    _seal(backend)
+                    backend.seal()
                     if progress:
                         progress(sampler.iteration, None)
                 state = sampler.get_last_sample()
             tau, rhat, ess = _diagnostics(sampler, conv)
             if _is_converged(sampler.iteration, tau, previous, rhat, ess, conv):
-                return SamplerRun(sampler, True, tau, "converged", start_theta)
+                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered)
             if sampler.iteration >= conv.max_steps:
-                return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, tau, rhat, ess, conv), start_theta)
+                return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, tau, rhat, ess, conv), start_theta, recovered)
             previous = tau
     finally:
         if pool is not None:

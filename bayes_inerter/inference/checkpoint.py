@@ -1,0 +1,295 @@
+"""Crash-safe emcee checkpoints: two HDF5 files written in turn, each sealed per step.
+
+emcee's ``HDFBackend`` writes each step in place. A process killed in the middle of such
+a write can leave the file unreadable (seen here: HDF5's 'addr overflow'), or readable
+but with the random state of step k beside the step count of step k - 1 (emcee writes
+the random state before it counts the step), so that the continued chain is no longer
+the one an uninterrupted run gives.
+
+Here every step goes to two files, ``chain.h5`` and then ``chain.twin.h5``, and after
+the step is in both, each file is *sealed*: one attribute that holds the number of steps
+it vouches for, a sha256 chained over those steps (positions, log probabilities,
+blobs), the acceptance counts and the sampler's random state after the last of them.
+A kill can damage at most the one file being written at that moment; the other is
+intact and sealed at most one step behind. A run that continues a checkpoint takes the
+longer intact file, puts the step count, acceptance counts and random state back to
+what its seal says, and copies it over its twin. A file that cannot be read or whose
+steps do not match its seal is never overwritten: it is moved aside to
+``<name>.damaged`` (numbered if one exists) and the run says so. When neither file is
+intact the run stops with :class:`CheckpointError`.
+
+This protects against the process being killed (SIGKILL, out of memory, a closed
+terminal), not against the machine losing power: the files are not fsync'ed per step.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+import emcee
+import numpy as np
+
+__all__ = ["CheckpointError", "Checkpoint", "open_checkpoint", "new_checkpoint", "read_chain", "twin_path"]
+
+GROUP = "mcmc"
+_SEAL = "bayes_inerter_seal"
+#: Older checkpoints (before the twin file): a chained sha256 and the steps it covers.
+_OLD_SUM, _OLD_SUMMED = "bayes_inerter_chain_sha256", "bayes_inerter_summed_steps"
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be continued (damaged, or made for another run)."""
+
+
+def twin_path(path) -> Path:
+    """The second file of a checkpoint: ``chain.h5`` -> ``chain.twin.h5``."""
+    path = Path(path)
+    return path.with_name(path.stem + ".twin" + path.suffix)
+
+
+class _Backend(emcee.backends.HDFBackend):
+    """emcee's HDF5 backend, opening the file without HDF5's advisory lock.
+
+    With the lock, anyone reading ``chain.h5`` while a run writes it (h5py, a viewer)
+    makes the run's next write fail with BlockingIOError and the run stop (seen here).
+    A reader may then see a step half-written; the writer never fails. Same logic as
+    ``HDFBackend.open`` (emcee 3.1) otherwise.
+    """
+
+    def open(self, mode="r"):
+        import h5py
+
+        if self.read_only and mode != "r":
+            raise RuntimeError("the backend is read-only")
+        f = h5py.File(self.filename, mode, locking=False)
+        if not self.dtype_set and self.name in f:
+            g = f[self.name]
+            if "chain" in g:
+                self.dtype = g["chain"].dtype
+                self.dtype_set = True
+        return f
+
+
+class TwinBackend(_Backend):
+    """Writes every step to its own file, then to the twin file; reads from its own."""
+
+    def __init__(self, filename, **kwargs):
+        super().__init__(str(filename), name=GROUP, **kwargs)
+        self.twin = _Backend(str(twin_path(filename)), name=GROUP, **kwargs)
+
+    def reset(self, nwalkers, ndim):  # pragma: no cover - new_checkpoint makes the files
+        super().reset(nwalkers, ndim)
+        self.twin.reset(nwalkers, ndim)
+
+    def grow(self, ngrow, blobs):
+        super().grow(ngrow, blobs)
+        self.twin.grow(ngrow, blobs)
+
+    def save_step(self, state, accepted):
+        super().save_step(state, accepted)
+        self.twin.save_step(state, accepted)
+
+    def seal(self) -> None:
+        """Seal both files over the steps they hold (call after every step)."""
+        _seal(self.filename)
+        _seal(self.twin.filename)
+
+
+def _step_hash(h: bytes, *rows) -> bytes:
+    return hashlib.sha256(h + b"".join(np.ascontiguousarray(r).tobytes() for r in rows)).digest()
+
+
+def _rows_hash(g, start: int, stop: int, h: bytes) -> bytes:
+    names = [n for n in ("chain", "log_prob", "blobs") if n in g]
+    if stop > start:
+        blocks = [g[n][start:stop] for n in names]
+        for i in range(stop - start):
+            h = _step_hash(h, *(b[i] for b in blocks))
+    return h
+
+
+def _random_state_attrs(g):
+    keys = sorted(k for k in g.attrs if k.startswith("random_state_"))
+    return [g.attrs[k] for k in keys] or None
+
+
+def _seal(filename) -> None:
+    import h5py
+
+    with h5py.File(filename, "a", locking=False) as f:
+        g = f[GROUP]
+        old = json.loads(g.attrs[_SEAL]) if _SEAL in g.attrs else {"steps": 0, "sha256": ""}
+        n = int(g.attrs["iteration"])
+        h = _rows_hash(g, old["steps"], n, bytes.fromhex(old["sha256"]))
+        rs = _random_state_attrs(g)
+        if rs is not None:
+            rs = [str(rs[0]), np.asarray(rs[1]).tolist(), int(rs[2]), int(rs[3]), float(rs[4])]
+        g.attrs[_SEAL] = json.dumps({"steps": n, "sha256": h.hex(), "accepted": g["accepted"][:].tolist(),
+                                     "random_state": rs})
+
+
+@dataclass(frozen=True)
+class _Inspection:
+    path: Path
+    status: str  # "missing", "empty" (no chain group), "intact" or "damaged"
+    steps: int = 0
+    why: str = ""
+    attrs: dict | None = None
+
+
+def _inspect(path: Path) -> _Inspection:
+    import h5py
+
+    if not path.exists():
+        return _Inspection(path, "missing")
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            if GROUP not in f:
+                return _Inspection(path, "empty")
+            g = f[GROUP]
+            attrs = dict(g.attrs)
+            if _SEAL in attrs:
+                seal = json.loads(attrs[_SEAL])
+                n = int(seal["steps"])
+                if n > g["chain"].shape[0] or _rows_hash(g, 0, n, b"").hex() != seal["sha256"]:
+                    return _Inspection(path, "damaged", why="its steps do not match their checksum")
+            elif _OLD_SUM in attrs:  # written before the twin file existed
+                k = int(attrs[_OLD_SUMMED])
+                h = b""
+                chain, lp = g["chain"][:k], g["log_prob"][:k]
+                for i in range(k):
+                    h = _step_hash(h, chain[i], lp[i])
+                if h.hex() != attrs[_OLD_SUM]:
+                    return _Inspection(path, "damaged", why="its steps do not match their checksum")
+                n = int(attrs["iteration"])
+            else:
+                n = int(attrs["iteration"])
+            return _Inspection(path, "intact", n, attrs=attrs)
+    except Exception as exc:  # h5py raises OSError, KeyError, ValueError for damaged files
+        return _Inspection(path, "damaged", why=f"it is unreadable or truncated ({type(exc).__name__})")
+
+
+def _restore(path: Path) -> None:
+    """Put the step count, acceptance counts and random state back to the seal's."""
+    import h5py
+
+    with h5py.File(path, "a", locking=False) as f:
+        g = f[GROUP]
+        if _SEAL not in g.attrs:
+            return
+        seal = json.loads(g.attrs[_SEAL])
+        g.attrs["iteration"] = seal["steps"]
+        g["accepted"][:] = np.asarray(seal["accepted"], dtype=g["accepted"].dtype)
+        rs = seal["random_state"]
+        if rs is not None:
+            values = [rs[0], np.asarray(rs[1], dtype=np.uint32), int(rs[2]), int(rs[3]), float(rs[4])]
+            for i, v in enumerate(values):
+                g.attrs[f"random_state_{i}"] = v
+
+
+def _copy_atomically(src: Path, dst: Path) -> None:
+    tmp = dst.with_name(dst.name + ".tmp")
+    shutil.copyfile(src, tmp)
+    os.replace(tmp, dst)
+
+
+def _move_aside(path: Path) -> Path:
+    target = path.with_name(path.name + ".damaged")
+    k = 1
+    while target.exists():
+        k += 1
+        target = path.with_name(f"{path.name}.damaged{k}")
+    os.replace(path, target)
+    return target
+
+
+@dataclass(frozen=True)
+class Checkpoint:
+    """An opened checkpoint: its backend, the steps it holds, and what was recovered."""
+
+    backend: TwinBackend
+    steps: int
+    recovered: str = ""
+
+
+def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool = False) -> Checkpoint | None:
+    """Open the checkpoint at ``path`` (and its twin) to continue it.
+
+    Returns None when there is nothing to continue (no files, or ``fresh``: both are
+    deleted). Raises :class:`CheckpointError` when no intact copy exists, or the intact
+    one belongs to another record, model or settings, or has another shape.
+    """
+    path = Path(path)
+    twin = twin_path(path)
+    if fresh:
+        for p in (path, twin):
+            p.unlink(missing_ok=True)  # the user asked to start over
+    seen = [_inspect(path), _inspect(twin)]
+    intact = [s for s in seen if s.status == "intact"]
+    damaged = [s for s in seen if s.status == "damaged"]
+    if not intact:
+        if damaged:
+            why = damaged[0].why
+            raise CheckpointError(
+                f"{path}: checkpoint cannot be continued: {why}, and no intact copy is left; it is "
+                "left as it is: move it away to keep it, or run with --fresh to start over"
+            )
+        return None
+    for s in intact:
+        if s.attrs.get("bayes_inerter_digest") != digest:
+            raise CheckpointError(
+                f"{s.path}: checkpoint belongs to another record, model or settings; "
+                "use another output folder, or --fresh to start over"
+            )
+        shape = (int(s.attrs["nwalkers"]), int(s.attrs["ndim"]))
+        if shape != (nwalkers, ndim):
+            raise CheckpointError(
+                f"{s.path}: checkpoint has {shape[0]} walkers and {shape[1]} parameters, this run "
+                f"{nwalkers} and {ndim}; use the same --walkers, or --fresh"
+            )
+    best = max(intact, key=lambda s: s.steps)  # max keeps the first (chain.h5) on a tie
+    notes = [f"{s.path.name} {s.why}: kept as {_move_aside(s.path).name}" for s in damaged]
+    other = twin if best.path == path else path
+    _copy_atomically(best.path, other)
+    for p in (other, best.path):
+        _restore(p)
+    recovered = ""
+    if notes:
+        recovered = "; ".join(notes) + f"; continuing from {best.path.name} ({best.steps} steps)"
+    return Checkpoint(TwinBackend(path), best.steps, recovered)
+
+
+def new_checkpoint(path, *, nwalkers: int, ndim: int, attrs: dict) -> TwinBackend:
+    """Make both files of a new, empty checkpoint; each appears whole or not at all."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".new")
+    tmp.unlink(missing_ok=True)
+    b = _Backend(str(tmp), name=GROUP)
+    b.reset(nwalkers, ndim)
+    with b.open("a") as f:
+        for k, v in attrs.items():
+            f[GROUP].attrs[k] = v
+    _seal(tmp)
+    _copy_atomically(tmp, twin_path(path))
+    os.replace(tmp, path)
+    return TwinBackend(path)
+
+
+def read_chain(path) -> np.ndarray:
+    """The steps of the checkpoint at ``path`` that a continued run would keep: the
+    sealed steps of its longer intact file, shape (steps, walkers, parameters). Safe to
+    call while a run writes it."""
+    import h5py
+
+    path = Path(path)
+    intact = [s for s in (_inspect(path), _inspect(twin_path(path))) if s.status == "intact"]
+    if not intact:
+        raise CheckpointError(f"{path}: no intact checkpoint there")
+    best = max(intact, key=lambda s: s.steps)
+    with h5py.File(best.path, "r", locking=False) as f:
+        return f[GROUP]["chain"][: best.steps].copy()
