@@ -4,7 +4,8 @@ results/calibration/<truth>-<residual>/ (REPORT.md, coverage.csv, ranks.csv, ran
 one JSON per replicate); running again reuses the replicates already there.
 
     python studies/calibration.py [--replicates 100] [--truth model|generator]
-        [--residual ar1|iid] [--friction coulomb|stribeck] [--backlash M] [--steps 1500]
+        [--residual ar1|iid] [--friction coulomb|stribeck] [--backlash M] [--noise-corner HZ]
+        [--steps 800]
         [--processes 2]
 """
 
@@ -27,6 +28,8 @@ if __name__ == "__main__":
     ap.add_argument("--residual", choices=("ar1", "iid"), default="ar1")
     ap.add_argument("--friction", choices=("coulomb", "stribeck", "smooth"), default="coulomb")
     ap.add_argument("--backlash", type=float, default=0.0)
+    ap.add_argument("--noise-corner", type=float, default=None,
+                    help="colour the generator's sensor noise with a low-pass at this frequency, Hz")
     ap.add_argument("--steps", type=int, default=CalibrationSettings.steps)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--processes", type=int, default=min(2, os.cpu_count() or 1))
@@ -35,8 +38,10 @@ if __name__ == "__main__":
     try:
         base = CalibrationSettings()
         cs = replace(base, truth=args.truth, residual=args.residual, steps=args.steps, seed=args.seed,
-                     generator=replace(base.generator, friction=args.friction, backlash=args.backlash))
+                     generator=replace(base.generator, friction=args.friction, backlash=args.backlash,
+                                       noise_corner=args.noise_corner))
         richer = "" if args.friction == "coulomb" and not args.backlash else f"-{args.friction}-bl{args.backlash:g}"
+        richer += f"-colour{args.noise_corner:g}Hz" if args.noise_corner else ""
         out = Path(args.out) if args.out else RESULTS / f"{args.truth}{richer}-{args.residual}"
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)

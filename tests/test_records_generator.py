@@ -72,6 +72,20 @@ def test_noise_sizes_are_as_set():
     assert np.std(noisy.accel - clean.accel) == pytest.approx(0.01, rel=0.05)
 
 
+def test_coloured_noise_keeps_its_rms_and_is_correlated():
+    """noise_corner colours the sensor noise: same rms as white, lag-1 correlation near
+    the low-pass's (about 0.99 for 20 Hz at 1 kHz), against about 0 for white noise."""
+    p = paper_parameters("A1")
+    s = GeneratorSettings(duration=9.0, ramp=0.5, force_noise=0, disp_noise=0)
+    clean = generate_record(p, 1.0, settings=dataclasses.replace(s, accel_noise=0))
+    white = generate_record(p, 1.0, settings=s, rng=3).accel - clean.accel
+    coloured = generate_record(p, 1.0, settings=dataclasses.replace(s, noise_corner=20.0), rng=3).accel - clean.accel
+    lag1 = [np.corrcoef(e[1:], e[:-1])[0, 1] for e in (white, coloured)]
+    assert abs(lag1[0]) < 0.05 and lag1[1] > 0.95
+    assert np.std(white) == pytest.approx(0.01, rel=0.05)
+    assert np.std(coloured) == pytest.approx(0.01, rel=0.3)  # few correlation times: a looser bound
+
+
 def test_naive_sampling_is_worse():
     """MODEL.md section 7: instantaneous sampling gives records the model fits worse
     (after the matched low-pass, at the true parameters)."""
@@ -127,6 +141,7 @@ def test_paper_grid_spawns_independent_records():
         (dict(ramp=20.0), "ramp"),
         (dict(network="linear"), "truth network"),
         (dict(accel_bandwidth=50_000.0), "below the internal Nyquist"),
+        (dict(noise_corner=600.0), "noise_corner must lie between"),
     ],
 )
 def test_bad_generator_settings(kwargs, message):

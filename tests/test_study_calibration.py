@@ -45,6 +45,25 @@ def test_other_settings_in_the_same_folder_are_refused(calibration):
         run_calibration(CalibrationSettings(steps=31, draws=9), out, 1)
 
 
+def test_settings_saved_before_a_new_option_existed_still_match(calibration):
+    """A settings.json written before an option existed (here the generator's
+    noise_corner) holds the option's default: the same settings, not other ones."""
+    import json
+
+    out, _ = calibration
+    path = out / "settings.json"
+    original = path.read_text()
+    saved = json.loads(original)
+    del saved["generator"]["noise_corner"]
+    path.write_text(json.dumps(saved))
+    assert run_calibration(TINY, out, 3, processes=1)["replicates"] == 3
+    saved["generator"]["noise_corner"] = 20.0  # a real difference is still refused
+    path.write_text(json.dumps(saved))
+    with pytest.raises(ValueError, match="other calibration settings"):
+        run_calibration(TINY, out, 3, processes=1)
+    path.write_text(original)  # the module's other tests share this folder
+
+
 def test_coverage_counts():
     reps = [{"replicate": k, "L": 9, "ranks": {"b": k % 10}, "in50": {"b": k < 5}, "in90": {"b": k < 9}}
             for k in range(10)]

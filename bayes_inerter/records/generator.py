@@ -50,6 +50,11 @@ class GeneratorSettings:
     force_noise : load-cell noise, N rms at the record rate (default 2 N).
     accel_noise : accelerometer noise, m/s^2 rms at the record rate (default 0.01, ~1e-3 g).
     disp_noise : displacement sensor noise, m rms (default 1 micrometre).
+    noise_corner : None (default) for white sensor noise; else the -3 dB frequency, Hz,
+        of a second-order Butterworth low-pass that colours all three sensors' noise
+        (scaled to keep the rms above): drift-like, correlated noise, as from a charge
+        amplifier or a noisy reference, that the likelihood's AR(1) residual only
+        approximates.
     force_bandwidth, accel_bandwidth : sensor -3 dB bandwidths, Hz (second-order
         Butterworth; defaults 2 kHz and 5 kHz); None for ideal sensors.
     antialias : "fir" (linear-phase FIR with its delay removed, as a delta-sigma
@@ -71,6 +76,7 @@ class GeneratorSettings:
     force_noise: float = 2.0
     accel_noise: float = 0.01
     disp_noise: float = 1e-6
+    noise_corner: float | None = None
     force_bandwidth: float | None = 2000.0
     accel_bandwidth: float | None = 5000.0
     antialias: str = "fir"
@@ -96,6 +102,9 @@ class GeneratorSettings:
             raise ValueError("antialias='fir' needs oversample >= 4")
         if self.ramp >= self.duration:
             raise ValueError(f"ramp ({self.ramp} s) must be shorter than duration ({self.duration} s)")
+        if self.noise_corner is not None and not (
+                isinstance(self.noise_corner, (int, float)) and 0 < self.noise_corner < self.fs / 2):
+            raise ValueError(f"noise_corner must lie between 0 and fs/2 = {self.fs / 2:g} Hz, got {self.noise_corner!r}")
         if self.network not in ("reduced", "full"):
             raise ValueError(f"truth network must be 'reduced' or 'full', got {self.network!r}")
         for bw in (self.force_bandwidth, self.accel_bandwidth):
@@ -180,6 +189,18 @@ def _acquire(x, s: GeneratorSettings):
     return signal.decimate(x, s.oversample, ftype="fir", zero_phase=True)
 
 
+def _noise(gen: np.random.Generator, n: int, s: GeneratorSettings) -> np.ndarray:
+    """Unit-rms sensor noise: white, or white through the ``noise_corner`` low-pass,
+    rescaled by the filter's noise gain (the root sum of squares of its impulse
+    response) so the rms stays 1."""
+    w = gen.standard_normal(n)
+    if s.noise_corner is None:
+        return w
+    b, a = signal.butter(2, s.noise_corner, fs=s.fs)
+    impulse = signal.lfilter(b, a, np.r_[1.0, np.zeros(max(4096, int(50 * s.fs / s.noise_corner)))])
+    return signal.lfilter(b, a, w) / math.sqrt(np.sum(impulse**2))
+
+
 def generate_record(
     params: InerterParameters,
     freq: float,
@@ -215,9 +236,9 @@ def generate_record(
     disp = _acquire(disp, s)
     n = int(round(s.duration * s.fs)) + 1
     force, accel, disp = force[:n], accel[:n], disp[:n]
-    force = force + s.force_noise * gen.standard_normal(n)
-    accel = accel + s.accel_noise * gen.standard_normal(n)
-    disp = disp + s.disp_noise * gen.standard_normal(n)
+    force = force + s.force_noise * _noise(gen, n, s)
+    accel = accel + s.accel_noise * _noise(gen, n, s)
+    disp = disp + s.disp_noise * _noise(gen, n, s)
     meta = {
         "source": "generated",
         "setting": setting_name,

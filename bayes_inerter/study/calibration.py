@@ -179,6 +179,17 @@ def _worker(args):
     return result
 
 
+def _with_defaults(saved: dict, defaults: dict) -> dict:
+    """Settings saved before a field existed hold no value for it: it had its default."""
+    out = dict(saved)
+    for k, v in defaults.items():
+        if k not in out:
+            out[k] = v
+        elif isinstance(v, dict) and isinstance(out[k], dict):
+            out[k] = _with_defaults(out[k], v)
+    return out
+
+
 def run_calibration(cs: CalibrationSettings, out, replicates: int, *, processes: int = 1, progress=None) -> dict:
     """Run ``replicates`` replicates into ``out`` (one JSON each; those already there are
     reused) and write ranks.csv, coverage.csv, ranks.png and REPORT.md."""
@@ -189,7 +200,8 @@ def run_calibration(cs: CalibrationSettings, out, replicates: int, *, processes:
     (out / "replicates").mkdir(parents=True, exist_ok=True)
     settings_file = out / "settings.json"
     mine = json.loads(json.dumps(asdict(cs), default=str))
-    if settings_file.exists() and json.loads(settings_file.read_text()) != mine:
+    defaults = json.loads(json.dumps(asdict(CalibrationSettings()), default=str))
+    if settings_file.exists() and _with_defaults(json.loads(settings_file.read_text()), defaults) != mine:
         raise ValueError(f"{out} holds replicates of other calibration settings; choose another output folder")
     settings_file.write_text(json.dumps(mine, indent=2) + "\n")
     todo = [k for k in range(replicates) if not _replicate_file(out, k).exists()]
