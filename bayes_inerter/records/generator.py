@@ -143,12 +143,18 @@ def _truth_network(params: InerterParameters, s: GeneratorSettings) -> Network:
     return net
 
 
-def _simulate_servo(params, freq, s: GeneratorSettings):
-    """Fine-rate simulation of device + servo: time, force, accel, displacement."""
-    fine = s.fs * s.oversample
-    n_fine = int(round((s.duration + s.tail) * fine)) + 1
-    t = np.arange(n_fine) / fine
-    x_ref, v_ref = _reference_motion(t, freq, s.amplitude, s.ramp)
+#: Records are simulated and filtered in pieces of this many seconds of internal time,
+#: so that memory is bounded by a piece rather than growing with the record (20 kHz
+#: states for 10 minutes would be about 1.5 GB). A record no longer than one piece is
+#: made in one pass; a longer one gives the same numbers bit for bit as one pass (the
+#: exact kernel continues from its state at each joint; the filters carry theirs; the
+#: anti-alias windows overlap; checked in the tests). The general stiff solver (Stribeck,
+#: smooth law, backlash) still runs in one piece. Not a physical assumption.
+CHUNK_SECONDS = 30.0
+
+
+def _servo_system(params, s: GeneratorSettings):
+    """The device's compiled network with the servo closed around node 0."""
     compiled = compile_network(_truth_network(params, s))
     inv_m0 = 1.0 / compiled.masses[0]
     exact = compiled.all_coulomb
@@ -160,33 +166,118 @@ def _simulate_servo(params, freq, s: GeneratorSettings):
     A[0, 0] -= s.k_d * inv_m0
     B = np.zeros((n, 2))
     B[0] = [s.k_p * inv_m0, s.k_d * inv_m0]
-    inputs = np.column_stack([x_ref, v_ref])
-    # The sensor sees the continuous acceleration, which jumps at every Coulomb switch:
-    # its fine-rate samples are means over +-1/fine around each instant (the velocity's
-    # central difference), not point values, so a jump is not aliased onto one sample.
-    if exact:
-        _, states = run_piecewise_linear(compiled, A, B, inputs, 1.0 / fine, store=True)
-    else:
-        _, states = _stiff.run_stiff(compiled, A, B, t, inputs, rtol=STIFF_RTOL)
-    accel = mean_acceleration(states[:, 0], 1.0 / fine)
-    disp = states[:, pos]
-    force = s.k_p * (x_ref - disp) + s.k_d * (v_ref - states[:, 0])
-    return t, force, accel, disp
+    return compiled, A, B, pos, exact
 
 
-def _sensor(x, bandwidth, fine):
-    if bandwidth is None:
-        return x
-    sos = signal.butter(2, bandwidth, fs=fine, output="sos")
-    return signal.sosfilt(sos, x)
+def _simulate_servo(params, freq, s: GeneratorSettings, chunk_s: float):
+    """Fine-rate simulation of device + servo, piece by piece: yields (velocity of node 0,
+    displacement, servo force) for consecutive runs of fine samples; each piece starts
+    from the state the last one ended in."""
+    fine = s.fs * s.oversample
+    n_fine = int(round((s.duration + s.tail) * fine)) + 1
+    compiled, A, B, pos, exact = _servo_system(params, s)
+    piece = n_fine if exact is False else max(2, int(round(chunk_s * fine)))
+    x0, a = None, 0
+    while a < n_fine:
+        lo, hi = max(a - 1, 0), min(a + piece, n_fine)  # a piece re-takes the last sample
+        t = np.arange(lo, hi) / fine
+        x_ref, v_ref = _reference_motion(t, freq, s.amplitude, s.ramp)
+        inputs = np.column_stack([x_ref, v_ref])
+        if exact:
+            _, states = run_piecewise_linear(compiled, A, B, inputs, 1.0 / fine, x0=x0, store=True)
+        else:  # the general stiff solver runs in one piece
+            _, states = _stiff.run_stiff(compiled, A, B, t, inputs, rtol=STIFF_RTOL)
+        if lo < a:
+            states, x_ref, v_ref = states[1:], x_ref[1:], v_ref[1:]
+        x0 = states[-1].copy()
+        vel, disp = states[:, 0], states[:, pos]
+        yield vel, disp, s.k_p * (x_ref - disp) + s.k_d * (v_ref - vel)
+        a = hi
 
 
-def _acquire(x, s: GeneratorSettings):
-    """Anti-alias and sample at the record rate."""
-    if s.antialias == "none":
-        return x[:: s.oversample]
-    # linear-phase FIR, zero phase (delay removed), as scipy.signal.decimate does
-    return signal.decimate(x, s.oversample, ftype="fir", zero_phase=True)
+class _MeanAcceleration:
+    """Streaming ``simulate.mean_acceleration`` (np.gradient's central differences, one-
+    sided at the ends): the sensor sees the continuous acceleration, which jumps at every
+    Coulomb switch, so its fine-rate samples are means over +-1/fine around each instant,
+    not point values, and a jump is not aliased onto one sample."""
+
+    def __init__(self, h):
+        self.h, self.tail = h, None
+
+    def push(self, v, final):
+        f = v if self.tail is None else np.concatenate([self.tail, v])
+        out = np.empty(len(f))
+        if self.tail is None:
+            out[0] = (f[1] - f[0]) / self.h
+        out[1:-1] = (f[2:] - f[:-2]) / (2.0 * self.h)
+        out[-1] = (f[-1] - f[-2]) / self.h
+        first = 0 if self.tail is None else 1  # the tail's value was given last time
+        self.tail = f[-2:]
+        return out[first:] if final else out[first:-1]
+
+
+class _Sensor:
+    """A sensor's second-order Butterworth response, its filter state carried across pieces."""
+
+    def __init__(self, bandwidth, fine):
+        self.sos = None if bandwidth is None else signal.butter(2, bandwidth, fs=fine, output="sos")
+        self.zi = None if self.sos is None else np.zeros((self.sos.shape[0], 2))
+
+    def push(self, x):
+        if self.sos is None:
+            return x
+        y, self.zi = signal.sosfilt(self.sos, x, zi=self.zi)
+        return y
+
+
+class _Acquisition:
+    """Anti-alias and sample at the record rate, piece by piece, with the same numbers as
+    on the whole signal: "none" takes every ``oversample``-th sample; "fir" is scipy's
+    ``decimate(ftype="fir", zero_phase=True)`` (a linear-phase FIR with its delay
+    removed, as a delta-sigma converter's decimation filter), computed on windows that
+    overlap by more than the filter's half length."""
+
+    def __init__(self, s: GeneratorSettings, n_fine: int):
+        self.q, self.fir, self.n_fine = s.oversample, s.antialias == "fir", n_fine
+        self.pad = (10 + 2) * self.q  # > decimate's half length 10 q, a multiple of q
+        self.buf, self.start, self.done = np.empty(0), 0, 0  # fine index of buf[0]; outputs given
+
+    def push(self, x, final):
+        self.buf = np.concatenate([self.buf, x])
+        end = self.start + len(self.buf)  # fine samples received
+        n_out = -(-end // self.q) if final else max(0, (end - self.pad) // self.q)
+        if n_out <= self.done:
+            return np.empty(0)
+        if not self.fir:
+            y = self.buf[self.done * self.q - self.start : n_out * self.q - self.start : self.q]
+        else:
+            lo = max(0, self.done * self.q - self.pad)
+            hi = end if final else n_out * self.q + self.pad
+            window = self.buf[lo - self.start : hi - self.start]
+            y = signal.decimate(window, self.q, ftype="fir", zero_phase=True)
+            y = y[(self.done * self.q - lo) // self.q :][: n_out - self.done]
+        self.done = n_out
+        keep = max(0, self.done * self.q - self.pad) - self.start  # drop what no output needs
+        self.buf, self.start = self.buf[keep:], self.start + keep
+        return y
+
+
+def _record_signals(params, freq, s: GeneratorSettings, chunk_s: float = CHUNK_SECONDS):
+    """Force, acceleration and displacement at the record rate, before sensor noise."""
+    fine = s.fs * s.oversample
+    n_fine = int(round((s.duration + s.tail) * fine)) + 1
+    accel_mean = _MeanAcceleration(1.0 / fine)
+    sensors = [_Sensor(s.force_bandwidth, fine), _Sensor(s.accel_bandwidth, fine), _Sensor(None, fine)]
+    acquire = [_Acquisition(s, n_fine) for _ in range(3)]
+    out = [[], [], []]
+    received = 0
+    for vel, disp, force in _simulate_servo(params, freq, s, chunk_s):
+        received += len(vel)
+        final = received == n_fine
+        for k, x in enumerate((force, accel_mean.push(vel, final), disp)):
+            out[k].append(acquire[k].push(sensors[k].push(x), final))
+    n = int(round(s.duration * s.fs)) + 1
+    return [np.concatenate(o)[:n] for o in out]
 
 
 def _noise(gen: np.random.Generator, n: int, s: GeneratorSettings) -> np.ndarray:
@@ -229,13 +320,8 @@ def generate_record(
     if rng is None and noisy:
         raise ValueError("generate_record needs rng (a seed or numpy Generator) when noise is on")
     gen = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
-    fine = s.fs * s.oversample
-    t, force, accel, disp = _simulate_servo(params, freq, s)
-    force = _acquire(_sensor(force, s.force_bandwidth, fine), s)
-    accel = _acquire(_sensor(accel, s.accel_bandwidth, fine), s)
-    disp = _acquire(disp, s)
-    n = int(round(s.duration * s.fs)) + 1
-    force, accel, disp = force[:n], accel[:n], disp[:n]
+    force, accel, disp = _record_signals(params, freq, s)
+    n = len(force)
     force = force + s.force_noise * _noise(gen, n, s)
     accel = accel + s.accel_noise * _noise(gen, n, s)
     disp = disp + s.disp_noise * _noise(gen, n, s)
