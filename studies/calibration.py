@@ -1,7 +1,8 @@
 """Simulation-based calibration (Talts et al.): prior draws, records made from them,
 posteriors fitted as a user's are, the rank of each truth. Writes
 results/calibration/<truth>-<residual>/ (REPORT.md, coverage.csv, ranks.csv, ranks.png,
-one JSON per replicate); running again reuses the replicates already there.
+one JSON per replicate); running again reuses the replicates already there. Then
+rewrites results/calibration/REPORT.md and coverage.png: every case there side by side.
 
     python studies/calibration.py [--replicates 100] [--truth model|generator]
         [--residual ar1|iid] [--friction coulomb|stribeck] [--backlash M] [--noise-corner HZ]
@@ -17,7 +18,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from bayes_inerter.study.calibration import CalibrationSettings, run_calibration
+from bayes_inerter.study.calibration import CalibrationSettings, compare_calibrations, run_calibration
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "calibration"
 
@@ -59,4 +60,5 @@ if __name__ == "__main__":
         sys.exit(1)
     bar.close()
     print(f"wrote {res['report']} ({res['replicates']} replicates, {len(res['failed'])} failed)")
+    print(f"wrote {compare_calibrations(out.parent)} (every case in {out.parent}, side by side)")
     sys.exit(1 if res["failed"] else 0)

@@ -6,7 +6,8 @@ import json
 import pytest
 
 from bayes_inerter.records import GeneratorSettings
-from bayes_inerter.study.calibration import CalibrationSettings, coverage_table, replicate, run_calibration
+from bayes_inerter.study.calibration import (CalibrationSettings, compare_calibrations, coverage_table, replicate,
+                                            run_calibration)
 
 TINY = CalibrationSettings(steps=30, draws=9, generator=GeneratorSettings(duration=2.0, ramp=0.6))
 
@@ -62,6 +63,14 @@ def test_settings_saved_before_a_new_option_existed_still_match(calibration):
     with pytest.raises(ValueError, match="other calibration settings"):
         run_calibration(TINY, out, 3, processes=1)
     path.write_text(original)  # the module's other tests share this folder
+
+
+def test_cases_compared_side_by_side(calibration):
+    out, _ = calibration
+    report = compare_calibrations(out.parent)
+    text = report.read_text()
+    assert f"| {out.name} (n = 3" in text and "| b |" in text
+    assert (out.parent / "coverage.png").is_file()
 
 
 def test_coverage_counts():

@@ -46,7 +46,7 @@ from ..inference.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
-__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_calibration", "coverage_table"]
+__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_calibration", "coverage_table", "compare_calibrations"]
 
 _P = paper_parameters("A1")
 #: The calibration prior (see module docstring).
@@ -273,3 +273,33 @@ def write_calibration(out: Path, cs: CalibrationSettings, results: list[dict], v
         plt.close(fig)
     report = calibration_report(out, cs, table, len(ok), failed, versions)
     return {"coverage": table, "replicates": len(ok), "failed": failed, "report": report}
+
+
+def compare_calibrations(root) -> Path | None:
+    """``root``/REPORT.md and coverage.png: the 50 % and 90 % coverage of every
+    calibration case found in ``root``'s sub-folders (each a run of
+    :func:`run_calibration`), side by side. Returns the report's path, or None when no
+    case holds results."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .plots import plot_coverage
+    from .report import calibration_comparison
+
+    root = Path(root)
+    cases = {}
+    for folder in sorted(p for p in root.iterdir() if (p / "coverage.csv").is_file() and (p / "settings.json").is_file()):
+        import csv
+
+        with open(folder / "coverage.csv", newline="") as f:
+            rows = [{k: (v if k == "parameter" else float(v)) for k, v in r.items()} for r in csv.DictReader(f)]
+        if rows:
+            cases[folder.name] = {"rows": rows, "settings": json.loads((folder / "settings.json").read_text())}
+    if not cases:
+        return None
+    fig = plot_coverage({name: c["rows"] for name, c in cases.items()})
+    fig.savefig(root / "coverage.png", dpi=100)
+    plt.close(fig)
+    return calibration_comparison(root, cases)

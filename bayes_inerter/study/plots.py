@@ -160,3 +160,31 @@ def plot_ranks(ranks: dict, L: int, *, bins: int = 10, title: str = ""):
     fig.suptitle(title + "\ngrey: 99 % band of a uniform histogram", fontsize=9)
     fig.tight_layout()
     return fig
+
+
+def plot_coverage(cases: dict):
+    """Coverage of the 50 % and 90 % intervals per parameter, one marker per calibration
+    case, with bars of 2 binomial se (at the nominal level) around each."""
+    import matplotlib.pyplot as plt
+
+    names = []
+    for rows in cases.values():
+        names += [r["parameter"] for r in rows if r["parameter"] not in names]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2), sharey=False)
+    width = 0.8 / max(len(cases), 1)
+    for ax, q in zip(axes, (50, 90)):
+        for j, (case, rows) in enumerate(cases.items()):
+            by = {r["parameter"]: r for r in rows}
+            x = [i - 0.4 + width * (j + 0.5) for i, n in enumerate(names) if n in by]
+            y = [by[n][f"coverage_{q}"] for n in names if n in by]
+            se = [by[n][f"se_{q}"] for n in names if n in by]
+            ax.errorbar(x, y, yerr=2 * np.asarray(se), fmt="o", ms=4, capsize=2, label=f"{case} ({int(rows[0]['replicates'])})")
+        ax.axhline(q / 100, color="k", lw=1)
+        ax.set_xticks(range(len(names)))
+        ax.set_xticklabels(names, rotation=45, ha="right")
+        ax.set_ylabel(f"coverage of the central {q} % interval")
+        ax.set_title(f"{q} % intervals (bars: 2 binomial se)")
+        ax.grid(alpha=0.3)
+    axes[1].legend(fontsize=8, loc="lower left")
+    fig.tight_layout()
+    return fig

@@ -6,9 +6,10 @@ so the report of a study that has not converged or that misses the truth says so
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-__all__ = ["write_report", "design_report", "calibration_report", "NOT_IDENTIFIED"]
+__all__ = ["write_report", "design_report", "calibration_report", "calibration_comparison", "NOT_IDENTIFIED"]
 
 #: Contraction below which a parameter is reported as not identified by the records.
 NOT_IDENTIFIED = 0.5
@@ -259,5 +260,35 @@ def calibration_report(out: Path, cs, table: list[dict], n_ok: int, failed: list
     lines += ["Versions: " + ", ".join(f"{k} {v}" for k, v in versions.items()) + ".", "",
               f"Settings: `{cs!r}`", ""]
     path = Path(out) / "REPORT.md"
+    path.write_text("\n".join(lines))
+    return path
+
+
+def calibration_comparison(root: Path, cases: dict) -> Path:
+    """``root``/REPORT.md comparing calibration cases (see ``calibration.compare_calibrations``)."""
+    names = []
+    for c in cases.values():
+        names += [r["parameter"] for r in c["rows"] if r["parameter"] not in names]
+    lines = ["# Simulation-based calibration: the cases side by side", "",
+             "Each cell: coverage of the central 90 % interval / of the 50 % interval over the case's "
+             "replicates (the binomial se at the nominal level is in the header). Cases: the folder names "
+             "say the truth (`model`: data from the likelihood's own model; `generator`: the realistic "
+             "record generator, optionally with coloured sensor noise, Stribeck friction or backlash) "
+             "and the residual model the likelihood used (`ar1` or `iid`). With the generator as truth "
+             "only the physical parameters have a true value. Details and rank histograms: each "
+             "case's own REPORT.md.", ""]
+    header = ["parameter"]
+    for name, c in cases.items():
+        n = int(c["rows"][0]["replicates"])
+        header.append(f"{name} (n = {n}, se {math.sqrt(0.09 / n):.3f} / {math.sqrt(0.25 / n):.3f})")
+    lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for p in names:
+        cells = [p]
+        for c in cases.values():
+            by = {r["parameter"]: r for r in c["rows"]}
+            cells.append(f"{by[p]['coverage_90']:.2f} / {by[p]['coverage_50']:.2f}" if p in by else "")
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "![coverage](coverage.png)", ""]
+    path = Path(root) / "REPORT.md"
     path.write_text("\n".join(lines))
     return path
