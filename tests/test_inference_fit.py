@@ -104,6 +104,7 @@ def test_resume_after_sigkill(tmp_path, record_file):
     _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
 
 
+@pytest.mark.slow  # about 2 minutes; CI keeps the single kill and the write-interrupted cases below
 def test_resume_after_sigkill_several_times(tmp_path, record_file):
     """Killed three times in a row at random steps and run again: exactly the requested
     steps, every earlier step kept, and the same chain as a run never interrupted."""

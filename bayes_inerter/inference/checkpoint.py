@@ -6,12 +6,12 @@ but with the random state of step k beside the step count of step k - 1 (emcee w
 the random state before it counts the step), so that the continued chain is no longer
 the one an uninterrupted run gives.
 
-Here every step goes to two files, ``chain.h5`` and then ``chain.twin.h5``, and after
-the step is in both, each file is *sealed*: one attribute that holds the number of steps
-it vouches for, a sha256 chained over those steps (positions, log probabilities,
-blobs), the acceptance counts and the sampler's random state after the last of them.
-A kill can damage at most the one file being written at that moment; the other is
-intact and sealed at most one step behind. A run that continues a checkpoint takes the
+Here every step goes to ``chain.h5`` and, every :data:`TWIN_EVERY` steps and when the
+run ends, to ``chain.twin.h5``. Each write *seals* its file in the same open: one
+attribute that holds the number of steps it vouches for, a sha256 chained over those
+steps (positions, log probabilities, blobs), the acceptance counts and the sampler's
+random state after the last of them. A kill can damage at most the one file being
+written at that moment; the other is intact, and at most ``TWIN_EVERY`` steps behind. A run that continues a checkpoint takes the
 longer intact file, puts the step count, acceptance counts and random state back to
 what its seal says, and copies it over its twin. A file that cannot be read or whose
 steps do not match its seal is never overwritten: it is moved aside to
@@ -75,12 +75,23 @@ class _Backend(emcee.backends.HDFBackend):
         return f
 
 
-class TwinBackend(_Backend):
-    """Writes every step to its own file, then to the twin file; reads from its own."""
+#: The twin file is brought up to date every this many steps (and when a run ends or
+#: stops): a kill that damages chain.h5 costs at most this many steps, which the
+#: continued run takes again, identically. Writing the twin at every step would double
+#: the checkpoint's cost for nothing a continued run needs.
+TWIN_EVERY = 10
 
-    def __init__(self, filename, **kwargs):
+
+class TwinBackend(_Backend):
+    """Writes and seals every step in its own file in one open, and the same steps in
+    the twin file every ``twin_every`` steps and on :meth:`flush`; reads from its own."""
+
+    def __init__(self, filename, twin_every: int = TWIN_EVERY, **kwargs):
         super().__init__(str(filename), name=GROUP, **kwargs)
         self.twin = _Backend(str(twin_path(filename)), name=GROUP, **kwargs)
+        self.twin_every = twin_every
+        self._pending = []  # steps written to chain.h5 and not yet to the twin
+        self._sums = {}  # file -> (steps sealed, running sha256), read from its seal once
 
     def reset(self, nwalkers, ndim):  # pragma: no cover - new_checkpoint makes the files
         super().reset(nwalkers, ndim)
@@ -91,13 +102,58 @@ class TwinBackend(_Backend):
         self.twin.grow(ngrow, blobs)
 
     def save_step(self, state, accepted):
-        super().save_step(state, accepted)
-        self.twin.save_step(state, accepted)
+        self._check(state, accepted)
+        row = (np.array(state.coords), np.array(state.log_prob),
+               None if state.blobs is None else np.array(state.blobs), np.asarray(accepted), state.random_state)
+        self._append(self.filename, [row])
+        self._pending.append(row)
+        if len(self._pending) >= self.twin_every:
+            self.flush()
 
-    def seal(self) -> None:
-        """Seal both files over the steps they hold (call after every step)."""
-        _seal(self.filename)
-        _seal(self.twin.filename)
+    def flush(self) -> None:
+        """Bring the twin file up to date (called every ``twin_every`` steps and when a
+        run ends)."""
+        if self._pending:
+            self._append(self.twin.filename, self._pending)
+            self._pending = []
+
+    def _append(self, filename, rows) -> None:
+        """Write ``rows`` (steps) and the seal that covers them, in one open of the file."""
+        import h5py
+
+        with h5py.File(filename, "a", locking=False) as f:
+            g = f[GROUP]
+            it = int(g.attrs["iteration"])
+            if filename not in self._sums:
+                seal = json.loads(g.attrs[_SEAL]) if _SEAL in g.attrs else None
+                if seal is None or seal["steps"] != it:  # not sealed up to here: hash from the start
+                    self._sums[filename] = (it, _rows_hash(g, 0, it, b""))
+                else:
+                    self._sums[filename] = (it, bytes.fromhex(seal["sha256"]))
+            n, h = self._sums[filename]
+            need = it + len(rows)
+            sets = [(k, g[name]) for k, name in enumerate(("chain", "log_prob", "blobs")) if name in g]
+            dtypes = [ds.dtype for _, ds in sets]
+            for _, ds in sets:
+                if ds.shape[0] < need:
+                    ds.resize(need, axis=0)
+            for i, row in enumerate(rows):
+                stored = [np.asarray(row[k], dtype=dt) for (k, _), dt in zip(sets, dtypes)]
+                for (_, ds), v in zip(sets, stored):
+                    ds[it + i] = v
+                h = _step_hash(h, *stored)
+            acc = g["accepted"]
+            accepted = acc[:] + np.sum([r[3] for r in rows], axis=0).astype(acc.dtype)
+            acc[:] = accepted
+            random_state = rows[-1][4]
+            for i, v in enumerate(random_state):
+                g.attrs[f"random_state_{i}"] = v
+            g.attrs["iteration"] = need
+            rs = [str(random_state[0]), np.asarray(random_state[1]).tolist(), int(random_state[2]),
+                  int(random_state[3]), float(random_state[4])]
+            g.attrs[_SEAL] = json.dumps({"steps": need, "sha256": h.hex(), "accepted": accepted.tolist(),
+                                         "random_state": rs})
+            self._sums[filename] = (need, h)
 
 
 def _step_hash(h: bytes, *rows) -> bytes:

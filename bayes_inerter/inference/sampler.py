@@ -199,9 +199,9 @@ def run_sampler(
             n_more = steps - done
             if n_more > 0:
                 for _ in sampler.sample(state, iterations=n_more, store=True):
-                    backend.seal()
                     if progress:
                         progress(sampler.iteration, target)
+                backend.flush()
             tau, rhat, ess = _diagnostics(sampler, conv)
             ok = _is_converged(sampler.iteration, tau, None, rhat, ess, conv)
             reason = "converged" if ok else _why_not(sampler.iteration, tau, rhat, ess, conv)
@@ -211,9 +211,9 @@ def run_sampler(
             chunk = min(conv.check_every, conv.max_steps - sampler.iteration)
             if chunk > 0:
                 for _ in sampler.sample(state, iterations=chunk, store=True):
-                    backend.seal()
                     if progress:
                         progress(sampler.iteration, None)
+                backend.flush()
                 state = sampler.get_last_sample()
             tau, rhat, ess = _diagnostics(sampler, conv)
             if _is_converged(sampler.iteration, tau, previous, rhat, ess, conv):
@@ -226,6 +226,10 @@ def run_sampler(
             pool.close()
             pool.join()
         _MODEL = None
+        try:  # a run stopped by Ctrl-C or an error: bring the twin up to date if possible
+            backend.flush()
+        except OSError:  # chain.h5 holds every step; the twin is only behind
+            pass
 
 
 def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> bool:
