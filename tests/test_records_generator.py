@@ -7,6 +7,7 @@ from bayes_inerter import paper_parameters, simulate
 from bayes_inerter.network import accel_response
 from bayes_inerter.models import build_network
 from bayes_inerter.records import GeneratorSettings, fit_accuracy, generate_record, lowpass, paper_grid
+from bayes_inerter.records.generator import paper_record
 
 QUIET = GeneratorSettings(force_noise=0.0, accel_noise=0.0, disp_noise=0.0)
 
@@ -145,6 +146,10 @@ def test_paper_grid_spawns_independent_records():
     again = list(paper_grid(settings=s, seed=1, names=("A0", "B2")))
     np.testing.assert_array_equal(grid[4][2].accel, again[4][2].accel)
     assert grid[0][2].metadata["true_parameters"]["b"] == 753.34
+    alone = paper_record("B2", 1.0, settings=s, seed=1, names=("A0", "B2"))  # one record, made alone
+    np.testing.assert_array_equal(grid[4][2].accel, alone.accel)
+    with pytest.raises(ValueError, match="no setting 'C9'"):
+        paper_record("C9", 1.0)
 
 
 @pytest.mark.parametrize(

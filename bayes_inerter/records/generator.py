@@ -27,7 +27,7 @@ from ..network import Backlash, Deformation, Network, compile_network
 from ..simulate import mean_acceleration, run_piecewise_linear
 from .record import Record
 
-__all__ = ["GeneratorSettings", "generate_record", "paper_grid", "STIFF_RTOL"]
+__all__ = ["GeneratorSettings", "generate_record", "paper_grid", "paper_record", "STIFF_RTOL", "CHUNK_SECONDS"]
 
 #: Relative tolerance of the general stiff solver when the truth is richer than the exact
 #: kernel handles (Stribeck, smooth law, backlash): 1e-6 changes phi by about 2e-5 against
@@ -349,15 +349,23 @@ def paper_grid(
     """The paper's 27 records (nine settings, 0.5 / 1 / 1.5 Hz) at the paper's parameters.
 
     Each record gets its own noise stream, spawned from ``seed`` in a fixed order, so any
-    one record can be regenerated alone. Yields (setting name, frequency, Record).
+    one record can be regenerated alone (:func:`paper_record`). Yields (setting name,
+    frequency, Record).
     """
-    seeds = np.random.SeedSequence(seed).spawn(len(names) * len(frequencies))
-    i = 0
     for name in names:
         for freq in frequencies:
-            rec = generate_record(
-                paper_parameters(name), freq, settings=settings,
-                rng=np.random.default_rng(seeds[i]), setting_name=name,
-            )
-            i += 1
-            yield name, freq, rec
+            yield name, freq, paper_record(name, freq, settings=settings, seed=seed, frequencies=frequencies,
+                                           names=names)
+
+
+def paper_record(name: str, freq: float, *, settings: GeneratorSettings | None = None, seed: int = 0,
+                 frequencies=FREQUENCIES_HZ, names=tuple(SETTINGS)):
+    """The record of setting ``name`` at ``freq`` exactly as :func:`paper_grid` (same
+    grid, same seed) makes it, without making the others."""
+    names, frequencies = list(names), list(frequencies)
+    if name not in names or freq not in frequencies:
+        raise ValueError(f"no setting {name!r} at {freq:g} Hz in the grid")
+    seeds = np.random.SeedSequence(seed).spawn(len(names) * len(frequencies))
+    i = names.index(name) * len(frequencies) + frequencies.index(freq)
+    return generate_record(paper_parameters(name), freq, settings=settings, rng=np.random.default_rng(seeds[i]),
+                           setting_name=name)
