@@ -51,6 +51,8 @@ def _add_generator_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--ramp", type=_non_negative_float, default=d.ramp, help="ramp-in time, s (%(default)s)")
     g.add_argument("--force-noise", type=_non_negative_float, default=d.force_noise, help="load-cell noise, N rms (%(default)s)")
     g.add_argument("--accel-noise", type=_non_negative_float, default=d.accel_noise, help="accelerometer noise, m/s^2 rms (%(default)s)")
+    g.add_argument("--noise-corner", type=_positive_float, default=d.noise_corner,
+                   help="colour the sensor noise: low-pass corner, Hz (default: white noise)")
     g.add_argument("--antialias", choices=("fir", "none"), default=d.antialias, help="anti-alias filter (%(default)s)")
     g.add_argument("--truth-network", choices=("reduced", "full"), default=d.network, help="truth network (%(default)s)")
     g.add_argument("--truth-friction", choices=("coulomb", "stribeck", "smooth"), default=d.friction, help="truth friction law (%(default)s)")
@@ -63,8 +65,8 @@ def _settings_from(args):
 
     return GeneratorSettings(
         amplitude=args.amplitude, fs=args.fs, duration=args.duration, ramp=args.ramp,
-        force_noise=args.force_noise, accel_noise=args.accel_noise, antialias=args.antialias,
-        network=args.truth_network, friction=args.truth_friction, backlash=args.backlash,
+        force_noise=args.force_noise, accel_noise=args.accel_noise, noise_corner=args.noise_corner,
+        antialias=args.antialias, network=args.truth_network, friction=args.truth_friction, backlash=args.backlash,
     )
 
 

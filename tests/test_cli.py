@@ -15,6 +15,10 @@ def test_generate_one_record(tmp_path, capsys):
     assert f"wrote {out}" in capsys.readouterr().out
     rec = read_record(out)
     assert rec.metadata["setting"] == "A1" and rec.metadata["generator"]["duration"] == 1.0
+    coloured = tmp_path / "a1c.csv"
+    assert main(["generate", "--setting", "A1", "--freq", "1.0", "--out", str(coloured), *SHORT,
+                 "--noise-corner", "20"]) == 0
+    assert read_record(coloured).metadata["generator"]["noise_corner"] == 20.0
 
 
 def test_generate_paper_grid(tmp_path, capsys):
@@ -54,6 +58,8 @@ def test_inspect_bad_record(tmp_path, capsys):
         (["generate", "--setting", "A1", "--out", "x.csv"], "give --setting and --freq"),
         (["generate", "--setting", "A1", "--freq", "1", "--out", "x.txt"], "must name a .csv file"),
         (["generate", "--paper-grid", "--out", "x.csv"], "writes a folder"),
+        (["generate", "--setting", "A1", "--freq", "1", "--out", "x.csv", "--noise-corner", "700"],
+         "noise_corner must lie between"),
     ],
 )
 def test_generate_bad_input(tmp_path, monkeypatch, capsys, argv, message):
