@@ -130,7 +130,7 @@ class TwinBackend(_Backend):
                     self._sums[filename] = (it, _rows_hash(g, 0, it, b""))
                 else:
                     self._sums[filename] = (it, bytes.fromhex(seal["sha256"]))
-            n, h = self._sums[filename]
+            h = self._sums[filename][1]
             need = it + len(rows)
             sets = [(k, g[name]) for k, name in enumerate(("chain", "log_prob", "blobs")) if name in g]
             dtypes = [ds.dtype for _, ds in sets]

@@ -24,7 +24,7 @@ from .. import _stiff
 from ..device import FREQUENCIES_HZ, SETTINGS, InerterParameters, paper_parameters
 from ..models import build_network
 from ..network import Backlash, Deformation, Network, compile_network
-from ..simulate import mean_acceleration, run_piecewise_linear
+from ..simulate import run_piecewise_linear
 from .record import Record
 
 __all__ = ["GeneratorSettings", "generate_record", "paper_grid", "paper_record", "STIFF_RTOL", "CHUNK_SECONDS"]
