@@ -61,6 +61,17 @@ def test_same_seed_same_summary(tmp_path, record_file):
     assert c.summary[0]["mean"] != a.summary[0]["mean"]
 
 
+def _steps_written(chain_file) -> int:
+    """Steps chain.h5 says it holds (0 while it is missing or being written)."""
+    import h5py
+
+    try:
+        with h5py.File(chain_file, "r", locking=False) as f:
+            return int(f["mcmc"].attrs["iteration"])
+    except (OSError, KeyError):
+        return 0
+
+
 def _run_until_killed(cmd, chain_file, at_least: int) -> None:
     """Start ``cmd`` and SIGKILL it once its checkpoint holds ``at_least`` steps."""
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -135,10 +146,10 @@ def test_resume_after_many_kills_at_random_moments(tmp_path, record_file):
     rng = np.random.default_rng(7)
     before = None
     for _ in range(12):
-        stamp = chain_file.stat().st_mtime_ns if chain_file.exists() else None
+        start = 0 if before is None else len(before)
         proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        while proc.poll() is None and (chain_file.stat().st_mtime_ns if chain_file.exists() else None) == stamp:
-            time.sleep(0.005)  # until the run starts writing
+        while proc.poll() is None and _steps_written(chain_file) <= start:
+            time.sleep(0.005)  # until the run writes a new step
         time.sleep(rng.uniform(0.0, 0.3))
         if proc.poll() is not None:
             break
