@@ -124,7 +124,7 @@ def fit_record(
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "contraction": shrink,
         "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total,
-                      "sampling_all_runs": _sampling_all_runs(out, t_sample, fresh)},
+                      "sampling_all_runs": _sampling_all_runs(out, t_sample, fresh or run.start_theta is not None)},
         "versions": versions(),
         "record_metadata": record.metadata,
     }
@@ -204,7 +204,7 @@ def fit_joint(
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "contraction": shrink,
         "timings_s": {"sampling": t_sample, "total": t_total,
-                      "sampling_all_runs": _sampling_all_runs(out, t_sample, False)},
+                      "sampling_all_runs": _sampling_all_runs(out, t_sample, run.start_theta is not None)},
         "versions": versions(),
     }
     (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
@@ -212,12 +212,14 @@ def fit_joint(
                      run.recovered)
 
 
-def _sampling_all_runs(out: Path, t_sample: float, fresh: bool) -> float:
+def _sampling_all_runs(out: Path, t_sample: float, started_over: bool) -> float:
     """Sampling seconds of the chain in all runs that built it: this run's plus what the
-    previous fit.json recorded, unless the chain started over (a run that continues a
-    checkpoint, or finds it complete, would otherwise report only its own share)."""
+    previous fit.json recorded, unless the chain started over (``--fresh``, or no
+    checkpoint was there, as in a fresh clone beside a committed fit.json); a run that
+    continues a checkpoint, or finds it complete, would otherwise report only its own
+    share."""
     previous = out / "fit.json"
-    if fresh or not previous.exists():
+    if started_over or not previous.exists():
         return t_sample
     try:
         timings = json.loads(previous.read_text()).get("timings_s", {})
