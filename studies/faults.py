@@ -25,16 +25,6 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _steps_written(chain_file) -> int:
-    """Steps chain.h5 says it holds (0 while it is missing or being written)."""
-    import h5py
-
-    try:
-        with h5py.File(chain_file, "r", locking=False) as f:
-            return int(f["mcmc"].attrs["iteration"])
-    except (OSError, KeyError):
-        return 0
-
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -47,7 +37,7 @@ def main():
     from tqdm import tqdm
 
     from bayes_inerter import paper_parameters
-    from bayes_inerter.inference.checkpoint import read_chain
+    from bayes_inerter.inference.checkpoint import read_chain, steps_written
     from bayes_inerter.records import GeneratorSettings, generate_record, write_record
 
     out = Path(args.out)
@@ -66,7 +56,7 @@ def main():
         for k in tqdm(range(args.kills), desc="kills", unit="kill", file=sys.stderr):
             start = 0 if before is None else len(before)
             proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-            while proc.poll() is None and _steps_written(chain_file) <= start:
+            while proc.poll() is None and steps_written(chain_file) <= start:
                 time.sleep(0.005)  # until the run writes a new step
             delay = float(rng.uniform(0.0, 0.3))
             time.sleep(delay)

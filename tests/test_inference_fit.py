@@ -12,7 +12,7 @@ import pytest
 from bayes_inerter import paper_parameters
 from bayes_inerter.cli import main
 from bayes_inerter.inference import fit_record
-from bayes_inerter.inference.checkpoint import read_chain
+from bayes_inerter.inference.checkpoint import read_chain, steps_written
 from bayes_inerter.records import GeneratorSettings, generate_record, write_record
 
 SHORT = GeneratorSettings(duration=2.5, ramp=0.8)
@@ -68,30 +68,13 @@ def test_same_seed_same_summary(tmp_path, record_file):
     assert (tmp_path / "a" / "summary.csv").read_bytes() == (tmp_path / "b" / "summary.csv").read_bytes()
 
 
-def _steps_written(chain_file) -> int:
-    """Steps chain.h5 says it holds (0 while it is missing or being written)."""
-    import h5py
-
-    try:
-        with h5py.File(chain_file, "r", locking=False) as f:
-            return int(f["mcmc"].attrs["iteration"])
-    except (OSError, KeyError):
-        return 0
-
 
 def _run_until_killed(cmd, chain_file, at_least: int) -> None:
     """Start ``cmd`` and SIGKILL it once its checkpoint holds ``at_least`` steps."""
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 300
-    while time.time() < deadline and proc.poll() is None:
+    while time.time() < deadline and proc.poll() is None and steps_written(chain_file) < at_least:
         time.sleep(0.05)
-        try:
-            with h5py.File(chain_file, "r", locking=False) as f:
-                seen = int(f["mcmc"].attrs["iteration"])
-        except (OSError, KeyError):
-            continue
-        if seen >= at_least:
-            break
     assert proc.poll() is None, "the run ended before it could be killed"
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
@@ -155,7 +138,7 @@ def test_resume_after_many_kills_at_random_moments(tmp_path, record_file):
     for _ in range(12):
         start = 0 if before is None else len(before)
         proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        while proc.poll() is None and _steps_written(chain_file) <= start:
+        while proc.poll() is None and steps_written(chain_file) <= start:
             time.sleep(0.005)  # until the run writes a new step
         time.sleep(rng.uniform(0.0, 0.3))
         if proc.poll() is not None:

@@ -34,7 +34,7 @@ from pathlib import Path
 import emcee
 import numpy as np
 
-__all__ = ["CheckpointError", "Checkpoint", "open_checkpoint", "new_checkpoint", "read_chain", "twin_path"]
+__all__ = ["CheckpointError", "Checkpoint", "open_checkpoint", "new_checkpoint", "read_chain", "steps_written", "twin_path"]
 
 GROUP = "mcmc"
 _SEAL = "bayes_inerter_seal"
@@ -349,3 +349,15 @@ def read_chain(path) -> np.ndarray:
     best = max(intact, key=lambda s: s.steps)
     with h5py.File(best.path, "r", locking=False) as f:
         return f[GROUP]["chain"][: best.steps].copy()
+
+
+def steps_written(path) -> int:
+    """The steps ``chain.h5`` at ``path`` says it holds, read without checking them (for
+    watching a run from outside; 0 while the file is missing or half-written)."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            return int(f[GROUP].attrs["iteration"])
+    except (OSError, KeyError):
+        return 0
