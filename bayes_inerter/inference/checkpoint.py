@@ -91,7 +91,7 @@ class TwinBackend(_Backend):
         self.twin = _Backend(str(twin_path(filename)), name=GROUP, **kwargs)
         self.twin_every = twin_every
         self._pending = []  # steps written to chain.h5 and not yet to the twin
-        self._sums = {}  # file -> (steps sealed, running sha256), read from its seal once
+        self._sums = {}  # file -> running sha256 over its sealed steps, read from its seal once
 
     def reset(self, nwalkers, ndim):  # pragma: no cover - new_checkpoint makes the files
         super().reset(nwalkers, ndim)
@@ -127,10 +127,10 @@ class TwinBackend(_Backend):
             if filename not in self._sums:
                 seal = json.loads(g.attrs[_SEAL]) if _SEAL in g.attrs else None
                 if seal is None or seal["steps"] != it:  # not sealed up to here: hash from the start
-                    self._sums[filename] = (it, _rows_hash(g, 0, it, b""))
+                    self._sums[filename] = _rows_hash(g, 0, it, b"")
                 else:
-                    self._sums[filename] = (it, bytes.fromhex(seal["sha256"]))
-            h = self._sums[filename][1]
+                    self._sums[filename] = bytes.fromhex(seal["sha256"])
+            h = self._sums[filename]
             need = it + len(rows)
             sets = [(k, g[name]) for k, name in enumerate(("chain", "log_prob", "blobs")) if name in g]
             dtypes = [ds.dtype for _, ds in sets]
@@ -149,19 +149,16 @@ class TwinBackend(_Backend):
             for i, v in enumerate(random_state):
                 g.attrs[f"random_state_{i}"] = v
             g.attrs["iteration"] = need
-            rs = [str(random_state[0]), np.asarray(random_state[1]).tolist(), int(random_state[2]),
-                  int(random_state[3]), float(random_state[4])]
-            g.attrs[_SEAL] = json.dumps({"steps": need, "sha256": h.hex(), "accepted": accepted.tolist(),
-                                         "random_state": rs})
-            self._sums[filename] = (need, h)
+            g.attrs[_SEAL] = _seal_text(need, h, accepted, random_state)
+            self._sums[filename] = h
 
 
 def _step_hash(h: bytes, *rows) -> bytes:
     return hashlib.sha256(h + b"".join(np.ascontiguousarray(r).tobytes() for r in rows)).digest()
 
 
-def _rows_hash(g, start: int, stop: int, h: bytes) -> bytes:
-    names = [n for n in ("chain", "log_prob", "blobs") if n in g]
+def _rows_hash(g, start: int, stop: int, h: bytes, names=("chain", "log_prob", "blobs")) -> bytes:
+    names = [n for n in names if n in g]
     if stop > start:
         blocks = [g[n][start:stop] for n in names]
         for i in range(stop - start):
@@ -169,24 +166,14 @@ def _rows_hash(g, start: int, stop: int, h: bytes) -> bytes:
     return h
 
 
-def _random_state_attrs(g):
-    keys = sorted(k for k in g.attrs if k.startswith("random_state_"))
-    return [g.attrs[k] for k in keys] or None
-
-
-def _seal(filename) -> None:
-    import h5py
-
-    with h5py.File(filename, "a", locking=False) as f:
-        g = f[GROUP]
-        old = json.loads(g.attrs[_SEAL]) if _SEAL in g.attrs else {"steps": 0, "sha256": ""}
-        n = int(g.attrs["iteration"])
-        h = _rows_hash(g, old["steps"], n, bytes.fromhex(old["sha256"]))
-        rs = _random_state_attrs(g)
-        if rs is not None:
-            rs = [str(rs[0]), np.asarray(rs[1]).tolist(), int(rs[2]), int(rs[3]), float(rs[4])]
-        g.attrs[_SEAL] = json.dumps({"steps": n, "sha256": h.hex(), "accepted": g["accepted"][:].tolist(),
-                                     "random_state": rs})
+def _seal_text(steps: int, h: bytes, accepted, random_state) -> str:
+    """The seal attribute: the steps it vouches for, their running sha256, the acceptance
+    counts and numpy's random state after the last of them (None before any step)."""
+    rs = None if random_state is None else [
+        str(random_state[0]), np.asarray(random_state[1]).tolist(), int(random_state[2]), int(random_state[3]),
+        float(random_state[4])]
+    return json.dumps({"steps": steps, "sha256": h.hex(), "accepted": np.asarray(accepted).tolist(),
+                       "random_state": rs})
 
 
 @dataclass(frozen=True)
@@ -214,13 +201,8 @@ def _inspect(path: Path) -> _Inspection:
                 n = int(seal["steps"])
                 if n > g["chain"].shape[0] or _rows_hash(g, 0, n, b"").hex() != seal["sha256"]:
                     return _Inspection(path, "damaged", why="its steps do not match their checksum")
-            elif _OLD_SUM in attrs:  # written before the twin file existed
-                k = int(attrs[_OLD_SUMMED])
-                h = b""
-                chain, lp = g["chain"][:k], g["log_prob"][:k]
-                for i in range(k):
-                    h = _step_hash(h, chain[i], lp[i])
-                if h.hex() != attrs[_OLD_SUM]:
+            elif _OLD_SUM in attrs:  # written before the twin file existed: chain and log_prob summed
+                if _rows_hash(g, 0, int(attrs[_OLD_SUMMED]), b"", ("chain", "log_prob")).hex() != attrs[_OLD_SUM]:
                     return _Inspection(path, "damaged", why="its steps do not match their checksum")
                 n = int(attrs["iteration"])
             else:
@@ -328,9 +310,10 @@ def new_checkpoint(path, *, nwalkers: int, ndim: int, attrs: dict) -> TwinBacken
     b = _Backend(str(tmp), name=GROUP)
     b.reset(nwalkers, ndim)
     with b.open("a") as f:
+        g = f[GROUP]
         for k, v in attrs.items():
-            f[GROUP].attrs[k] = v
-    _seal(tmp)
+            g.attrs[k] = v
+        g.attrs[_SEAL] = _seal_text(0, b"", g["accepted"][:], None)
     _copy_atomically(tmp, twin_path(path))
     os.replace(tmp, path)
     return TwinBackend(path)
