@@ -167,13 +167,12 @@ def run_sampler(
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
     digest = record_digest(model)
     opened = open_checkpoint(checkpoint, digest=digest, nwalkers=nwalkers, ndim=model.ndim, fresh=fresh)
+    recovered = opened.recovered if opened else ""
     if opened is None or opened.steps == 0:
-        backend, done, recovered = new_checkpoint(
-            checkpoint, nwalkers=nwalkers, ndim=model.ndim,
-            attrs={"bayes_inerter_digest": digest, "parameter_names": ",".join(model.names)}), 0, \
-            opened.recovered if opened else ""
+        backend, done = new_checkpoint(checkpoint, nwalkers=nwalkers, ndim=model.ndim, attrs={
+            "bayes_inerter_digest": digest, "parameter_names": ",".join(model.names)}), 0
     else:
-        backend, done, recovered = opened.backend, opened.steps, opened.recovered
+        backend, done = opened.backend, opened.steps
     _MODEL = model
     pool = multiprocessing.get_context("fork").Pool(processes) if processes > 1 else None
     try:
