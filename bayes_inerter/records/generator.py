@@ -176,7 +176,7 @@ def _simulate_servo(params, freq, s: GeneratorSettings, chunk_s: float):
     fine = s.fs * s.oversample
     n_fine = int(round((s.duration + s.tail) * fine)) + 1
     compiled, A, B, pos, exact = _servo_system(params, s)
-    piece = n_fine if exact is False else max(2, int(round(chunk_s * fine)))
+    piece = max(2, int(round(chunk_s * fine))) if exact else n_fine
     x0, a = None, 0
     while a < n_fine:
         lo, hi = max(a - 1, 0), min(a + piece, n_fine)  # a piece re-takes the last sample
@@ -237,8 +237,8 @@ class _Acquisition:
     removed, as a delta-sigma converter's decimation filter), computed on windows that
     overlap by more than the filter's half length."""
 
-    def __init__(self, s: GeneratorSettings, n_fine: int):
-        self.q, self.fir, self.n_fine = s.oversample, s.antialias == "fir", n_fine
+    def __init__(self, s: GeneratorSettings):
+        self.q, self.fir = s.oversample, s.antialias == "fir"
         self.pad = (10 + 2) * self.q  # > decimate's half length 10 q, a multiple of q
         self.buf, self.start, self.done = np.empty(0), 0, 0  # fine index of buf[0]; outputs given
 
@@ -268,7 +268,7 @@ def _record_signals(params, freq, s: GeneratorSettings, chunk_s: float = CHUNK_S
     n_fine = int(round((s.duration + s.tail) * fine)) + 1
     accel_mean = _MeanAcceleration(1.0 / fine)
     sensors = [_Sensor(s.force_bandwidth, fine), _Sensor(s.accel_bandwidth, fine), _Sensor(None, fine)]
-    acquire = [_Acquisition(s, n_fine) for _ in range(3)]
+    acquire = [_Acquisition(s) for _ in range(3)]
     out = [[], [], []]
     received = 0
     for vel, disp, force in _simulate_servo(params, freq, s, chunk_s):
