@@ -30,6 +30,7 @@ number of steps (``steps``); a replicate whose chain did not mix shows in the ra
 from __future__ import annotations
 
 import copy
+import csv
 import json
 import math
 import multiprocessing
@@ -291,15 +292,13 @@ def compare_calibrations(root) -> Path | None:
     root = Path(root)
     cases = {}
     for folder in sorted(p for p in root.iterdir() if (p / "coverage.csv").is_file() and (p / "settings.json").is_file()):
-        import csv
-
         with open(folder / "coverage.csv", newline="") as f:
             rows = [{k: (v if k == "parameter" else float(v)) for k, v in r.items()} for r in csv.DictReader(f)]
         if rows:
-            cases[folder.name] = {"rows": rows, "settings": json.loads((folder / "settings.json").read_text())}
+            cases[folder.name] = rows
     if not cases:
         return None
-    fig = plot_coverage({name: c["rows"] for name, c in cases.items()})
+    fig = plot_coverage(cases)
     fig.savefig(root / "coverage.png", dpi=100)
     plt.close(fig)
     return calibration_comparison(root, cases)

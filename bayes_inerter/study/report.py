@@ -265,10 +265,11 @@ def calibration_report(out: Path, cs, table: list[dict], n_ok: int, failed: list
 
 
 def calibration_comparison(root: Path, cases: dict) -> Path:
-    """``root``/REPORT.md comparing calibration cases (see ``calibration.compare_calibrations``)."""
+    """``root``/REPORT.md comparing calibration cases: ``cases`` maps each case's folder
+    name to its coverage rows (see ``calibration.compare_calibrations``)."""
     names = []
-    for c in cases.values():
-        names += [r["parameter"] for r in c["rows"] if r["parameter"] not in names]
+    for rows in cases.values():
+        names += [r["parameter"] for r in rows if r["parameter"] not in names]
     lines = ["# Simulation-based calibration: the cases side by side", "",
              "Each cell: coverage of the central 90 % interval / of the 50 % interval over the case's "
              "replicates (the binomial se at the nominal level is in the header). Cases: the folder names "
@@ -278,14 +279,14 @@ def calibration_comparison(root: Path, cases: dict) -> Path:
              "only the physical parameters have a true value. Details and rank histograms: each "
              "case's own REPORT.md.", ""]
     header = ["parameter"]
-    for name, c in cases.items():
-        n = int(c["rows"][0]["replicates"])
+    for name, rows in cases.items():
+        n = int(rows[0]["replicates"])
         header.append(f"{name} (n = {n}, se {math.sqrt(0.09 / n):.3f} / {math.sqrt(0.25 / n):.3f})")
     lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for p in names:
         cells = [p]
-        for c in cases.values():
-            by = {r["parameter"]: r for r in c["rows"]}
+        for rows in cases.values():
+            by = {r["parameter"]: r for r in rows}
             cells.append(f"{by[p]['coverage_90']:.2f} / {by[p]['coverage_50']:.2f}" if p in by else "")
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "![coverage](coverage.png)", ""]
