@@ -127,7 +127,7 @@ def test_resume_after_sigkill_several_times(tmp_path, record_file):
 @pytest.mark.slow
 def test_resume_after_many_kills_at_random_moments(tmp_path, record_file):
     """Killed 12 times at random moments (not at step boundaries: at a seeded random delay
-    after the run started writing), run again each time: every intact step is kept and
+    after the run wrote a new step), run again each time: every intact step is kept and
     the finished chain is the uninterrupted one."""
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
