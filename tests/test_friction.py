@@ -41,7 +41,10 @@ def test_regularized_slope_is_the_derivative(law, v, v_eps):
     f_minus, _ = law.regularized(v - dv, v_eps)
     _, slope = law.regularized(v, v_eps)
     numeric = (f_plus - f_minus) / (2 * dv)
-    assert slope == pytest.approx(numeric, rel=1e-4, abs=1e-3 * (1 + abs(slope)))
+    # the central difference carries rounding of order eps |f| / dv: 1.8e-3 for a 4.5 kN
+    # force (a fresh clone's hypothesis run found it), beyond the fixed 1e-3
+    rounding = 4 * np.finfo(float).eps * max(abs(f_plus), abs(f_minus)) / (2 * dv)
+    assert slope == pytest.approx(numeric, rel=1e-4, abs=1e-3 * (1 + abs(slope)) + rounding)
 
 
 def test_regularized_coulomb_tends_to_sign():
