@@ -93,3 +93,27 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     assert again.iterations == 9  # continued the checkpoint, not started over
     # the sampling time of the chain adds up over the two runs that built it
     assert again.timings["sampling_all_runs"] == pytest.approx(res.timings["sampling"] + again.timings["sampling"])
+
+
+def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_path, monkeypatch):
+    from bayes_inerter.inference import optimize
+
+    centres = []
+    for rec in records:
+        pm = PosteriorModel(rec)
+        centres.append(pm.values(pm.to_theta(paper_parameters(rec.metadata["setting"]), 1.0, 0.3)))
+    seen = []
+    real = optimize.local_optimum
+
+    def spy(model, theta, **kwargs):
+        out = real(model, theta, **kwargs)
+        seen.append((model.log_prob(theta)[0], out[1], kwargs.get("restarts")))
+        return out
+
+    monkeypatch.setattr(optimize, "local_optimum", spy)
+    fit_joint(records, tmp_path / "joint", centres=centres, steps=3, plots=False)
+    assert len(seen) == 1
+    lp_centres, lp_start, restarts = seen[0]
+    assert restarts == optimize.NM_RESTARTS and lp_start >= lp_centres
+    fit_joint(records, tmp_path / "joint", centres=centres, steps=5, plots=False)
+    assert len(seen) == 1  # a continued chain does not look for a start again
