@@ -20,6 +20,7 @@ __all__ = [
     "setting",
     "paper_parameters",
     "theoretical_inertance",
+    "apparent_inertance",
     "validate_parameters",
 ]
 
@@ -212,3 +213,18 @@ def paper_parameters(name: str) -> InerterParameters:
     """The paper's parameters for a flywheel setting: Table I, and Table 2's b and m_s."""
     s = setting(name)
     return InerterParameters(b=s.b_paper, m_s=s.m_s, **TABLE_I)
+
+
+def apparent_inertance(b, k_n, c_n):
+    """The inertance the drive sees through the nut, kg: b (1 + b k_n / c_n^2).
+
+    The nut's deformation (c_n + k_n / s) sits in series with the inertance b s, so the
+    admittance of the pair is 1 / (c_n + k_n / s) + 1 / (b s). Where the nut's spring is
+    small beside its damper at the drive frequency (k_n / (omega c_n) << 1; 0.03 at
+    1 Hz for Table I's values) this is 1 / c_n + (1 / s)(1 / b - k_n / c_n^2): a damper
+    in series with an inerter of 1 / (1 / b - k_n / c_n^2), to first order
+    b (1 + b k_n / c_n^2), the same at every drive frequency. Records therefore fix this
+    combination more tightly than b: a stiffer nut with a smaller b looks the same
+    (measured: the full study's joint model, ``README``). Works on arrays.
+    """
+    return b * (1.0 + b * k_n / (c_n * c_n))

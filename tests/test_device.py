@@ -1,10 +1,11 @@
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 
 from bayes_inerter import SETTINGS, Geometry, paper_parameters, theoretical_inertance
-from bayes_inerter.device import DEFAULT_GEOMETRY, SCREW_MASS
+from bayes_inerter.device import DEFAULT_GEOMETRY, FREQUENCIES_HZ, SCREW_MASS, TABLE_I, apparent_inertance
 
 
 def test_theoretical_inertance_matches_paper_end_points():
@@ -72,3 +73,25 @@ def test_parameters_are_frozen():
     p = paper_parameters("A0")
     with pytest.raises(dataclasses.FrozenInstanceError):
         p.b = 1.0
+
+
+# b_app holds where the nut's spring is small beside its damper, k_n / (omega c_n) << 1:
+# 0.06 at 0.5 Hz for Table I's k_n, 0.15 for 1e6 N/m (at 1e7 N/m, 0.7, it does not hold)
+@pytest.mark.parametrize("k_n", [TABLE_I["k_n"], 1e6])
+@pytest.mark.parametrize("name", ["A0", "A3", "B2"])
+def test_apparent_inertance_is_what_the_nut_and_inerter_show_together(name, k_n):
+    from bayes_inerter.network import cascade
+    from bayes_inerter.network.blocks import Deformation, Inerter
+    from bayes_inerter.network.twoport import accel_response
+
+    b, c_n = SETTINGS[name].b_paper, TABLE_I["c_n"]
+    omega = 2 * np.pi * np.array(FREQUENCIES_HZ)
+    accel = accel_response(cascade(Deformation(c_n, k_n), Inerter(b)), omega)
+    mobility = accel / (1j * omega)  # v / F of the nut in series with the inerter
+    seen = -1.0 / (omega * mobility.imag)  # the inertance of the mobility's 1 / s part
+    app = apparent_inertance(b, k_n, c_n)
+    # the nut's compliance makes the pair look heavier than b, and b_app says by how much
+    assert np.all(seen > b)
+    # to first order in k_n / (omega c_n): the neglected part is its square, 0.02 at 1e6
+    np.testing.assert_allclose(app - b, seen - b, rtol=0.03)
+    np.testing.assert_allclose(app, seen, rtol=1e-4)

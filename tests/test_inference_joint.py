@@ -89,6 +89,7 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     assert (tmp_path / "joint" / "summary.csv").is_file() and (tmp_path / "joint" / "fit.json").is_file()
     names = [r["name"] for r in res.summary]
     assert names[:2] == ["b_A0", "b_A2"] and "phi" in names
+    assert {"b_app_A0", "b_app_A2"} <= set(names)  # the inertance each setting shows through the nut
     again = fit_joint(records, tmp_path / "joint", centres=centres, steps=9, plots=False)
     assert again.iterations == 9  # continued the checkpoint, not started over
     # the sampling time of the chain adds up over the two runs that built it

@@ -177,3 +177,17 @@ def test_edges_of_the_prior_give_a_number_or_minus_infinity(record):
             continue
         assert np.all(np.isfinite(a))
     assert finite > 0  # the corners are not all refused: the check above did run on numbers
+
+
+def test_derived_quantities(record):
+    from bayes_inerter.device import apparent_inertance
+
+    p = paper_parameters("A2")
+    split = PosteriorModel(record)
+    assert split.derived_names == ["f1_0", "c_f1", "f2_0", "c_f2", "b_app"]
+    vals = split.values(split.to_theta(p, 0.003, 0.1))
+    assert vals["b_app"] == pytest.approx(apparent_inertance(p.b, p.k_n, p.c_n), rel=1e-12)
+    assert vals["f2_0"] == pytest.approx(p.f2_0, rel=1e-9)
+    assert PosteriorModel(record, split=False).derived_names == ["b_app"]
+    assert PosteriorModel(record, "linear").derived_names == ["b_app"]
+    assert PosteriorModel(record, "rigid").derived_names == []  # no nut

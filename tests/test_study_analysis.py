@@ -69,3 +69,24 @@ def test_regression_reports_the_generating_values():
     assert by["per small flywheel"]["truth"] == pytest.approx((3530.0 - 750.0) / 3)
     assert by["per big flywheel"]["truth"] == pytest.approx((20300.0 - 750.0) / 2)
     assert all(r["covers_truth"] for r in rows)
+
+
+def test_joint_table_holds_b_and_the_apparent_inertance_against_their_truths():
+    from bayes_inerter.study.analysis import joint_inertance
+
+    inert = inertance_table([fake_fit("A1", 1.0, 1000.0, 10.0), fake_fit("A2", 1.0, 2000.0, 5.0)])
+
+    def row(name, m, s):
+        return {"name": name, "mean": m, "sd": s, "hdi_3%": m - Z94 * s, "hdi_97%": m + Z94 * s, "r_hat": 1.01,
+                "ess_bulk": 500.0}
+
+    joint = [row("b_A1", 1001.0, 1.0), row("b_A2", 1990.0, 2.0), row("b_app_A1", 1003.0, 1.0),
+             row("b_app_A2", 2001.0, 2.0)]
+    rows = joint_inertance(joint, inert, truth_b={"A1": 1000.0, "A2": 2000.0}, truth_app={"A1": 1010.0, "A2": 2002.0})
+    by = {r["setting"]: r for r in rows}
+    assert by["A1"]["covers_truth"] and not by["A2"]["covers_truth"]  # 1000 in 1001 +- 1.9; 2000 not in 1990 +- 3.8
+    assert not by["A1"]["covers_truth_app"] and by["A2"]["covers_truth_app"]
+    assert by["A2"]["b_app_joint_mean"] == 2001.0 and by["A2"]["b_app_truth"] == 2002.0
+    # a joint summary without b_app (an older run) gives the b columns only
+    plain = joint_inertance(joint[:2], inert, truth_b={"A1": 1000.0, "A2": 2000.0}, truth_app={"A1": 1.0, "A2": 2.0})
+    assert "b_app_joint_mean" not in plain[0] and "covers_truth" in plain[0]

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..device import SETTINGS
+from ..device import SETTINGS, apparent_inertance
 from .model import LikelihoodSettings, PosteriorModel
 from .priors import NOISE_PRIORS
 
@@ -85,7 +85,8 @@ class JointModel:
         self.shared = shared
         self.rhos = [f"rho_{f:g}Hz" for f in self.frequencies] if self.likelihood.residual == "ar1" else []
         self.names = [f"b_{s}" for s in self.settings] + shared + self.rhos
-        self.derived_names = []
+        #: the inertance each setting shows through the nut (``device.apparent_inertance``)
+        self.derived_names = [f"b_app_{s}" for s in self.settings]
         base = first.all_priors
         self.all_priors = {**{n: base[n] for n in shared},
                            **{f"b_{s}": base["b"] for s in self.settings},
@@ -122,6 +123,11 @@ class JointModel:
         """Record ``k``'s single-record theta (its sigma set to 1: marginalised here)."""
         idx = self._maps[k]
         return np.where(idx >= 0, np.asarray(theta, dtype=float)[idx], 0.0)
+
+    def derived(self, values: dict) -> dict:
+        """``b_app_<setting>`` from sampled values by name (works on arrays)."""
+        return {f"b_app_{s}": apparent_inertance(values[f"b_{s}"], values["k_n"], values["c_n"])
+                for s in self.settings}
 
     def log_prior(self, theta) -> float:
         return float(sum(self.all_priors[n].logpdf(t) for n, t in zip(self.names, theta)))

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import signal
 
-from ..device import TABLE_I, InerterParameters, setting as get_setting
+from ..device import TABLE_I, InerterParameters, apparent_inertance, setting as get_setting
 from ..records.conditioning import LOWPASS_HZ, lowpass
 from ..records.record import Record
 from ..simulate import SAMPLINGS, SimulationError, check_record, simulate
@@ -165,6 +165,8 @@ class PosteriorModel:
         self.n_phys = len(sampled)
         self.names = sampled + ["sigma"] + (["rho"] if self.likelihood.residual == "ar1" else [])
         self.derived_names = sorted(pairs, key=PHYSICAL.index) if self.split else []
+        if {"b", "k_n", "c_n"} <= set(self.free):
+            self.derived_names.append("b_app")
         self._log = np.array([self.all_priors[n].log_scale for n in self.names])
         self.fs = rec.fs
         lk = self.likelihood
@@ -229,10 +231,20 @@ class PosteriorModel:
                        c_share=phys["c_f1"] / c if c > 0 else 0.5)
         return out
 
+    def derived(self, values: dict) -> dict:
+        """The derived quantities (``derived_names``) from sampled values by name: the raw
+        frictions of the split parametrisation and ``b_app``, the inertance seen through
+        the nut (``device.apparent_inertance``). Works on arrays."""
+        out = {n: v for n, v in self.physical(values).items() if n in self.derived_names}
+        if "b_app" in self.derived_names:
+            out["b_app"] = apparent_inertance(values["b"], values["k_n"], values["c_n"])
+        return out
+
     def values(self, theta) -> dict:
         """Sampled and derived parameter values at theta, by name."""
         vals = dict(zip(self.names, map(float, self.to_values(theta))))
         vals.update(self.physical(vals))
+        vals.update(self.derived(vals))
         return vals
 
     def parameters(self, theta) -> InerterParameters:

@@ -55,8 +55,7 @@ class PosteriorSample:
 def _derived(model: PosteriorModel, values: np.ndarray) -> dict:
     if not model.derived_names:
         return {}
-    phys = model.physical({n: values[..., i] for i, n in enumerate(model.names)})
-    return {n: phys[n] for n in model.derived_names}
+    return model.derived({n: values[..., i] for i, n in enumerate(model.names)})
 
 
 def posterior_sample(model: PosteriorModel, sampler, tau) -> PosteriorSample:

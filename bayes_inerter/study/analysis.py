@@ -127,10 +127,14 @@ def inertance_table(fits: list[RecordFit], geometry=None) -> list[dict]:
     return rows
 
 
-def joint_inertance(joint_rows: list[dict], inertance: list[dict], truth_b: dict | None = None) -> list[dict]:
+def joint_inertance(joint_rows: list[dict], inertance: list[dict], truth_b: dict | None = None,
+                    truth_app: dict | None = None) -> list[dict]:
     """Per setting, the joint model's b (posterior mean, sd, 94 % HDI) beside theory and
     the single-record combination; adds ``b_joint_mean``, ``b_joint_hdi_3%`` and
-    ``b_joint_hdi_97%`` to the ``inertance`` rows too. ``covers_truth`` with ``truth_b``."""
+    ``b_joint_hdi_97%`` to the ``inertance`` rows too. ``covers_truth`` with ``truth_b``.
+    Where the joint summary has the apparent inertance ``b_app_<setting>``
+    (``device.apparent_inertance``): its mean and 94 % HDI, and with ``truth_app`` (its
+    generating values) ``b_app_truth`` and ``covers_truth_app``."""
     by_name = {r["name"]: r for r in joint_rows}
     rows = []
     for row in inertance:
@@ -144,6 +148,14 @@ def joint_inertance(joint_rows: list[dict], inertance: list[dict], truth_b: dict
         if truth_b and row["setting"] in truth_b:
             t = truth_b[row["setting"]]
             out.update(b_truth=t, covers_truth=bool(out["b_joint_hdi_3%"] <= t <= out["b_joint_hdi_97%"]))
+        app = by_name.get(f"b_app_{row['setting']}")
+        if app is not None:
+            out.update({"b_app_joint_mean": float(app["mean"]), "b_app_joint_hdi_3%": float(app["hdi_3%"]),
+                        "b_app_joint_hdi_97%": float(app["hdi_97%"])})
+            if truth_app and row["setting"] in truth_app:
+                t = truth_app[row["setting"]]
+                out.update(b_app_truth=t,
+                           covers_truth_app=bool(out["b_app_joint_hdi_3%"] <= t <= out["b_app_joint_hdi_97%"]))
         row.update({k: out[k] for k in ("b_joint_mean", "b_joint_hdi_3%", "b_joint_hdi_97%")})
         rows.append(out)
     return rows

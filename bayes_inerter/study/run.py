@@ -8,7 +8,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..device import SETTINGS, paper_parameters
+from ..device import SETTINGS, apparent_inertance, paper_parameters
 from ..records import paper_grid, read_record, write_record
 from .analysis import (collect, contraction_table, flywheel_regression, inertance_table, joint_inertance,
                        model_comparison, phi_table, record_table, write_csv)
@@ -114,7 +114,9 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
              "phi": "phi.csv", "models": "model_comparison.csv", "contraction": "contraction.csv"}
     if joint is not None:
-        tables["joint"] = joint_inertance(joint.summary, inert, truth_b=truth_b)
+        truth = {s: paper_parameters(s) for s in plan.settings}
+        truth_app = None if plan.records_dir else {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()}
+        tables["joint"] = joint_inertance(joint.summary, inert, truth_b=truth_b, truth_app=truth_app)
         tables["joint_regression"] = flywheel_regression(
             [{"setting": r["setting"], "b_median": r["b_joint_mean"], "b_sd": r["b_joint_sd"]} for r in tables["joint"]],
             truth_b=truth_b)
