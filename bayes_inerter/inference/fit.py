@@ -158,8 +158,8 @@ def fit_joint(
     gains (``optimize.local_optimum``), reaches from ``JointModel.start`` of them. Without
     them the centres are each record's own optimum found first (``optimize.find_start``,
     minutes a record). The medians of the records' centres are far from the joint
-    optimum (950 nats below the first pass's end on the 27 records of the full study),
-    so the walkers would otherwise spend their first hundreds of steps getting there.
+    optimum (about 1,000 nats below where the chain settles on the 27 records of the
+    full study), so the walkers would otherwise spend their first hundreds of steps getting there.
     """
     from .joint import JointModel
     from .optimize import NM_RESTARTS, find_start, local_optimum
