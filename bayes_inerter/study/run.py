@@ -106,7 +106,9 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     joint = run_joint(plan, out, fits, records, processes=processes, progress=on_joint_step) if plan.joint else None
     t_joint = time.perf_counter()
     inert = inertance_table(fits)
-    truth_b = None if plan.records_dir else {s: paper_parameters(s).b for s in plan.settings}
+    # generated records are made with the paper's parameters; a user's records have no truth
+    truth = None if plan.records_dir else {s: paper_parameters(s) for s in plan.settings}
+    truth_b = None if truth is None else {s: p.b for s, p in truth.items()}
     tables = {
         "records": record_table(fits), "inertance": inert, "regression": flywheel_regression(inert, truth_b=truth_b),
         "phi": phi_table(fits), "models": model_comparison(fits), "contraction": contraction_table(fits),
@@ -114,8 +116,7 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
              "phi": "phi.csv", "models": "model_comparison.csv", "contraction": "contraction.csv"}
     if joint is not None:
-        truth = {s: paper_parameters(s) for s in plan.settings}
-        truth_app = None if plan.records_dir else {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()}
+        truth_app = None if truth is None else {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()}
         tables["joint"] = joint_inertance(joint.summary, inert, truth_b=truth_b, truth_app=truth_app)
         tables["joint_regression"] = flywheel_regression(
             [{"setting": r["setting"], "b_median": r["b_joint_mean"], "b_sd": r["b_joint_sd"]} for r in tables["joint"]],
