@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 
 from ..records.record import Record
-from .checkpoint import steps_written
 from .model import LikelihoodSettings, PosteriorModel
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_summary
 from .sampler import Convergence, check_run_options, run_sampler
@@ -157,9 +156,10 @@ def fit_joint(
     record; the run starts from the joint optimum that Nelder-Mead, restarted while it
     gains (``optimize.local_optimum``), reaches from ``JointModel.start`` of them. Without
     them the centres are each record's own optimum found first (``optimize.find_start``,
-    minutes a record). The medians of the records' centres are far from the joint
-    optimum (about 1,000 nats below where the chain settles on the 27 records of the
-    full study), so the walkers would otherwise spend their first hundreds of steps getting there.
+    minutes a record). A continued chain needs no start and skips both searches. The
+    medians of the records' centres are far from the joint optimum (about 1,000 nats
+    below where the chain settles on the 27 records of the full study), so the walkers
+    would otherwise spend their first hundreds of steps getting there.
     """
     from .joint import JointModel
     from .optimize import NM_RESTARTS, find_start, local_optimum
@@ -170,13 +170,14 @@ def fit_joint(
     check_output_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    if centres is None:
-        rng = np.random.default_rng(seed)
-        centres = [part.values(find_start(part, rng)[0]) for part in jm.parts]
-    if steps_written(out / "chain.h5") > 0:  # continued: the start is not used
-        start = None
-    else:
-        start = local_optimum(jm, jm.start(centres), restarts=NM_RESTARTS)
+
+    def start():  # run_sampler calls it only when the chain starts over
+        given = centres
+        if given is None:
+            rng = np.random.default_rng(seed)
+            given = [part.values(find_start(part, rng)[0]) for part in jm.parts]
+        return local_optimum(jm, jm.start(given), restarts=NM_RESTARTS)
+
     run = run_sampler(jm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, processes=processes,
                       convergence=convergence, progress=progress, start=start)
     t_sample = time.perf_counter() - t0

@@ -156,8 +156,10 @@ def run_sampler(
     fresh : start over even if the checkpoint holds steps.
     processes : worker processes evaluating walkers in parallel (1: none).
     progress : callable(iteration, target or None), called after each step.
-    start : optional (theta, log prob) to start from instead of the optimiser; the
-        walkers are drawn around it by ``optimize.laplace_ensemble``.
+    start : optional (theta, log prob) to start from instead of the optimiser, or a
+        callable returning one, called only when the chain starts over (a continued
+        checkpoint needs no start); the walkers are drawn around it by
+        ``optimize.laplace_ensemble``.
     """
     from pathlib import Path
 
@@ -186,6 +188,8 @@ def run_sampler(
             if start is None:
                 sse_many = (lambda xs: pool.map(_sse, xs)) if pool is not None else None
                 start = find_start(model, rng, sse_many=sse_many)
+            elif callable(start):
+                start = start()
             start_theta = np.asarray(start[0], dtype=float)
             sampler.random_state = np.random.RandomState(seed).get_state()
             state, _ = laplace_ensemble(model, start_theta, nwalkers, rng)
