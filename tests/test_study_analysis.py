@@ -23,11 +23,22 @@ def test_records_of_a_setting_combine_as_a_product_of_normals():
     a1 = rows["A1"]
     # precisions 1/100 and 1/400: mean (1000*4 + 1030) / 5 = 1006, sd sqrt(80)
     assert a1["b_median"] == pytest.approx(1006.0)
-    assert a1["b_sd"] == pytest.approx(np.sqrt(80.0))
-    assert a1["chi2"] == pytest.approx(6.0**2 / 100 + 24.0**2 / 400)
-    assert a1["records"] == 2 and rows["A2"]["records"] == 1
+    chi2 = 6.0**2 / 100 + 24.0**2 / 400  # 1.8 on 1 degree of freedom: they disagree
+    assert a1["chi2"] == pytest.approx(chi2)
+    assert a1["scale"] == pytest.approx(np.sqrt(chi2))
+    assert a1["b_sd"] == pytest.approx(np.sqrt(80.0) * np.sqrt(chi2))
+    assert a1["b_hdi_97%"] - a1["b_median"] == pytest.approx(Z94 * np.sqrt(80.0 * chi2))
+    assert a1["records"] == 2 and rows["A2"]["records"] == 1 and rows["A2"]["scale"] == 1.0
     assert a1["b_theory"] == pytest.approx(theoretical_inertance("A1"))
     assert a1["b_paper"] == SETTINGS["A1"].b_paper
+
+
+def test_records_that_agree_keep_their_combined_sd():
+    # means 1000 and 1010, sds 10: chi2 = 2 * 5^2 / 100 = 0.5 < 1 degree of freedom
+    a1 = inertance_table([fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1010.0, 10.0)])[0]
+    assert a1["chi2"] == pytest.approx(0.5)
+    assert a1["scale"] == 1.0
+    assert a1["b_sd"] == pytest.approx(10.0 / np.sqrt(2.0))
 
 
 def test_regression_recovers_the_increments_it_was_made_with():
@@ -90,3 +101,13 @@ def test_joint_table_holds_b_and_the_apparent_inertance_against_their_truths():
     # a joint summary without b_app (an older run) gives the b columns only
     plain = joint_inertance(joint[:2], inert, truth_b={"A1": 1000.0, "A2": 2000.0}, truth_app={"A1": 1.0, "A2": 2.0})
     assert "b_app_joint_mean" not in plain[0] and "covers_truth" in plain[0]
+
+
+def test_report_names_the_settings_whose_sd_was_widened():
+    from bayes_inerter.study.report import _inertance_text
+
+    rows = inertance_table([fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1030.0, 20.0),
+                            fake_fit("A2", 0.5, 2000.0, 10.0), fake_fit("A2", 1.0, 2010.0, 10.0)])
+    text = _inertance_text(rows, {"A1": 1006.0, "A2": 2005.0})
+    assert "Birge ratio" in text and "A1 (1.3)" in text  # sqrt(1.8) = 1.34
+    assert "A2 (" not in text  # its records agree (chi2 0.5 on 1 degree of freedom)

@@ -5,8 +5,11 @@ model comparison, and what the data identify.
 Combining records: each record's posterior is sampled on its own (its own frictions and
 deformations). A setting's inertance from its records at several frequencies is their
 product, taken in a normal approximation (precision-weighted mean and sd of the
-per-record posteriors); a chi-square of the per-record medians about it says whether
-they agree. The increments per flywheel come from a weighted least-squares regression
+per-record posteriors); a chi-square of the per-record means about it says whether
+they agree, and where they disagree by more than their sds allow (chi-square above its
+degrees of freedom) the combined sd is scaled up by the Birge ratio
+sqrt(chi2 / (records - 1)), the Particle Data Group's rule for averaging discrepant
+measurements: their sds are then taken to be too small by a common factor. The increments per flywheel come from a weighted least-squares regression
 of those per-setting normals on the numbers of small and big flywheels (a normal
 posterior for base, per-small and per-big inertance under flat priors).
 """
@@ -24,9 +27,8 @@ import numpy as np
 
 from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
 
-__all__ = ["RecordFit", "collect", "inertance_table", "joint_inertance", "record_table", "flywheel_regression",
-           "phi_table",
-           "model_comparison", "contraction_table", "write_csv", "Z94"]
+__all__ = ["RecordFit", "birge_ratio", "collect", "inertance_table", "joint_inertance", "record_table",
+           "flywheel_regression", "phi_table", "model_comparison", "contraction_table", "write_csv", "Z94"]
 
 #: Half-width of a central 94 % interval of a normal, in sd.
 Z94 = 1.880793608151251
@@ -101,13 +103,20 @@ def _combine(normals):
     return mean, float(1.0 / math.sqrt(np.sum(prec))), chi2
 
 
+def birge_ratio(chi2: float, n: int) -> float:
+    """sqrt(chi2 / (n - 1)) when n values disagree by more than their sds allow, else 1
+    (one value, or chi2 no larger than its degrees of freedom)."""
+    return math.sqrt(chi2 / (n - 1)) if n > 1 and chi2 > n - 1 else 1.0
+
+
 def inertance_table(fits: list[RecordFit], geometry=None) -> list[dict]:
     """Per setting: theory, the paper's identified b, and the posterior (all its records).
 
     Columns ``setting, b_theory, b_paper, b_median, b_hdi_3%, b_hdi_97%`` (the normal
     approximation's median and central 94 % interval), then ``b_sd``, ``records``,
     ``chi2`` (of the per-record means about the combined one; about records - 1 when
-    they agree) and ``converged`` (all its chains).
+    they agree), ``scale`` (the Birge ratio the sd was multiplied by, 1 when they
+    agree: see the module docstring) and ``converged`` (all its chains).
     """
     by_setting = {}
     for f in fits:
@@ -119,10 +128,12 @@ def inertance_table(fits: list[RecordFit], geometry=None) -> list[dict]:
         if not group:
             continue
         mean, sd, chi2 = _combine([_normal(f) for f in group])
+        scale = birge_ratio(chi2, len(group))
+        sd *= scale
         rows.append({
             "setting": name, "b_theory": theoretical_inertance(name, geometry), "b_paper": SETTINGS[name].b_paper,
             "b_median": mean, "b_hdi_3%": mean - Z94 * sd, "b_hdi_97%": mean + Z94 * sd, "b_sd": sd,
-            "records": len(group), "chi2": chi2, "converged": all(f.converged for f in group),
+            "records": len(group), "chi2": chi2, "scale": scale, "converged": all(f.converged for f in group),
         })
     return rows
 

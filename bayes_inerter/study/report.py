@@ -44,10 +44,11 @@ def _inertance_text(rows, truth_b: dict | None) -> str:
         text += (f" The records were generated with known inertances: the 94 % interval holds the true value for "
                  f"{held} of {held + len(missed)} settings" + (f" and misses it for {', '.join(missed)}." if missed
                                                                 else "."))
-    disagree = [r["setting"] for r in rows if r["records"] > 1 and r["chi2"] > 4 * (r["records"] - 1) + 6]
-    if disagree:
-        text += (f" For {', '.join(disagree)} the records at different frequencies disagree on b by more than their "
-                 "intervals allow (chi-square of the per-record means): the combined interval is too narrow there.")
+    scaled = [f"{r['setting']} ({r['scale']:.1f})" for r in rows if r.get("scale", 1.0) > 1.0]
+    if scaled:
+        text += (" Where a setting's records at different frequencies disagree on b by more than their intervals "
+                 "allow (chi-square of the per-record means above its degrees of freedom), the combined sd is "
+                 "widened by the Birge ratio sqrt(chi2 / (records - 1)): " + ", ".join(scaled) + ".")
     return text
 
 
