@@ -51,6 +51,10 @@ def _add_generator_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--ramp", type=_non_negative_float, default=d.ramp, help="ramp-in time, s (%(default)s)")
     g.add_argument("--force-noise", type=_non_negative_float, default=d.force_noise, help="load-cell noise, N rms (%(default)s)")
     g.add_argument("--accel-noise", type=_non_negative_float, default=d.accel_noise, help="accelerometer noise, m/s^2 rms (%(default)s)")
+    g.add_argument("--force-gain", type=_positive_float, default=d.force_gain,
+                   help="load cell's true over nominal sensitivity: a calibration error (%(default)s)")
+    g.add_argument("--accel-gain", type=_positive_float, default=d.accel_gain,
+                   help="accelerometer's true over nominal sensitivity (%(default)s)")
     g.add_argument("--noise-corner", type=_positive_float, default=d.noise_corner,
                    help="colour the sensor noise: low-pass corner, Hz (default: white noise)")
     g.add_argument("--antialias", choices=("fir", "none"), default=d.antialias, help="anti-alias filter (%(default)s)")
@@ -66,6 +70,7 @@ def _settings_from(args):
     return GeneratorSettings(
         amplitude=args.amplitude, fs=args.fs, duration=args.duration, ramp=args.ramp,
         force_noise=args.force_noise, accel_noise=args.accel_noise, noise_corner=args.noise_corner,
+        force_gain=args.force_gain, accel_gain=args.accel_gain,
         antialias=args.antialias, network=args.truth_network, friction=args.truth_friction, backlash=args.backlash,
     )
 
@@ -188,6 +193,14 @@ def cmd_study(args) -> int:
         changes["joint_steps"] = args.joint_steps
     if args.no_joint:
         changes["joint"] = False
+    if args.sensor_uncertainty is not None:
+        from .records.sensitivity import SensorCalibration
+
+        u_force, u_accel = args.sensor_uncertainty
+        try:
+            changes["calibration"] = SensorCalibration(force=u_force / 100, accel=u_accel / 100)
+        except ValueError as err:
+            raise CliError(f"--sensor-uncertainty: {err}") from None
     if args.records:
         if not Path(args.records).is_dir():
             raise CliError(f"--records {args.records}: not a folder of CSV records")
@@ -292,6 +305,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--joint-steps", type=_positive_int,
                    help="steps of the joint model's chain (full study; default: until converged)")
     p.add_argument("--no-joint", action="store_true", help="skip the joint model of all records")
+    p.add_argument("--sensor-uncertainty", type=_non_negative_float, nargs=2, metavar=("FORCE_%", "ACCEL_%"),
+                   help="relative standard uncertainty of the load cell's and accelerometer's sensitivities, "
+                        "percent, added to b in the b_cal columns (default 0.25 0.5; 0 0: exact sensors)")
     p.add_argument("--processes", type=_positive_int, help="local worker processes, one fit each (default: up to 2)")
     p.add_argument("--scheduler", help="run the fits on this Dask scheduler (tcp://host:port) instead")
     p.set_defaults(func=cmd_study)

@@ -57,6 +57,9 @@ class GeneratorSettings:
         approximates.
     force_bandwidth, accel_bandwidth : sensor -3 dB bandwidths, Hz (second-order
         Butterworth; defaults 2 kHz and 5 kHz); None for ideal sensors.
+    force_gain, accel_gain : each sensor's true sensitivity over the nominal one the
+        record is converted with: a calibration error (default 1: none). The records
+        alone cannot reveal it (``records.sensitivity``).
     antialias : "fir" (linear-phase FIR with its delay removed, as a delta-sigma
         converter's decimation filter; default) or "none" (instantaneous sampling, the
         naive record MODEL.md section 7 warns against).
@@ -79,6 +82,8 @@ class GeneratorSettings:
     noise_corner: float | None = None
     force_bandwidth: float | None = 2000.0
     accel_bandwidth: float | None = 5000.0
+    force_gain: float = 1.0
+    accel_gain: float = 1.0
     antialias: str = "fir"
     tail: float = 0.5
     network: str = "reduced"
@@ -86,7 +91,7 @@ class GeneratorSettings:
     backlash: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("amplitude", "fs", "duration", "k_p", "k_d"):
+        for name in ("amplitude", "fs", "duration", "k_p", "k_d", "force_gain", "accel_gain"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ValueError(f"generator setting {name} must be positive, got {value!r}")
@@ -322,8 +327,8 @@ def generate_record(
     gen = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
     force, accel, disp = _record_signals(params, freq, s)
     n = len(force)
-    force = force + s.force_noise * _noise(gen, n, s)
-    accel = accel + s.accel_noise * _noise(gen, n, s)
+    force = s.force_gain * force + s.force_noise * _noise(gen, n, s)
+    accel = s.accel_gain * accel + s.accel_noise * _noise(gen, n, s)
     disp = disp + s.disp_noise * _noise(gen, n, s)
     meta = {
         "source": "generated",
