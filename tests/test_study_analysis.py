@@ -111,3 +111,36 @@ def test_report_names_the_settings_whose_sd_was_widened():
     text = _inertance_text(rows, {"A1": 1006.0, "A2": 2005.0})
     assert "Birge ratio" in text and "A1 (1.3)" in text  # sqrt(1.8) = 1.34
     assert "A2 (" not in text  # its records agree (chi2 0.5 on 1 degree of freedom)
+
+
+def test_calibration_widens_b_by_the_sensors_share_of_b_plus_the_moving_mass():
+    from bayes_inerter.records.sensitivity import SensorCalibration
+    from bayes_inerter.study.analysis import joint_inertance
+
+    cal = SensorCalibration(force=0.003, accel=0.004)  # u = 0.005
+    fits = [fake_fit("A0", 1.0, 700.0, 2.0), fake_fit("A1", 1.0, 1000.0, 10.0), fake_fit("B1", 1.0, 10000.0, 10.0)]
+    for f, m_s in zip(fits, (15.0, 20.0, 25.0)):
+        f.info.update(m_s=m_s, m_B=50.0)
+    rows = {r["setting"]: r for r in inertance_table(fits, calibration=cal)}
+    a1 = rows["A1"]
+    assert a1["moving_mass"] == 70.0
+    assert a1["b_cal_sd"] == pytest.approx(np.hypot(10.0, 1070.0 * 0.005))
+    assert a1["b_cal_hdi_97%"] - a1["b_median"] == pytest.approx(Z94 * a1["b_cal_sd"])
+    assert a1["b_sd"] == 10.0  # the records-alone columns stay as they were
+    assert "b_cal_sd" not in inertance_table(fits)[0]
+
+    reg = {r["term"]: r for r in flywheel_regression(list(rows.values()), calibration=cal,
+                                                     truth_b={"A0": 700.0, "A1": 1000.0, "B1": 10000.0})}
+    small, base = reg["per small flywheel"], reg["base (A0)"]
+    assert small["cal_sd"] == pytest.approx(np.hypot(small["sd"], small["mean"] * 0.005))  # an increment: no mass
+    assert base["cal_sd"] == pytest.approx(np.hypot(base["sd"], (base["mean"] + 65.0) * 0.005))  # A0's 65 kg
+    assert small["covers_truth_cal"]
+
+    joint = [{"name": "b_A1", "mean": 1030.0, "sd": 1.0, "hdi_3%": 1028.0, "hdi_97%": 1032.0, "r_hat": 1.0,
+              "ess_bulk": 500.0}]
+    j = joint_inertance(joint, [a1], truth_b={"A1": 1000.0}, calibration=cal)[0]
+    # 30 kg off: outside both intervals (1.88 * hypot(1, 5.5) = 10.5 kg with the calibration)
+    assert not j["covers_truth"] and not j["covers_truth_cal"]
+    assert j["b_joint_cal_sd"] == pytest.approx(np.hypot(1.0, (1030.0 + 70.0) * 0.005))
+    j = joint_inertance([{**joint[0], "mean": 1008.0, "hdi_3%": 1006.0, "hdi_97%": 1010.0}], [a1], truth_b={"A1": 1000.0}, calibration=cal)[0]
+    assert not j["covers_truth"] and j["covers_truth_cal"]  # 8 kg off: within 1.88 * 5.5 = 10.4 kg

@@ -36,6 +36,7 @@ def test_study_writes_tables_figures_and_report(study):
         assert (out / name).is_file(), name
     header = (out / "inertance.csv").read_text().splitlines()[0]
     assert header.startswith("setting,b_theory,b_paper,b_median,b_hdi_3%,b_hdi_97%")
+    assert "b_cal_hdi_3%" in header  # the sensors' calibration, beside the records-alone interval
     assert [o["status"] for o in study.outcomes] == ["done"] * 4  # A0 two-port; A2 two-port, rigid, linear
     report = (out / "REPORT.md").read_text()
     assert "not converged" in report  # 8 steps: the report must say so
@@ -43,6 +44,8 @@ def test_study_writes_tables_figures_and_report(study):
     assert {r["model"] for r in study.tables["models"]} == {"linear", "rigid", "two-port"}
     info = json.loads((out / "study.json").read_text())
     assert info["plan"]["steps"] == 8 and info["versions"]["emcee"]
+    assert info["plan"]["calibration"] == {"force": 0.0025, "accel": 0.005}
+    assert "sensitivities as exact" in report and "--sensor-uncertainty" in report
     # the joint model of both records: one b per setting beside the single-record ones
     assert (out / "joint" / "summary.csv").is_file() and (out / "flywheels_joint.csv").is_file()
     assert [r["setting"] for r in study.tables["joint"]] == ["A0", "A2"]
@@ -120,6 +123,13 @@ def test_study_on_a_local_dask_cluster(study, tmp_path):
                         scheduler=cluster.scheduler_address)
     assert [o["status"] for o in res.outcomes] == ["done"]
     assert (tmp_path / "dask" / "fits" / "two-port" / "A0_1Hz" / "done.json").is_file()
+
+
+def test_cli_study_refuses_a_sensor_uncertainty_that_is_not_a_small_percentage(tmp_path, capsys):
+    code = main(["study", "--quick", "--sensor-uncertainty", "60", "0.5", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 1 and err.startswith("error: --sensor-uncertainty") and "Traceback" not in err
+    assert not (tmp_path / "o").exists()
 
 
 def test_cli_study_refuses_a_missing_records_folder(tmp_path, capsys):

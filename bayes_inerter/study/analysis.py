@@ -12,6 +12,11 @@ sqrt(chi2 / (records - 1)), the Particle Data Group's rule for averaging discrep
 measurements: their sds are then taken to be too small by a common factor. The increments per flywheel come from a weighted least-squares regression
 of those per-setting normals on the numbers of small and big flywheels (a normal
 posterior for base, per-small and per-big inertance under flat priors).
+
+The sensors' calibration (``records.sensitivity.SensorCalibration``) is what no record
+can check: with one, every table also gives b's sd and 94 % interval with the
+calibration's share added (``b_cal_*`` columns, ``cal_*`` in the regression), beside
+the records-alone ones.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
+from ..records.sensitivity import SensorCalibration
 
 __all__ = ["RecordFit", "birge_ratio", "collect", "inertance_table", "joint_inertance", "record_table",
            "flywheel_regression", "phi_table", "model_comparison", "contraction_table", "write_csv", "Z94"]
@@ -109,14 +115,37 @@ def birge_ratio(chi2: float, n: int) -> float:
     return math.sqrt(chi2 / (n - 1)) if n > 1 and chi2 > n - 1 else 1.0
 
 
-def inertance_table(fits: list[RecordFit], geometry=None) -> list[dict]:
+def _moving_mass(f: RecordFit) -> float:
+    """m_s + m_B of a fit's record (kg), from its fit.json; nan when it does not say."""
+    try:
+        return float(f.info["m_s"]) + float(f.info["m_B"])
+    except (KeyError, TypeError, ValueError):
+        return math.nan
+
+
+def _with_calibration(row: dict, calibration: SensorCalibration | None, mean: float, sd: float, mass: float,
+                      prefix: str, truth: float | None = None) -> None:
+    """Add ``<prefix>sd``, ``<prefix>hdi_3%``, ``<prefix>hdi_97%`` (and ``covers_truth_cal``
+    with ``truth``) of an inertance of posterior ``mean`` and ``sd`` with the calibration's
+    share for ``mass`` kg of moving mass (0 for an increment; nan: unknown, taken as 0)."""
+    if calibration is None:
+        return
+    total = calibration.inertance_sd(mean, sd, 0.0 if math.isnan(mass) else mass)
+    row.update({f"{prefix}sd": total, f"{prefix}hdi_3%": mean - Z94 * total, f"{prefix}hdi_97%": mean + Z94 * total})
+    if truth is not None:
+        row["covers_truth_cal"] = bool(abs(mean - truth) <= Z94 * total)
+
+
+def inertance_table(fits: list[RecordFit], geometry=None, calibration: SensorCalibration | None = None) -> list[dict]:
     """Per setting: theory, the paper's identified b, and the posterior (all its records).
 
     Columns ``setting, b_theory, b_paper, b_median, b_hdi_3%, b_hdi_97%`` (the normal
     approximation's median and central 94 % interval), then ``b_sd``, ``records``,
     ``chi2`` (of the per-record means about the combined one; about records - 1 when
     they agree), ``scale`` (the Birge ratio the sd was multiplied by, 1 when they
-    agree: see the module docstring) and ``converged`` (all its chains).
+    agree: see the module docstring), ``converged`` (all its chains) and
+    ``moving_mass`` (m_s + m_B of its records, kg). With ``calibration``:
+    ``b_cal_sd``, ``b_cal_hdi_3%``, ``b_cal_hdi_97%`` (the sensors' share added).
     """
     by_setting = {}
     for f in fits:
@@ -134,18 +163,22 @@ def inertance_table(fits: list[RecordFit], geometry=None) -> list[dict]:
             "setting": name, "b_theory": theoretical_inertance(name, geometry), "b_paper": SETTINGS[name].b_paper,
             "b_median": mean, "b_hdi_3%": mean - Z94 * sd, "b_hdi_97%": mean + Z94 * sd, "b_sd": sd,
             "records": len(group), "chi2": chi2, "scale": scale, "converged": all(f.converged for f in group),
+            "moving_mass": float(np.mean([_moving_mass(f) for f in group])),
         })
+        _with_calibration(rows[-1], calibration, mean, sd, rows[-1]["moving_mass"], "b_cal_")
     return rows
 
 
 def joint_inertance(joint_rows: list[dict], inertance: list[dict], truth_b: dict | None = None,
-                    truth_app: dict | None = None) -> list[dict]:
+                    truth_app: dict | None = None, calibration: SensorCalibration | None = None) -> list[dict]:
     """Per setting, the joint model's b (posterior mean, sd, 94 % HDI) beside theory and
     the single-record combination; adds ``b_joint_mean``, ``b_joint_hdi_3%`` and
     ``b_joint_hdi_97%`` to the ``inertance`` rows too. ``covers_truth`` with ``truth_b``.
     Where the joint summary has the apparent inertance ``b_app_<setting>``
     (``device.apparent_inertance``): its mean and 94 % HDI, and with ``truth_app`` (its
-    generating values) ``b_app_truth`` and ``covers_truth_app``."""
+    generating values) ``b_app_truth`` and ``covers_truth_app``. With ``calibration``:
+    ``b_joint_cal_sd`` and the 94 % interval ``b_joint_cal_hdi_3%``, ``b_joint_cal_hdi_97%``
+    (normal, the sensors' share added; ``covers_truth_cal`` with ``truth_b``)."""
     by_name = {r["name"]: r for r in joint_rows}
     rows = []
     for row in inertance:
@@ -159,6 +192,8 @@ def joint_inertance(joint_rows: list[dict], inertance: list[dict], truth_b: dict
         if truth_b and row["setting"] in truth_b:
             t = truth_b[row["setting"]]
             out.update(b_truth=t, covers_truth=bool(out["b_joint_hdi_3%"] <= t <= out["b_joint_hdi_97%"]))
+        _with_calibration(out, calibration, out["b_joint_mean"], out["b_joint_sd"], row.get("moving_mass", math.nan),
+                          "b_joint_cal_", out.get("b_truth"))
         app = by_name.get(f"b_app_{row['setting']}")
         if app is not None:
             out.update({"b_app_joint_mean": float(app["mean"]), "b_app_joint_hdi_3%": float(app["hdi_3%"]),
@@ -172,14 +207,18 @@ def joint_inertance(joint_rows: list[dict], inertance: list[dict], truth_b: dict
     return rows
 
 
-def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | None = None) -> list[dict]:
+def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | None = None,
+                        calibration: SensorCalibration | None = None) -> list[dict]:
     """Base, per-small and per-big-flywheel inertance: posterior (normal) against geometry.
 
     Only the terms the settings can separate are estimated: the small (big) increment
     needs a setting with small (big) flywheels, and the base needs more settings than
     increments. With ``truth_b`` (setting -> the b its records were generated with), the
     same regression of those values is given as ``truth`` and whether the interval
-    holds it (``covers_truth``).
+    holds it (``covers_truth``). With ``calibration``: ``cal_sd``, ``cal_hdi_3%``,
+    ``cal_hdi_97%`` (and ``covers_truth_cal``), the sensors' share added: ``u`` times an
+    increment, ``u`` times base plus the moving mass of a setting without flywheels
+    (its row's ``moving_mass``; 0 when no such row says).
     """
     geometry = geometry or DEFAULT_GEOMETRY
     if not inertance:
@@ -201,6 +240,7 @@ def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | No
     truth = None
     if truth_b and all(r["setting"] in truth_b for r in inertance):
         truth = cov @ (X.T @ (w * np.array([truth_b[r["setting"]] for r in inertance])))
+    base_mass = next((r.get("moving_mass", math.nan) for r, a, b in zip(inertance, ns, nb) if a == b == 0), math.nan)
     rows = []
     for k, ((name, _, theory), c, var) in enumerate(zip(terms, coef, np.diag(cov))):
         sd = math.sqrt(var)
@@ -208,6 +248,8 @@ def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | No
                "hdi_97%": c + Z94 * sd, "covers_theory": bool(abs(c - theory) <= Z94 * sd)}
         if truth is not None:
             row.update(truth=float(truth[k]), covers_truth=bool(abs(c - truth[k]) <= Z94 * sd))
+        _with_calibration(row, calibration, float(c), sd, base_mass if k == 0 else 0.0, "cal_",
+                          None if truth is None else float(truth[k]))
         rows.append(row)
     return rows
 

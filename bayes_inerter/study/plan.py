@@ -21,6 +21,7 @@ from pathlib import Path
 from ..device import FREQUENCIES_HZ, SETTINGS
 from ..inference.model import MODELS
 from ..records.generator import GeneratorSettings
+from ..records.sensitivity import SensorCalibration
 
 __all__ = ["FitJob", "StudyPlan", "quick_plan", "full_plan", "record_name"]
 
@@ -65,6 +66,9 @@ class StudyPlan:
         setting) on all the two-port records, started from their single-record
         posteriors, into ``<out>/joint``.
     joint_steps : steps of the joint chain; None: until converged.
+    calibration : the sensors' calibration uncertainty (**assumption**, see
+        ``records.sensitivity``), added to b in the tables' ``b_cal`` columns; it changes
+        no fit.
     """
 
     name: str
@@ -78,6 +82,7 @@ class StudyPlan:
     comparison: tuple = ((), ())
     joint: bool = False
     joint_steps: int | None = None
+    calibration: SensorCalibration = field(default_factory=SensorCalibration)
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.settings if s not in SETTINGS]

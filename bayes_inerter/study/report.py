@@ -52,7 +52,28 @@ def _inertance_text(rows, truth_b: dict | None) -> str:
     return text
 
 
-def _joint_section(rows, reg, info) -> list[str]:
+def _calibration_text(rows, calibration, truth_b: dict | None, prefix: str) -> str:
+    """What the sensors' calibration adds to b (``<prefix>hdi_*`` columns), and how often
+    the widened intervals hold the generating b."""
+    if not rows or f"{prefix}hdi_3%" not in rows[0]:
+        return ""
+    u = calibration.ratio_sd
+    text = (f"These intervals take the sensors' sensitivities as exact. With the load cell's sensitivity known "
+            f"to {100 * calibration.force:.2g} % and the accelerometer's to {100 * calibration.accel:.2g} % (standard "
+            f"uncertainties, an **assumption**: `--sensor-uncertainty`), a record reads the same whether b or the "
+            f"sensitivities' ratio is off (`records.sensitivity`), so b carries a further {100 * u:.2g} % of "
+            f"b plus the moving mass that no record can reduce: the 94 % intervals widen to "
+            + "; ".join(f"{r['setting']} {r[f'{prefix}hdi_3%']:.0f}-{r[f'{prefix}hdi_97%']:.0f}" for r in rows) + ".")
+    if truth_b:
+        known = [r for r in rows if r["setting"] in truth_b]
+        held = sum(r[f"{prefix}hdi_3%"] <= truth_b[r["setting"]] <= r[f"{prefix}hdi_97%"] for r in known)
+        text += (f" They hold the generating b for {held} of {len(known)} settings; the records were generated "
+                 "with exact sensitivities, so this says how wide a real measurement's interval is, not that the "
+                 "records alone pin b.")
+    return text
+
+
+def _joint_section(rows, reg, info, calibration=None, truth_b=None) -> list[str]:
     status = ("converged" if info["converged"] else
               f"**not converged** after {info['iterations']} steps ({info['reason']}): read it as indicative")
     text = ("One set of friction and deformation parameters for every record and one b per setting, as the paper "
@@ -68,21 +89,27 @@ def _joint_section(rows, reg, info) -> list[str]:
                  f"{len(rows)} settings. ")
     text += ("The joint b's are correlated through the shared parameters; the regression below treats them as "
              "independent normals, an approximation.")
+    if calibration is not None:
+        text += " " + _calibration_text(rows, calibration, truth_b, "b_joint_cal_")
     cols = ("setting", "b_theory", "b_truth", "b_single_median", "b_joint_mean", "b_joint_hdi_3%", "b_joint_hdi_97%",
-            "covers_truth", "b_app_truth", "b_app_joint_hdi_3%", "b_app_joint_hdi_97%", "covers_truth_app", "r_hat",
-            "ess_bulk")
+            "covers_truth", "b_app_truth", "b_app_joint_hdi_3%", "b_app_joint_hdi_97%", "covers_truth_app",
+            "b_joint_cal_hdi_3%", "b_joint_cal_hdi_97%", "r_hat", "ess_bulk")
     one = ("b_theory", "b_truth", "b_single_median", "b_joint_mean", "b_joint_hdi_3%", "b_joint_hdi_97%",
-           "b_app_truth", "b_app_joint_hdi_3%", "b_app_joint_hdi_97%")
+           "b_app_truth", "b_app_joint_hdi_3%", "b_app_joint_hdi_97%", "b_joint_cal_hdi_3%", "b_joint_cal_hdi_97%")
     out = ["## Joint model: all records at once", "", text, "",
            _table(rows, [c for c in cols if c in rows[0]],
                   {c: "{:.1f}" for c in one} | {"r_hat": "{:.3f}", "ess_bulk": "{:.0f}"}), "",
            "![joint posterior of b](joint/corner.png)", ""]
     if reg:
         out += ["Inertance added per flywheel from the joint b's (`flywheels_joint.csv`):", "",
-                _table(reg, [c for c in ("term", "theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%",
-                                         "covers_theory", "covers_truth") if c in reg[0]],
-                       {c: "{:.1f}" for c in ("theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%")}), ""]
+                _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]],
+                       {c: "{:.1f}" for c in REGRESSION_COLUMNS[1:7] + REGRESSION_COLUMNS[9:11]}), ""]
     return out
+
+
+#: The regression's columns in the report (``cal_*``: the sensors' calibration added).
+REGRESSION_COLUMNS = ("term", "theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%", "covers_theory", "covers_truth",
+                      "cal_hdi_3%", "cal_hdi_97%", "covers_truth_cal")
 
 
 def _record_coverage(recs, truth_b) -> str:
@@ -118,10 +145,13 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
     if failed:
         lines += ["**Failed fits:** " + "; ".join(f"{o['key']}: {o.get('error', '')}" for o in failed), ""]
     if inert:
+        cal_cols = [c for c in ("b_cal_hdi_3%", "b_cal_hdi_97%") if c in inert[0]]
         lines += ["## Inertance per flywheel setting", "", _inertance_text(inert, truth_b), "",
-                  _table(inert, ["setting", "b_theory", "b_paper", "b_median", "b_hdi_3%", "b_hdi_97%", "records",
-                                 "converged"], {c: "{:.1f}" for c in ("b_theory", "b_paper", "b_median",
-                                                                     "b_hdi_3%", "b_hdi_97%")}), "",
+                  _table(inert, ["setting", "b_theory", "b_paper", "b_median", "b_hdi_3%", "b_hdi_97%", *cal_cols,
+                                 "records", "converged"],
+                         {c: "{:.1f}" for c in ("b_theory", "b_paper", "b_median", "b_hdi_3%", "b_hdi_97%",
+                                                *cal_cols)}), "",
+                  _calibration_text(inert, plan.calibration, truth_b, "b_cal_"), "",
                   "![theory against identification](theory_vs_identified.png)", "",
                   "Per record (`inertance_records.csv`)" + _record_coverage(recs, truth_b) + ":", "",
                   _table(recs, ["record", "b_mean", "b_hdi_3%", "b_hdi_97%", "b_r_hat", "iterations", "converged"],
@@ -135,14 +165,14 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
         lines += ["## Inertance added per flywheel", "",
                   "A weighted least-squares regression of the per-setting posteriors on the numbers of small and "
                   f"big flywheels: {sent}.", "",
-                  _table(reg, [c for c in ("term", "theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%",
-                                           "covers_theory", "covers_truth") if c in reg[0]],
-                         {c: "{:.1f}" for c in ("theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%")}), "",
+                  _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]],
+                         {c: "{:.1f}" for c in REGRESSION_COLUMNS[1:7] + REGRESSION_COLUMNS[9:11]}), "",
                   "The records were generated with the paper's identified b per setting, not the geometry's: "
                   "`truth` is what the regression gives on those values, `theory` the geometry."
                   if "truth" in reg[0] else "", ""]
     if tables.get("joint"):
-        lines += _joint_section(tables["joint"], tables.get("joint_regression", []), tables["joint_info"])
+        lines += _joint_section(tables["joint"], tables.get("joint_regression", []), tables["joint_info"],
+                                plan.calibration, truth_b)
     if phi:
         lines += ["## Fit accuracy phi (the paper's Table 2, with uncertainty)", "",
                   "phi (eq. 5) on the 30 Hz low-passed accelerations inside the likelihood's window, for every "

@@ -105,22 +105,25 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     fits = collect(out / "fits")
     joint = run_joint(plan, out, fits, records, processes=processes, progress=on_joint_step) if plan.joint else None
     t_joint = time.perf_counter()
-    inert = inertance_table(fits)
+    cal = plan.calibration
+    inert = inertance_table(fits, calibration=cal)
     # generated records are made with the paper's parameters; a user's records have no truth
     truth = None if plan.records_dir else {s: paper_parameters(s) for s in plan.settings}
     truth_b = None if truth is None else {s: p.b for s, p in truth.items()}
     tables = {
-        "records": record_table(fits), "inertance": inert, "regression": flywheel_regression(inert, truth_b=truth_b),
+        "records": record_table(fits), "inertance": inert, "regression": flywheel_regression(inert, truth_b=truth_b, calibration=cal),
         "phi": phi_table(fits), "models": model_comparison(fits), "contraction": contraction_table(fits),
     }
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
              "phi": "phi.csv", "models": "model_comparison.csv", "contraction": "contraction.csv"}
     if joint is not None:
         truth_app = None if truth is None else {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()}
-        tables["joint"] = joint_inertance(joint.summary, inert, truth_b=truth_b, truth_app=truth_app)
+        tables["joint"] = joint_inertance(joint.summary, inert, truth_b=truth_b, truth_app=truth_app, calibration=cal)
+        mass = {r["setting"]: r["moving_mass"] for r in inert}
         tables["joint_regression"] = flywheel_regression(
-            [{"setting": r["setting"], "b_median": r["b_joint_mean"], "b_sd": r["b_joint_sd"]} for r in tables["joint"]],
-            truth_b=truth_b)
+            [{"setting": r["setting"], "b_median": r["b_joint_mean"], "b_sd": r["b_joint_sd"],
+              "moving_mass": mass[r["setting"]]} for r in tables["joint"]],
+            truth_b=truth_b, calibration=cal)
         tables["joint_info"] = {"converged": joint.converged, "reason": joint.reason, "iterations": joint.iterations}
         files.update(joint="joint_inertance.csv", joint_regression="flywheels_joint.csv")
     for key, name in files.items():
