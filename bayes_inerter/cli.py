@@ -197,10 +197,10 @@ def cmd_study(args) -> int:
         from .records.sensitivity import SensorCalibration
 
         u_force, u_accel = args.sensor_uncertainty
-        try:
-            changes["calibration"] = SensorCalibration(force=u_force / 100, accel=u_accel / 100)
-        except ValueError as err:
-            raise CliError(f"--sensor-uncertainty: {err}") from None
+        if not (u_force < 50 and u_accel < 50):
+            raise CliError(f"--sensor-uncertainty takes two percentages from 0 to below 50, got {u_force:g} "
+                           f"and {u_accel:g}")
+        changes["calibration"] = SensorCalibration(force=u_force / 100, accel=u_accel / 100)
     if args.records:
         if not Path(args.records).is_dir():
             raise CliError(f"--records {args.records}: not a folder of CSV records")

@@ -68,6 +68,10 @@ def test_calibration_adds_its_share_in_quadrature():
     assert cal.inertance_sd(3000.0, 4.0, 100.0) == pytest.approx(math.hypot(4.0, 15.5))
     assert SensorCalibration(0.0, 0.0).inertance_sd(3000.0, 4.0, 100.0) == pytest.approx(4.0)
     assert cal.as_dict() == {"force": 0.003, "accel": 0.004}
+    # an unknown sd or moving mass gives an unknown total, not an error at the end of a long study
+    assert math.isnan(cal.inertance_sd(3000.0, math.nan, 100.0)) and math.isnan(cal.inertance_sd(3000.0, 4.0, math.nan))
+    with pytest.raises(ValueError, match="non-negative"):
+        cal.inertance_sd(3000.0, -1.0)
 
 
 @pytest.mark.parametrize("bad", [-0.01, 0.5, math.nan, "1 %"])

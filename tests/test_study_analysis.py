@@ -1,6 +1,7 @@
 """Study tables from synthetic fits (no sampling): combining records, the flywheel
 regression, and the report's sentences."""
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -109,7 +110,8 @@ def test_report_names_the_settings_whose_sd_was_widened():
     rows = inertance_table([fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1030.0, 20.0),
                             fake_fit("A2", 0.5, 2000.0, 10.0), fake_fit("A2", 1.0, 2010.0, 10.0)])
     text = _inertance_text(rows, {"A1": 1006.0, "A2": 2005.0})
-    assert "Birge ratio" in text and "A1 (1.3)" in text  # sqrt(1.8) = 1.34
+    assert "Birge ratio" in text and "A1 (1.34)" in text  # sqrt(1.8)
+    assert "beyond chance" not in text  # chi2 1.8 on 1 degree of freedom: p = 0.18
     assert "A2 (" not in text  # its records agree (chi2 0.5 on 1 degree of freedom)
 
 
@@ -131,10 +133,16 @@ def test_calibration_widens_b_by_the_sensors_share_of_b_plus_the_moving_mass():
 
     reg = {r["term"]: r for r in flywheel_regression(list(rows.values()), calibration=cal,
                                                      truth_b={"A0": 700.0, "A1": 1000.0, "B1": 10000.0})}
-    small, base = reg["per small flywheel"], reg["base (A0)"]
-    assert small["cal_sd"] == pytest.approx(np.hypot(small["sd"], small["mean"] * 0.005))  # an increment: no mass
-    assert base["cal_sd"] == pytest.approx(np.hypot(base["sd"], (base["mean"] + 65.0) * 0.005))  # A0's 65 kg
+    small, big, base = reg["per small flywheel"], reg["per big flywheel"], reg["base (A0)"]
+    # three settings, three terms: the moving masses 65, 70, 75 kg regress exactly to 65 + 5 per small flywheel
+    # (A1 has one) + 10 per big one (B1 has one); each term's share is u (term + its mass term)
+    assert base["cal_sd"] == pytest.approx(np.hypot(base["sd"], (base["mean"] + 65.0) * 0.005))
+    assert small["cal_sd"] == pytest.approx(np.hypot(small["sd"], (small["mean"] + 5.0) * 0.005))
+    assert big["cal_sd"] == pytest.approx(np.hypot(big["sd"], (big["mean"] + 10.0) * 0.005))
     assert small["covers_truth_cal"]
+    # a row without a moving mass: its share is unknown, not zero
+    bare = [{k: v for k, v in r.items() if k != "moving_mass"} for r in rows.values()]
+    assert all(math.isnan(r["cal_sd"]) for r in flywheel_regression(bare, calibration=cal))
 
     joint = [{"name": "b_A1", "mean": 1030.0, "sd": 1.0, "hdi_3%": 1028.0, "hdi_97%": 1032.0, "r_hat": 1.0,
               "ess_bulk": 500.0}]
@@ -142,5 +150,31 @@ def test_calibration_widens_b_by_the_sensors_share_of_b_plus_the_moving_mass():
     # 30 kg off: outside both intervals (1.88 * hypot(1, 5.5) = 10.5 kg with the calibration)
     assert not j["covers_truth"] and not j["covers_truth_cal"]
     assert j["b_joint_cal_sd"] == pytest.approx(np.hypot(1.0, (1030.0 + 70.0) * 0.005))
-    j = joint_inertance([{**joint[0], "mean": 1008.0, "hdi_3%": 1006.0, "hdi_97%": 1010.0}], [a1], truth_b={"A1": 1000.0}, calibration=cal)[0]
+    near = [{**joint[0], "mean": 1008.0, "hdi_3%": 1006.0, "hdi_97%": 1010.0}]
+    j = joint_inertance(near, [a1], truth_b={"A1": 1000.0}, calibration=cal)[0]
     assert not j["covers_truth"] and j["covers_truth_cal"]  # 8 kg off: within 1.88 * 5.5 = 10.4 kg
+
+
+def test_report_on_calibration_says_what_the_generated_records_can_check():
+    from bayes_inerter.records.sensitivity import SensorCalibration
+    from bayes_inerter.study.report import _calibration_text
+
+    fits = [fake_fit("A0", 1.0, 700.0, 2.0), fake_fit("A1", 1.0, 1000.0, 2.0)]
+    for f in fits:
+        f.info.update(m_s=20.0, m_B=50.0)
+    rows = inertance_table(fits, calibration=SensorCalibration())
+    truth = {"A0": 712.0, "A1": 1000.0}  # A0 12 kg off: 1.88 * hypot(2, 770 * 0.0056) = 8.9 kg, outside
+    exact = _calibration_text(rows, SensorCalibration(), truth, "b_cal_", (1.0, 1.0))
+    assert "0.56 %" in exact and "records-alone intervals are the ones to hold" in exact and "of 2" not in exact
+    off = _calibration_text(rows, SensorCalibration(), truth, "b_cal_", (1.01, 1.0))
+    assert "hold the generating b for 1 of 2 settings" in off
+    assert "taken as exact" in _calibration_text(rows, SensorCalibration(0.0, 0.0), truth, "b_cal_", (1.0, 1.0))
+    assert _calibration_text(inertance_table(fits), SensorCalibration(), truth, "b_cal_") == ""  # no b_cal columns
+
+
+def test_report_flags_records_that_disagree_beyond_chance():
+    from bayes_inerter.study.report import _inertance_text
+
+    # 1000 +- 1 against 1010 +- 1: chi2 50 on 1 degree of freedom
+    rows = inertance_table([fake_fit("A1", 0.5, 1000.0, 1.0), fake_fit("A1", 1.0, 1010.0, 1.0)])
+    assert "A1 the disagreement is beyond chance" in _inertance_text(rows, None)

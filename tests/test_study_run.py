@@ -128,8 +128,22 @@ def test_study_on_a_local_dask_cluster(study, tmp_path):
 def test_cli_study_refuses_a_sensor_uncertainty_that_is_not_a_small_percentage(tmp_path, capsys):
     code = main(["study", "--quick", "--sensor-uncertainty", "60", "0.5", "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
-    assert code == 1 and err.startswith("error: --sensor-uncertainty") and "Traceback" not in err
-    assert not (tmp_path / "o").exists()
+    assert code == 1 and err.startswith("error: --sensor-uncertainty") and "percentages" in err and "60" in err
+    assert "Traceback" not in err and not (tmp_path / "o").exists()
+
+
+def test_cli_study_takes_the_sensor_uncertainty_in_percent(tmp_path, monkeypatch):
+    import bayes_inerter.study as study_pkg
+
+    seen = []
+
+    def fake_run_study(plan, out, **kwargs):
+        seen.append(plan)
+        raise KeyboardInterrupt  # stop here: only the plan matters
+
+    monkeypatch.setattr(study_pkg, "run_study", fake_run_study)
+    assert main(["study", "--quick", "--sensor-uncertainty", "0.25", "1", "--out", str(tmp_path / "o")]) == 130
+    assert seen[0].calibration.force == pytest.approx(0.0025) and seen[0].calibration.accel == pytest.approx(0.01)
 
 
 def test_cli_study_refuses_a_missing_records_folder(tmp_path, capsys):

@@ -7,7 +7,8 @@ masses, inertance, viscous coefficients, stiffnesses and dampings are ``s = g_F 
 times the true ones and whose Coulomb forces are ``g_F`` times the true ones: its
 displacement is then ``g_a`` times the true one, each term of the equations of motion
 ``g_F`` times its true value (the Coulomb force's sign follows the velocity, which keeps
-its sign). The records alone therefore cannot tell ``s`` from 1. The likelihood holds the masses
+its sign). The likelihood, which compares the acceleration simulated from the recorded force with
+the recorded one, therefore cannot tell ``s`` from 1. The likelihood holds the masses
 m_s and m_B at their known values, so the identified inertance absorbs the rest: in the
 rigid-body limit ``m + b_id = s (m + b)``, with ``m = m_s + m_B`` the moving mass, and
 
@@ -22,9 +23,11 @@ b_id with mean ``mu`` and sd ``sd``,
 
     sd_total^2 = sd^2 + ((mu + m) u)^2
 
-(the type-B combination of the GUM). The calibration's share is common to every setting
-of one study (one pair of sensors); a difference of two settings' inertances (an
-increment per flywheel) carries ``u`` times the difference.
+(the GUM's law of propagation: the posterior's sd with a type-B share). The
+calibration's share is common to every setting of one study (one pair of sensors); a
+difference of two settings' inertances (an increment per flywheel) carries ``u`` times
+the difference of ``b + m``: the moving mass differs between settings where m_s holds
+the flywheels.
 """
 
 from __future__ import annotations
@@ -54,7 +57,8 @@ class SensorCalibration:
         for name in ("force", "accel"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and 0 <= value < 0.5):
-                raise ValueError(f"{name} sensitivity uncertainty must be a fraction in [0, 0.5), got {value!r}")
+                raise ValueError(f"the {name} sensor's sensitivity uncertainty must be a fraction from 0 to below 0.5 "
+                                 f"(50 %), got {value!r}")
 
     @property
     def ratio_sd(self) -> float:
@@ -64,10 +68,11 @@ class SensorCalibration:
     def inertance_sd(self, mean: float, sd: float, moving_mass: float = 0.0) -> float:
         """The sd of an inertance identified with posterior ``mean`` and ``sd`` (kg), the
         calibration's share added: sqrt(sd^2 + ((mean + moving_mass) u)^2). For a
-        difference of inertances (an increment), ``moving_mass`` is 0."""
-        if not (sd >= 0 and moving_mass >= 0):
-            raise ValueError(f"sd and moving mass must be non-negative, got {sd!r} and {moving_mass!r}")
-        return math.hypot(sd, (abs(mean) + moving_mass) * self.ratio_sd)
+        difference of inertances, the difference of the moving masses. A nan in (an
+        unknown sd or mass) gives nan out."""
+        if sd < 0:
+            raise ValueError(f"sd must be non-negative, got {sd!r}")
+        return math.hypot(sd, abs(mean + moving_mass) * self.ratio_sd)
 
     def as_dict(self) -> dict:
         return {"force": self.force, "accel": self.accel}

@@ -9,14 +9,18 @@ per-record posteriors); a chi-square of the per-record means about it says wheth
 they agree, and where they disagree by more than their sds allow (chi-square above its
 degrees of freedom) the combined sd is scaled up by the Birge ratio
 sqrt(chi2 / (records - 1)), the Particle Data Group's rule for averaging discrepant
-measurements: their sds are then taken to be too small by a common factor. The increments per flywheel come from a weighted least-squares regression
-of those per-setting normals on the numbers of small and big flywheels (a normal
-posterior for base, per-small and per-big inertance under flat priors).
+measurements: their sds are then taken to be too small by a common factor. (A
+chi-square far beyond that, p < 1 %, says more: b may change with the frequency; the
+report flags it.) The increments per flywheel come from a weighted least-squares
+regression of those per-setting normals on the numbers of small and big flywheels (a
+normal posterior for base, per-small and per-big inertance under flat priors).
 
 The sensors' calibration (``records.sensitivity.SensorCalibration``) is what no record
 can check: with one, every table also gives b's sd and 94 % interval with the
-calibration's share added (``b_cal_*`` columns, ``cal_*`` in the regression), beside
-the records-alone ones.
+calibration's share added (``b_cal_*`` columns, ``cal_*`` in the regression; normal
+intervals, mean +- 1.88 sd), beside the records-alone ones. A share is ``u`` times the
+inertance plus the moving mass m_s + m_B; for the regression's terms, ``u`` times the
+term plus the same regression of the moving masses (m_s grows with the flywheels).
 """
 
 from __future__ import annotations
@@ -127,10 +131,10 @@ def _with_calibration(row: dict, calibration: SensorCalibration | None, mean: fl
                       prefix: str, truth: float | None = None) -> None:
     """Add ``<prefix>sd``, ``<prefix>hdi_3%``, ``<prefix>hdi_97%`` (and ``covers_truth_cal``
     with ``truth``) of an inertance of posterior ``mean`` and ``sd`` with the calibration's
-    share for ``mass`` kg of moving mass (0 for an increment; nan: unknown, taken as 0)."""
+    share for ``mass`` kg of moving mass (nan when the mass is unknown: then so are they)."""
     if calibration is None:
         return
-    total = calibration.inertance_sd(mean, sd, 0.0 if math.isnan(mass) else mass)
+    total = calibration.inertance_sd(mean, sd, mass)
     row.update({f"{prefix}sd": total, f"{prefix}hdi_3%": mean - Z94 * total, f"{prefix}hdi_97%": mean + Z94 * total})
     if truth is not None:
         row["covers_truth_cal"] = bool(abs(mean - truth) <= Z94 * total)
@@ -216,9 +220,8 @@ def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | No
     increments. With ``truth_b`` (setting -> the b its records were generated with), the
     same regression of those values is given as ``truth`` and whether the interval
     holds it (``covers_truth``). With ``calibration``: ``cal_sd``, ``cal_hdi_3%``,
-    ``cal_hdi_97%`` (and ``covers_truth_cal``), the sensors' share added: ``u`` times an
-    increment, ``u`` times base plus the moving mass of a setting without flywheels
-    (its row's ``moving_mass``; 0 when no such row says).
+    ``cal_hdi_97%`` (and ``covers_truth_cal``), the sensors' share added: ``u`` times the
+    term plus the same regression of the rows' ``moving_mass`` (nan where a row has none).
     """
     geometry = geometry or DEFAULT_GEOMETRY
     if not inertance:
@@ -240,7 +243,8 @@ def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | No
     truth = None
     if truth_b and all(r["setting"] in truth_b for r in inertance):
         truth = cov @ (X.T @ (w * np.array([truth_b[r["setting"]] for r in inertance])))
-    base_mass = next((r.get("moving_mass", math.nan) for r, a, b in zip(inertance, ns, nb) if a == b == 0), math.nan)
+    # b = r (b_id + m) - m for every setting, so each term's share is u (term + that term of m's regression)
+    mass_coef = cov @ (X.T @ (w * np.array([r.get("moving_mass", math.nan) for r in inertance], dtype=float)))
     rows = []
     for k, ((name, _, theory), c, var) in enumerate(zip(terms, coef, np.diag(cov))):
         sd = math.sqrt(var)
@@ -248,7 +252,7 @@ def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | No
                "hdi_97%": c + Z94 * sd, "covers_theory": bool(abs(c - theory) <= Z94 * sd)}
         if truth is not None:
             row.update(truth=float(truth[k]), covers_truth=bool(abs(c - truth[k]) <= Z94 * sd))
-        _with_calibration(row, calibration, float(c), sd, base_mass if k == 0 else 0.0, "cal_",
+        _with_calibration(row, calibration, float(c), sd, float(mass_coef[k]), "cal_",
                           None if truth is None else float(truth[k]))
         rows.append(row)
     return rows

@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from scipy import stats
+
 __all__ = ["write_report", "design_report", "calibration_report", "calibration_comparison", "NOT_IDENTIFIED"]
 
 #: Contraction below which a parameter is reported as not identified by the records.
@@ -44,36 +46,50 @@ def _inertance_text(rows, truth_b: dict | None) -> str:
         text += (f" The records were generated with known inertances: the 94 % interval holds the true value for "
                  f"{held} of {held + len(missed)} settings" + (f" and misses it for {', '.join(missed)}." if missed
                                                                 else "."))
-    scaled = [f"{r['setting']} ({r['scale']:.1f})" for r in rows if r.get("scale", 1.0) > 1.0]
+    scaled = [f"{r['setting']} ({r['scale']:.2f})" for r in rows if r.get("scale", 1.0) > 1.0]
     if scaled:
         text += (" Where a setting's records at different frequencies disagree on b by more than their intervals "
                  "allow (chi-square of the per-record means above its degrees of freedom), the combined sd is "
                  "widened by the Birge ratio sqrt(chi2 / (records - 1)): " + ", ".join(scaled) + ".")
+    gross = [r["setting"] for r in rows if r["records"] > 1 and stats.chi2.sf(r["chi2"], r["records"] - 1) < 0.01]
+    if gross:
+        text += (f" For {', '.join(gross)} the disagreement is beyond chance (p < 1 %): rather than intervals too "
+                 "narrow by a common factor, which is what the widening assumes, it may mean that the identified "
+                 "b changes with the drive frequency.")
     return text
 
 
-def _calibration_text(rows, calibration, truth_b: dict | None, prefix: str) -> str:
-    """What the sensors' calibration adds to b (``<prefix>hdi_*`` columns), and how often
-    the widened intervals hold the generating b."""
+def _calibration_text(rows, calibration, truth_b: dict | None, prefix: str, gains=None) -> str:
+    """What the sensors' calibration adds to b (``<prefix>hdi_*`` columns). ``gains``: the
+    (load cell, accelerometer) sensitivity errors the records were generated with (None
+    for a user's records); with errors and ``truth_b``, how often the widened intervals
+    hold the generating b."""
     if not rows or f"{prefix}hdi_3%" not in rows[0]:
         return ""
     u = calibration.ratio_sd
+    if u == 0:
+        return ("The sensors' sensitivities are taken as exact (`--sensor-uncertainty 0 0`): no calibration "
+                "uncertainty is added to b.")
     text = (f"These intervals take the sensors' sensitivities as exact. With the load cell's sensitivity known "
             f"to {100 * calibration.force:.2g} % and the accelerometer's to {100 * calibration.accel:.2g} % (standard "
             f"uncertainties, an **assumption**: `--sensor-uncertainty`), a record reads the same whether b or the "
             f"sensitivities' ratio is off (`records.sensitivity`), so b carries a further {100 * u:.2g} % of "
             f"b plus the moving mass that no record can reduce: the 94 % intervals widen to "
             + "; ".join(f"{r['setting']} {r[f'{prefix}hdi_3%']:.0f}-{r[f'{prefix}hdi_97%']:.0f}" for r in rows) + ".")
-    if truth_b:
-        known = [r for r in rows if r["setting"] in truth_b]
-        held = sum(r[f"{prefix}hdi_3%"] <= truth_b[r["setting"]] <= r[f"{prefix}hdi_97%"] for r in known)
-        text += (f" They hold the generating b for {held} of {len(known)} settings; the records were generated "
-                 "with exact sensitivities, so this says how wide a real measurement's interval is, not that the "
-                 "records alone pin b.")
+    if truth_b and gains is not None:
+        if tuple(gains) == (1.0, 1.0):
+            text += (" The records were generated with exact sensitivities, so the records-alone intervals are the "
+                     "ones to hold against the generating b; these say how wide a real measurement's interval is.")
+        else:
+            known = [r for r in rows if r["setting"] in truth_b]
+            held = sum(r[f"{prefix}hdi_3%"] <= truth_b[r["setting"]] <= r[f"{prefix}hdi_97%"] for r in known)
+            text += (f" The records were generated with a load cell reading {gains[0]:g} and an accelerometer "
+                     f"{gains[1]:g} times the truth: these intervals hold the generating b for {held} of "
+                     f"{len(known)} settings.")
     return text
 
 
-def _joint_section(rows, reg, info, calibration=None, truth_b=None) -> list[str]:
+def _joint_section(rows, reg, info, calibration=None, truth_b=None, gains=None) -> list[str]:
     status = ("converged" if info["converged"] else
               f"**not converged** after {info['iterations']} steps ({info['reason']}): read it as indicative")
     text = ("One set of friction and deformation parameters for every record and one b per setting, as the paper "
@@ -90,7 +106,7 @@ def _joint_section(rows, reg, info, calibration=None, truth_b=None) -> list[str]
     text += ("The joint b's are correlated through the shared parameters; the regression below treats them as "
              "independent normals, an approximation.")
     if calibration is not None:
-        text += " " + _calibration_text(rows, calibration, truth_b, "b_joint_cal_")
+        text += " " + _calibration_text(rows, calibration, truth_b, "b_joint_cal_", gains)
     cols = ("setting", "b_theory", "b_truth", "b_single_median", "b_joint_mean", "b_joint_hdi_3%", "b_joint_hdi_97%",
             "covers_truth", "b_app_truth", "b_app_joint_hdi_3%", "b_app_joint_hdi_97%", "covers_truth_app",
             "b_joint_cal_hdi_3%", "b_joint_cal_hdi_97%", "r_hat", "ess_bulk")
@@ -102,14 +118,15 @@ def _joint_section(rows, reg, info, calibration=None, truth_b=None) -> list[str]
            "![joint posterior of b](joint/corner.png)", ""]
     if reg:
         out += ["Inertance added per flywheel from the joint b's (`flywheels_joint.csv`):", "",
-                _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]],
-                       {c: "{:.1f}" for c in REGRESSION_COLUMNS[1:7] + REGRESSION_COLUMNS[9:11]}), ""]
+                _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]], REGRESSION_FORMATS), ""]
     return out
 
 
 #: The regression's columns in the report (``cal_*``: the sensors' calibration added).
 REGRESSION_COLUMNS = ("term", "theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%", "covers_theory", "covers_truth",
                       "cal_hdi_3%", "cal_hdi_97%", "covers_truth_cal")
+REGRESSION_FORMATS = {c: "{:.1f}" for c in ("theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%", "cal_hdi_3%",
+                                            "cal_hdi_97%")}
 
 
 def _record_coverage(recs, truth_b) -> str:
@@ -129,6 +146,7 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
     done = [o for o in outcomes if o["status"] != "failed"]
     failed = [o for o in outcomes if o["status"] == "failed"]
     n_conv = sum(bool(o.get("converged")) for o in done)
+    gains = None if plan.records_dir else (plan.generator.force_gain, plan.generator.accel_gain)
     lines = [f"# Study `{plan.name}`: the inertance of each flywheel setting, with uncertainty", ""]
     source = (f"the records in `{plan.records_dir}`" if plan.records_dir else
               f"records generated at the paper's parameters (settings {', '.join(plan.settings)}; "
@@ -151,7 +169,7 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
                                  "records", "converged"],
                          {c: "{:.1f}" for c in ("b_theory", "b_paper", "b_median", "b_hdi_3%", "b_hdi_97%",
                                                 *cal_cols)}), "",
-                  _calibration_text(inert, plan.calibration, truth_b, "b_cal_"), "",
+                  _calibration_text(inert, plan.calibration, truth_b, "b_cal_", gains), "",
                   "![theory against identification](theory_vs_identified.png)", "",
                   "Per record (`inertance_records.csv`)" + _record_coverage(recs, truth_b) + ":", "",
                   _table(recs, ["record", "b_mean", "b_hdi_3%", "b_hdi_97%", "b_r_hat", "iterations", "converged"],
@@ -165,14 +183,13 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
         lines += ["## Inertance added per flywheel", "",
                   "A weighted least-squares regression of the per-setting posteriors on the numbers of small and "
                   f"big flywheels: {sent}.", "",
-                  _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]],
-                         {c: "{:.1f}" for c in REGRESSION_COLUMNS[1:7] + REGRESSION_COLUMNS[9:11]}), "",
+                  _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]], REGRESSION_FORMATS), "",
                   "The records were generated with the paper's identified b per setting, not the geometry's: "
                   "`truth` is what the regression gives on those values, `theory` the geometry."
                   if "truth" in reg[0] else "", ""]
     if tables.get("joint"):
         lines += _joint_section(tables["joint"], tables.get("joint_regression", []), tables["joint_info"],
-                                plan.calibration, truth_b)
+                                plan.calibration, truth_b, gains)
     if phi:
         lines += ["## Fit accuracy phi (the paper's Table 2, with uncertainty)", "",
                   "phi (eq. 5) on the 30 Hz low-passed accelerations inside the likelihood's window, for every "

@@ -111,7 +111,8 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     truth = None if plan.records_dir else {s: paper_parameters(s) for s in plan.settings}
     truth_b = None if truth is None else {s: p.b for s, p in truth.items()}
     tables = {
-        "records": record_table(fits), "inertance": inert, "regression": flywheel_regression(inert, truth_b=truth_b, calibration=cal),
+        "records": record_table(fits), "inertance": inert,
+        "regression": flywheel_regression(inert, truth_b=truth_b, calibration=cal),
         "phi": phi_table(fits), "models": model_comparison(fits), "contraction": contraction_table(fits),
     }
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
