@@ -15,11 +15,11 @@ The big-flywheel settings are where b_app - b = b^2 k_n / c_n^2 is largest (abou
 """
 
 import argparse
-import csv
 import sys
 from pathlib import Path
 
 import numpy as np
+from _table import write_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -72,15 +72,7 @@ def main():
             rows.append(row)
     except ValueError as exc:
         sys.exit(f"error: {exc}")
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "nut_seeds.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    for row in rows:
-        print(", ".join(f"{k} {v}" for k, v in row.items()))
-    print(f"wrote {out / 'nut_seeds.csv'}")
+    print(f"wrote {write_rows(Path(args.out) / 'nut_seeds.csv', rows)}")
 
 
 if __name__ == "__main__":

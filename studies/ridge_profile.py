@@ -12,12 +12,12 @@ the first point starts at the generating parameters. Writes
 """
 
 import argparse
-import csv
 import math
 import sys
 from pathlib import Path
 
 import numpy as np
+from _table import write_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -76,15 +76,8 @@ def main():
         v = model.values(theta)
         rows.append({"log10_k_n": round(log_k / math.log(10), 3), "log_post": round(lp, 2), "b": round(v["b"], 2),
                      "c_f": round(v["c_f"], 1), "c_n": f"{v['c_n']:.4g}", "k_B": f"{v['k_B']:.4g}"})
-    out = Path(args.out) / f"{args.setting}_{args.freq:g}Hz"
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "profile.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    for r in rows:
-        print(", ".join(f"{k} {v}" for k, v in r.items()))
-    print(f"generating values: b {truth['b']}, log10 k_n {math.log10(truth['k_n']):.2f}; wrote {out / 'profile.csv'}")
+    path = write_rows(Path(args.out) / f"{args.setting}_{args.freq:g}Hz" / "profile.csv", rows)
+    print(f"generating values: b {truth['b']}, log10 k_n {math.log10(truth['k_n']):.2f}; wrote {path}")
 
 
 if __name__ == "__main__":

@@ -17,9 +17,10 @@ which the records fix.
 """
 
 import argparse
-import csv
 import sys
 from pathlib import Path
+
+from _table import write_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -60,15 +61,7 @@ def main():
                          "b_app_corrected": round((v["b_app"] + m) / s - m, 2), "log_post": round(lp, 1)})
     except ValueError as exc:
         sys.exit(f"error: {exc}")
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "gains.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    for row in rows:
-        print(", ".join(f"{k} {v}" for k, v in row.items()))
-    print(f"wrote {out / 'gains.csv'}")
+    print(f"wrote {write_rows(Path(args.out) / 'gains.csv', rows)}")
 
 
 if __name__ == "__main__":
