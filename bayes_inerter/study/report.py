@@ -40,9 +40,9 @@ def _inertance_text(rows, truth_b: dict | None) -> str:
                      f"{100 * ratio:+.1f} % against theory)")
     text = "Posterior inertance per setting (median, 94 % interval): " + "; ".join(parts) + "."
     if truth_b:
-        missed = [r["setting"] for r in rows if r["setting"] in truth_b
-                  and not r["b_hdi_3%"] <= truth_b[r["setting"]] <= r["b_hdi_97%"]]
-        held = len([r for r in rows if r["setting"] in truth_b]) - len(missed)
+        known, missed = _coverage(rows, truth_b)
+        missed = [r["setting"] for r in missed]
+        held = len(known) - len(missed)
         text += (f" The records were generated with known inertances: the 94 % interval holds the true value for "
                  f"{held} of {held + len(missed)} settings" + (f" and misses it for {', '.join(missed)}." if missed
                                                                 else "."))
@@ -81,11 +81,10 @@ def _calibration_text(rows, calibration, truth_b: dict | None, prefix: str, gain
             text += (" The records were generated with exact sensitivities, so the records-alone intervals are the "
                      "ones to hold against the generating b; these say how wide a real measurement's interval is.")
         else:
-            known = [r for r in rows if r["setting"] in truth_b]
-            held = sum(r[f"{prefix}hdi_3%"] <= truth_b[r["setting"]] <= r[f"{prefix}hdi_97%"] for r in known)
+            known, missed = _coverage(rows, truth_b, prefix)
             text += (f" The records were generated with a load cell reading {gains[0]:g} and an accelerometer "
-                     f"{gains[1]:g} times the truth: these intervals hold the generating b for {held} of "
-                     f"{len(known)} settings.")
+                     f"{gains[1]:g} times the truth: these intervals hold the generating b for "
+                     f"{len(known) - len(missed)} of {len(known)} settings.")
     return text
 
 
@@ -129,12 +128,20 @@ REGRESSION_FORMATS = {c: "{:.1f}" for c in ("theory", "truth", "mean", "sd", "hd
                                             "cal_hdi_97%")}
 
 
+def _coverage(rows, truth_b: dict | None, prefix: str = "b_"):
+    """(rows whose setting has a generating b, those of them whose 94 % interval,
+    ``<prefix>hdi_3%`` to ``<prefix>hdi_97%``, misses it)."""
+    known = [r for r in rows if truth_b and r["setting"] in truth_b]
+    missed = [r for r in known if not r[f"{prefix}hdi_3%"] <= truth_b[r["setting"]] <= r[f"{prefix}hdi_97%"]]
+    return known, missed
+
+
 def _record_coverage(recs, truth_b) -> str:
     """', whose 94 % intervals hold the generating b for n of m records (missed: ...)'."""
-    known = [r for r in recs if truth_b and r["setting"] in truth_b]
+    known, missed = _coverage(recs, truth_b)
     if not known:
         return ""
-    missed = [r["record"] for r in known if not r["b_hdi_3%"] <= truth_b[r["setting"]] <= r["b_hdi_97%"]]
+    missed = [r["record"] for r in missed]
     return (f", whose 94 % intervals hold the generating b for {len(known) - len(missed)} of {len(known)} records"
             + (f" (missed: {', '.join(missed)})" if missed else ""))
 
