@@ -39,8 +39,8 @@ NM_MAXITER = 800  # Nelder-Mead iterations on the full posterior
 #: Nelder-Mead's simplex collapses along this posterior's ridges and stops far short of
 #: the optimum: on a generated A3 record at 1 Hz one pass from the evolved point ended
 #: 167 nats below where three more passes, each from the last one's result with a fresh
-#: simplex, got to (the third gained 0.2 nat). ``find_start`` restarts while a pass gains more than RESTART_GAIN
-#: nats, at most NM_RESTARTS times.
+#: simplex, got to (the third gained 0.2 nat). ``find_start`` restarts while a pass gains
+#: more than RESTART_GAIN nats, at most NM_RESTARTS times.
 NM_RESTARTS = 6
 RESTART_GAIN = 0.5
 
