@@ -29,12 +29,31 @@ import numpy as np
 
 from .checkpoint import CheckpointError, new_checkpoint, open_checkpoint
 from .model import PosteriorModel
+from .moves import NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, sse
 
-__all__ = ["Convergence", "CheckpointError", "SamplerRun", "run_sampler", "record_digest", "check_run_options"]
+__all__ = ["Convergence", "CheckpointError", "SamplerRun", "run_sampler", "record_digest", "check_run_options",
+           "default_moves"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
+
+#: Share of the steps that jump along the nut's ridge (:class:`.moves.NutRidgeMove`)
+#: in models that have one; the other moves keep their proportions in the rest.
+RIDGE_WEIGHT = 0.2
+
+
+def default_moves(model, ridge_weight: float = RIDGE_WEIGHT) -> list:
+    """emcee's moves for ``model``: :data:`DEFAULT_MOVES`, and where the model samples
+    b, k_n and c_n in log scale, :class:`.moves.NutRidgeMove` in ``ridge_weight`` of
+    the steps (0: none)."""
+    if not 0.0 <= ridge_weight < 1.0:
+        raise ValueError(f"ridge move weight must lie in [0, 1), got {ridge_weight}")
+    idx = ridge_indices(model.names, [model.all_priors[n].log_scale for n in model.names])
+    if idx is None or ridge_weight == 0.0:
+        return list(DEFAULT_MOVES)
+    k, c, b = idx
+    return [(m, w * (1.0 - ridge_weight)) for m, w in DEFAULT_MOVES] + [(NutRidgeMove(k, c, b), ridge_weight)]
 
 
 def default_walkers(ndim: int) -> int:
@@ -179,7 +198,7 @@ def run_sampler(
     pool = multiprocessing.get_context("fork").Pool(processes) if processes > 1 else None
     try:
         sampler = emcee.EnsembleSampler(
-            nwalkers, model.ndim, _log_prob, pool=pool, moves=moves or DEFAULT_MOVES,
+            nwalkers, model.ndim, _log_prob, pool=pool, moves=moves or default_moves(model),
             backend=backend, blobs_dtype=float,
         )
         start_theta = None

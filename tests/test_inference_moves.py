@@ -1,0 +1,83 @@
+"""The nut-ridge move: it must leave the target invariant (its Jacobian matters), keep
+1 / b - k_n / c_n^2 where it is, and be used only where a model has the ridge."""
+
+import emcee
+import numpy as np
+import pytest
+from scipy import stats
+
+from bayes_inerter.inference.moves import NutRidgeMove, ridge_indices
+from bayes_inerter.inference.sampler import DEFAULT_MOVES, default_moves
+
+# A target in (log b, log k_n, log c_n) where the Jacobian b'/b is far from 1: c_n near
+# 1 and k_n spread over e^-2..e^2, so k_n / c_n^2 is as large as 1 / b.
+SD = np.array([0.5, 1.0, 1.0])
+
+
+def _log_target(x):
+    return np.sum(stats.norm.logpdf(x, 0.0, SD), axis=1)
+
+
+def _run(move, steps=30, n=4000):
+    rng = np.random.default_rng(1)
+    x0 = rng.normal(0.0, SD, size=(n, 3))  # exact draws: an invariant move keeps them so
+    sampler = emcee.EnsembleSampler(n, 3, _log_target, moves=[move], vectorize=True)
+    sampler.random_state = np.random.RandomState(2).get_state()
+    sampler.run_mcmc(x0, steps)
+    return sampler
+
+
+class _WithoutJacobian(NutRidgeMove):
+    def _propose(self, coords, random):
+        q, factors = super()._propose(coords, random)
+        return q, np.where(np.isfinite(factors), 0.0, factors)
+
+
+def _ks_pvalues(sampler):
+    x = sampler.get_last_sample().coords
+    return [stats.kstest(x[:, i], stats.norm(0.0, SD[i]).cdf).pvalue for i in (0, 1, 2)]
+
+
+def test_ridge_move_leaves_the_target_invariant():
+    sampler = _run(NutRidgeMove(1, 2, [0]))
+    assert 0.2 < np.mean(sampler.acceptance_fraction) < 0.9  # it does move
+    assert min(_ks_pvalues(sampler)) > 0.01
+
+
+def test_the_invariance_check_sees_a_missing_jacobian():
+    # the same check on the move without its Jacobian: the marginals drift away
+    assert min(_ks_pvalues(_run(_WithoutJacobian(1, 2, [0])))) < 1e-6
+
+
+def test_ridge_move_keeps_the_apparent_inertance_of_every_b():
+    move = NutRidgeMove(2, 3, [0, 1])
+    coords = np.log([[800.0, 20000.0, 4e5, 2.2e6], [900.0, 15000.0, 1e7, 1e6]])
+    q, factors = move._propose(coords, np.random.RandomState(0))
+
+    def inv_app(x):
+        return np.exp(-x[:, :2]) - (np.exp(x[:, 2]) / np.exp(2 * x[:, 3]))[:, None]
+
+    assert np.all(q[:, 2] != coords[:, 2])
+    np.testing.assert_array_equal(q[:, 3], coords[:, 3])  # c_n does not move
+    np.testing.assert_allclose(inv_app(q), inv_app(coords), rtol=1e-9)
+    np.testing.assert_allclose(factors, np.sum(q[:, :2] - coords[:, :2], axis=1))
+
+
+def test_ridge_indices_and_default_moves():
+    assert ridge_indices(["b", "f_0", "c_n", "k_n"], [True] * 4) == (3, 2, [0])
+    assert ridge_indices(["b_A0", "b_B2", "k_n", "c_n", "rho"], [True] * 4 + [False]) == (2, 3, [0, 1])
+    assert ridge_indices(["b", "f1_0", "c_f1"], [True] * 3) is None
+    assert ridge_indices(["b", "k_n", "c_n"], [True, False, True]) is None
+
+    class Model:
+        names = ["b", "k_n", "c_n", "sigma"]
+        all_priors = {n: type("P", (), {"log_scale": True})() for n in names}
+
+    moves = default_moves(Model(), 0.25)
+    assert isinstance(moves[-1][0], NutRidgeMove) and moves[-1][1] == 0.25
+    assert sum(w for _, w in moves) == pytest.approx(1.0)
+    assert default_moves(Model(), 0.0) == DEFAULT_MOVES
+    with pytest.raises(ValueError, match="weight"):
+        default_moves(Model(), 1.0)
+    with pytest.raises(ValueError, match="0 < min <= max"):
+        NutRidgeMove(0, 1, [2], scale_min=2.0, scale_max=1.0)
