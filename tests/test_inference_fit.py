@@ -48,6 +48,8 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     for group in ("posterior", "log_likelihood", "posterior_predictive", "observed_data", "sample_stats"):
         assert group in idata.groups()
     assert "phi" in idata.posterior
+    moves = json.loads((out / "fit.json").read_text())["moves"]
+    assert any(m.startswith("NutRidgeMove") for m in moves), moves  # the two-port model has the nut's ridge
 
 
 def test_same_seed_same_summary(tmp_path, record_file):

@@ -1,6 +1,7 @@
 """The joint model: one b per setting, shared frictions and deformations, sigma marginalised."""
 
 import dataclasses
+import json
 import math
 
 import numpy as np
@@ -87,6 +88,8 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     res = fit_joint(records, tmp_path / "joint", centres=centres, steps=6, plots=False)
     assert res.iterations == 6 and not res.converged
     assert (tmp_path / "joint" / "summary.csv").is_file() and (tmp_path / "joint" / "fit.json").is_file()
+    info = json.loads((tmp_path / "joint" / "fit.json").read_text())
+    assert any(m.startswith("NutRidgeMove") for m in info["moves"])  # moving every b with k_n
     names = [r["name"] for r in res.summary]
     assert names[:2] == ["b_A0", "b_A2"] and "phi" in names
     assert {"b_app_A0", "b_app_A2"} <= set(names)  # the inertance each setting shows through the nut

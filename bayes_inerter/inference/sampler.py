@@ -95,6 +95,8 @@ class SamplerRun:
     start_theta: np.ndarray | None = None
     #: what was done to continue a damaged checkpoint ("" when nothing was)
     recovered: str = ""
+    #: the moves of this run and their weights ("DEMove 0.48", ...)
+    moves: tuple = ()
 
     @property
     def iteration(self) -> int:
@@ -195,10 +197,12 @@ def run_sampler(
     else:
         backend, done = opened.backend, opened.steps
     _MODEL = model
+    moves = moves or default_moves(model)
+    used = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves)
     pool = multiprocessing.get_context("fork").Pool(processes) if processes > 1 else None
     try:
         sampler = emcee.EnsembleSampler(
-            nwalkers, model.ndim, _log_prob, pool=pool, moves=moves or default_moves(model),
+            nwalkers, model.ndim, _log_prob, pool=pool, moves=moves,
             backend=backend, blobs_dtype=float,
         )
         start_theta = None
@@ -227,7 +231,7 @@ def run_sampler(
             tau, rhat, ess = _diagnostics(sampler, conv)
             ok = _is_converged(sampler.iteration, tau, None, rhat, ess, conv)
             reason = "converged" if ok else _why_not(sampler.iteration, tau, rhat, ess, conv)
-            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered)
+            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used)
         previous = None
         while True:
             chunk = min(conv.check_every, conv.max_steps - sampler.iteration)
@@ -239,9 +243,10 @@ def run_sampler(
                 state = sampler.get_last_sample()
             tau, rhat, ess = _diagnostics(sampler, conv)
             if _is_converged(sampler.iteration, tau, previous, rhat, ess, conv):
-                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered)
+                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used)
             if sampler.iteration >= conv.max_steps:
-                return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, tau, rhat, ess, conv), start_theta, recovered)
+                return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, tau, rhat, ess, conv), start_theta,
+                                  recovered, used)
             previous = tau
     finally:
         if pool is not None:
