@@ -1,0 +1,90 @@
+"""What the nut-ridge move (``inference.moves.NutRidgeMove``) changes: the same record
+sampled from the same start and seed with emcee's moves alone and with the ridge move
+added (the default), side by side.
+
+    python studies/ridge_move.py [--record A3:1 ...] [--steps 1000] [--seed 0]
+        [--processes 2] [--out results/long-chain/ridge_move.csv]
+
+Records are the full study's (the paper grid generated with seed 0), named
+SETTING:FREQUENCY. Each (record, moves) pair is one chain on one process. Writes one row
+per chain: acceptance, the largest autocorrelation time and b's, R-hat and bulk ESS of
+the second half, b's and log10 k_n's 3rd, 50th and 97th percentiles over the second
+half, and whether b's lies between them, and prints them.
+"""
+
+import argparse
+import sys
+import tempfile
+import time
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _table import write_rows  # noqa: E402
+
+
+def _chain(job):
+    setting, freq, ridge, steps, seed, folder = job
+    from bayes_inerter.inference.diagnostics import rhat_ess
+    from bayes_inerter.inference.model import PosteriorModel
+    from bayes_inerter.inference.sampler import DEFAULT_MOVES, default_moves, run_sampler
+    from bayes_inerter.records.generator import paper_record
+
+    rec = paper_record(setting, freq, seed=0)
+    pm = PosteriorModel(rec)
+    moves = default_moves(pm) if ridge else list(DEFAULT_MOVES)
+    t0 = time.perf_counter()
+    run = run_sampler(pm, Path(folder) / f"{setting}_{freq:g}_{int(ridge)}.h5", steps=steps, seed=seed,
+                      moves=moves, fresh=True)
+    minutes = (time.perf_counter() - t0) / 60
+    half = run.sampler.get_chain()[steps // 2:]
+    rhat, ess = rhat_ess(half)
+    ib, ik = pm.names.index("b"), pm.names.index("k_n")
+    b = np.percentile(np.exp(half[..., ib]), [3, 50, 97])
+    lk = np.percentile(half[..., ik] / np.log(10), [3, 50, 97])
+    truth = rec.metadata["true_parameters"]["b"]
+    return {
+        "record": f"{setting}_{freq:g}Hz", "moves": "emcee + ridge" if ridge else "emcee", "steps": steps,
+        "minutes": round(minutes, 2), "acceptance": round(float(np.mean(run.sampler.acceptance_fraction)), 3),
+        "max_tau": round(float(np.max(run.tau)), 1), "tau_b": round(float(run.tau[ib]), 1),
+        "rhat_b": round(float(rhat[ib]), 3), "max_rhat": round(float(np.max(rhat)), 3),
+        "ess_b": round(float(ess[ib]), 1),
+        "b_3%": round(float(b[0]), 1), "b_50%": round(float(b[1]), 1), "b_97%": round(float(b[2]), 1),
+        "b_truth": round(float(truth), 1), "covers": bool(b[0] <= truth <= b[2]),
+        "log10_k_n_3%": round(float(lk[0]), 2), "log10_k_n_50%": round(float(lk[1]), 2),
+        "log10_k_n_97%": round(float(lk[2]), 2),
+        "log10_k_n_truth": round(float(np.log10(rec.metadata["true_parameters"]["k_n"])), 2),
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--record", action="append", default=None, help="SETTING:FREQUENCY (default A3:1)")
+    ap.add_argument("--steps", type=int, default=1000)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--processes", type=int, default=2)
+    ap.add_argument("--out", default=str(ROOT / "results" / "long-chain" / "ridge_move.csv"))
+    args = ap.parse_args()
+    jobs = []
+    with tempfile.TemporaryDirectory() as folder:
+        for item in args.record or ["A3:1"]:
+            try:
+                setting, freq = item.split(":")
+                freq = float(freq)
+            except ValueError:
+                sys.exit(f"error: --record takes SETTING:FREQUENCY, got {item!r}")
+            jobs += [(setting.upper(), freq, ridge, args.steps, args.seed, folder) for ridge in (False, True)]
+        try:
+            with get_context("fork").Pool(max(1, args.processes)) as pool:
+                rows = pool.map(_chain, jobs)
+        except ValueError as exc:
+            sys.exit(f"error: {exc}")
+    write_rows(args.out, rows)
+
+
+if __name__ == "__main__":
+    main()
