@@ -52,6 +52,7 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     assert any(m.startswith("NutRidgeMove") for m in moves), moves  # the two-port model has the nut's ridge
 
 
+@pytest.mark.slow  # 3 fits, about a minute; the resume tests check same-seed chains in CI
 def test_same_seed_same_summary(tmp_path, record_file):
     from bayes_inerter.records import read_record
 
