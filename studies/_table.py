@@ -1,7 +1,21 @@
-"""What the studies' scripts share: write rows of results to a CSV file and print them."""
+"""What the studies' scripts share: run jobs on local processes, write rows of results
+to a CSV file and print them."""
 
 import csv
+import sys
+from multiprocessing import get_context
 from pathlib import Path
+
+
+def map_rows(func, jobs: list, processes: int) -> list[dict]:
+    """``func`` over ``jobs`` on ``processes`` forked processes (at least one), in order;
+    a ValueError (bad input, such as an unknown setting) ends the script with a
+    one-line error."""
+    try:
+        with get_context("fork").Pool(max(1, processes)) as pool:
+            return pool.map(func, jobs)
+    except ValueError as exc:
+        sys.exit(f"error: {exc}")
 
 
 def write_rows(path, rows: list[dict]) -> Path:

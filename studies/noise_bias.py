@@ -15,13 +15,12 @@ generating values, and prints them.
 import argparse
 import dataclasses
 import sys
-from multiprocessing import get_context
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _table import write_rows  # noqa: E402
+from _table import map_rows, write_rows  # noqa: E402
 
 CASES = ("both", "load cell only", "accelerometer only")
 
@@ -62,11 +61,7 @@ def main():
     name = args.setting.upper()
     jobs = [(name, args.freq, case, args.seeds[0]) for case in CASES[:2]]
     jobs += [(name, args.freq, CASES[2], s) for s in args.seeds]
-    try:
-        with get_context("fork").Pool(max(1, args.processes)) as pool:
-            rows = pool.map(_optimum, jobs)
-    except ValueError as exc:
-        sys.exit(f"error: {exc}")
+    rows = map_rows(_optimum, jobs, args.processes)
     write_rows(args.out, rows)
 
 

@@ -16,7 +16,6 @@ import argparse
 import sys
 import tempfile
 import time
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +23,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _table import write_rows  # noqa: E402
+from _table import map_rows, write_rows  # noqa: E402
 
 
 def _chain(job):
@@ -78,11 +77,7 @@ def main():
             except ValueError:
                 sys.exit(f"error: --record takes SETTING:FREQUENCY, got {item!r}")
             jobs += [(setting.upper(), freq, ridge, args.steps, args.seed, folder) for ridge in (False, True)]
-        try:
-            with get_context("fork").Pool(max(1, args.processes)) as pool:
-                rows = pool.map(_chain, jobs)
-        except ValueError as exc:
-            sys.exit(f"error: {exc}")
+        rows = map_rows(_chain, jobs, args.processes)
     write_rows(args.out, rows)
 
 
