@@ -78,11 +78,15 @@ def _tables(Abar, h, J):
     return F
 
 
-@njit(cache=True, inline="always")
-def _step(FT, z, out, n, n_in, T):
-    """out = z + F z over a time T, with FT = F transposed (column sweeps: independent
-    adds). Only the n state rows need the product: the inputs move linearly
-    (u += du T) and their slopes and the Coulomb forces stay."""
+@njit(cache=True)
+def _step(F, mode, level, z, out, n, n_in, T):
+    """out = z + F z over a time T, with F[mode, level] = the table transposed (column
+    sweeps: independent adds). Only the n state rows need the product: the inputs move
+    linearly (u += du T) and their slopes and the Coulomb forces stay. The tables are
+    indexed in place rather than through a view per call.
+
+    The small helpers are left to LLVM to inline: numba's own ``inline="always"`` made
+    the simulation of a 10 s record 5-7 % slower (measured side by side)."""
     m = z.shape[0]
     for i in range(m):
         out[i] = z[i]
@@ -90,20 +94,30 @@ def _step(FT, z, out, n, n_in, T):
         zj = z[j]
         if zj != 0.0:
             for i in range(n):
-                out[i] += FT[j, i] * zj
+                out[i] += F[mode, level, j, i] * zj
     for q in range(n_in):
         out[n + q] += T * z[n + n_in + q]
 
 
-@njit(cache=True, inline="always")
-def _dot(row, z):
+@njit(cache=True)
+def _dot3(M, a, b, z):
+    """M[a, b] . z without making the view M[a, b]."""
     s = 0.0
     for j in range(z.shape[0]):
-        s += row[j] * z[j]
+        s += M[a, b, j] * z[j]
     return s
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
+def _dot2(M, a, z):
+    """M[a] . z without making the view M[a]."""
+    s = 0.0
+    for j in range(z.shape[0]):
+        s += M[a, j] * z[j]
+    return s
+
+
+@njit(cache=True)
 def _cubic_range(y0, d0, y1, d1):
     """Min and max over s in [0, 1] of the cubic Hermite interpolant (d scaled by T)."""
     lo = min(y0, y1)
@@ -133,25 +147,38 @@ def _cubic_range(y0, d0, y1, d1):
     return lo, hi
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _guards(z, mode, nc, node, R, VD, RD, val, der):
     """Guard values and time derivatives at z: velocity (sliding) or holding force (stuck)."""
     for i in range(nc):
         if (mode >> i) & 1:
-            val[i] = _dot(R[i], z)
-            der[i] = _dot(RD[mode, i], z)
+            val[i] = _dot2(R, i, z)
+            der[i] = _dot3(RD, mode, i, z)
         else:
             val[i] = z[node[i]]
-            der[i] = _dot(VD[mode, i], z)
+            der[i] = _dot3(VD, mode, i, z)
 
 
-@njit(cache=True, inline="always")
+#: The cubic Hermite interpolant on [0, 1] lies within HERMITE_SLACK (|d0| + |d1|) of the
+#: range of its end values (its value basis functions are non-negative and sum to one;
+#: each slope basis function is at most 4/27 in size).
+HERMITE_SLACK = 4.0 / 27.0
+
+
+@njit(cache=True)
 def _crossed(va, da, vb, db, T, mode, nc, sgn, f0):
-    """True when some guard is (or may have been) violated between the two ends."""
+    """True when some guard is (or may have been) violated between the two ends.
+
+    A guard whose end values clear its bound by more than the Hermite slack cannot have
+    been crossed: the exact cubic test (roots and a square root) runs only where that
+    cheap bound fails, which is near the contacts' switches."""
     for i in range(nc):
+        slack = HERMITE_SLACK * T * (abs(da[i]) + abs(db[i]))
         if (mode >> i) & 1:
             if abs(vb[i]) > f0[i]:
                 return True
+            if max(abs(va[i]), abs(vb[i])) + slack <= f0[i]:
+                continue
             lo, hi = _cubic_range(va[i], T * da[i], vb[i], T * db[i])
             if hi > f0[i] or lo < -f0[i]:
                 return True
@@ -159,10 +186,36 @@ def _crossed(va, da, vb, db, T, mode, nc, sgn, f0):
             s = sgn[i]
             if s * vb[i] < 0.0:
                 return True
+            if min(s * va[i], s * vb[i]) - slack > 0.0:
+                continue
             lo, hi = _cubic_range(s * va[i], T * s * da[i], s * vb[i], T * s * db[i])
             if lo < 0.0:
                 return True
     return False
+
+
+@njit(cache=True)
+def _bisect(F, mode, level, size, z, zc, zm, zn, n, n_in, tick, nc, node, R, VD, RD, va, da, vb, db, sgn, f0):
+    """Bisect [0, size] ticks from state z for the first guard crossing, on the dyadic
+    grid; returns the ticks advanced before the last halving step, with the state at
+    the crossing's end (one tick later) in zn."""
+    advanced = np.int64(0)
+    for j in range(z.shape[0]):
+        zc[j] = z[j]
+    while size > 1:
+        size >>= 1
+        level += 1
+        _step(F, mode, level, zc, zm, n, n_in, tick * size)
+        _guards(zc, mode, nc, node, R, VD, RD, va, da)
+        _guards(zm, mode, nc, node, R, VD, RD, vb, db)
+        if _crossed(va, da, vb, db, tick * size, mode, nc, sgn, f0):
+            for j in range(z.shape[0]):
+                zn[j] = zm[j]
+        else:
+            for j in range(z.shape[0]):
+                zc[j] = zm[j]
+            advanced += size
+    return advanced
 
 
 @njit(cache=True)
@@ -171,14 +224,14 @@ def _switch(z, mode, nc, node, R, f0, sgn, wcol):
     for i in range(nc):
         bit = 1 << i
         if mode & bit:
-            r = _dot(R[i], z)
+            r = _dot2(R, i, z)
             if abs(r) > f0[i]:  # break away in the direction of the holding force
                 mode &= ~bit
                 sgn[i] = 1.0 if r > 0 else -1.0
                 z[wcol + i] = sgn[i] * f0[i]
         elif sgn[i] * z[node[i]] < 0.0:  # velocity reached zero: stick or reverse
             z[node[i]] = 0.0
-            r = _dot(R[i], z)
+            r = _dot2(R, i, z)
             if abs(r) <= f0[i]:
                 mode |= bit
             else:
@@ -262,7 +315,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             sgn[i] = 1.0 if v > 0 else -1.0
             z[wcol + i] = sgn[i] * f0[i]
     mode = _switch(z, mode, nc, node, R, f0, sgn, wcol)
-    accel[0] = _dot(OUT[mode], z)
+    accel[0] = _dot2(OUT, mode, z)
     vel[0] = z[out_node]
     if store:
         states[0] = z[:n]
@@ -285,7 +338,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             # a stuck contact's holding-force rate, which sees the new input slope
             for i in range(nc):
                 if (mode >> i) & 1:
-                    da[i] = _dot(RD[mode, i], z)
+                    da[i] = _dot3(RD, mode, i, z)
         pos = np.int64(0)
         events = 0
         while pos < FULL:
@@ -297,28 +350,22 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
                     tz += 1
             size = np.int64(1) << tz
             level = J - tz
-            _step(F[mode, level], z, zn, n, n_in, h * size / FULL)
+            _step(F, mode, level, z, zn, n, n_in, h * size / FULL)
             _guards(zn, mode, nc, node, R, VD, RD, vb, db)
             if not _crossed(va, da, vb, db, h * size / FULL, mode, nc, sgn, f0):
-                z, zn = zn, z  # swap buffers instead of copying
-                va, vb = vb, va
-                da, db = db, da
+                # copy, not swap: rebinding arrays costs atomic reference counting in numba
+                for j in range(m):
+                    z[j] = zn[j]
+                for i in range(nc):
+                    va[i] = vb[i]
+                    da[i] = db[i]
                 pos += size
                 continue
-            # Bisect for the first crossing inside [pos, pos + size].
+            # Bisect for the first crossing inside [pos, pos + size] (out of line: the
+            # rare path, kept out of the hot loop's code).
             stats[1] += 1
-            zc[:] = z
-            while size > 1:
-                size >>= 1
-                level += 1
-                _step(F[mode, level], zc, zm, n, n_in, h * size / FULL)
-                _guards(zc, mode, nc, node, R, VD, RD, va, da)
-                _guards(zm, mode, nc, node, R, VD, RD, vb, db)
-                if _crossed(va, da, vb, db, h * size / FULL, mode, nc, sgn, f0):
-                    zn[:] = zm
-                else:
-                    zc[:] = zm
-                    pos += size
+            pos += _bisect(F, mode, level, size, z, zc, zm, zn, n, n_in, h / FULL, nc, node, R, VD, RD,
+                           va, da, vb, db, sgn, f0)
             pos += 1
             z[:] = zn
             new_mode = _switch(z, mode, nc, node, R, f0, sgn, wcol)
@@ -333,7 +380,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             if events > max_events:
                 return accel, vel, states, STATUS_TOO_MANY_EVENTS, stats
             _guards(z, mode, nc, node, R, VD, RD, va, da)
-        accel[k + 1] = _dot(OUT[mode], z)
+        accel[k + 1] = _dot2(OUT, mode, z)
         vel[k + 1] = z[out_node]
         if store:
             states[k + 1] = z[:n]
