@@ -38,6 +38,9 @@ def _number_type(convert, ok, requirement: str, noun: str = "number"):
 _positive_float = _number_type(float, lambda v: 0 < v < float("inf"), "a positive number")
 _non_negative_float = _number_type(float, lambda v: 0 <= v < float("inf"), "a non-negative number")
 _positive_int = _number_type(int, lambda v: v >= 1, "at least 1", "whole number")
+#: ``inference.coordinates.COORDINATES``, written out so that the parser does not import
+#: the inference package (emcee, arviz) before it is needed; a test keeps the two equal.
+FIT_COORDINATES = ("impedance", "unconstrained", "physical")
 
 
 def _add_generator_options(p: argparse.ArgumentParser) -> None:
@@ -156,6 +159,7 @@ def cmd_fit(args) -> int:
             rec, args.out, model=args.model, m_s=args.m_s, walkers=args.walkers, steps=args.steps,
             seed=args.seed, fresh=args.fresh, processes=processes,
             likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=progress,
+            coordinates=args.coordinates,
         )
     finally:
         bar.close()
@@ -293,6 +297,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="force reconstruction rate / record rate before simulating (%(default)s: linear interpolation)")
     p.add_argument("--processes", type=_positive_int, help="worker processes (default: up to 2)")
     p.add_argument("--fresh", action="store_true", help="start over instead of continuing the checkpoint")
+    p.add_argument("--coordinates", choices=FIT_COORDINATES, default="impedance",
+                   help="where the walkers move (%(default)s; the outputs are the same parameters either way)")
     p.set_defaults(func=cmd_fit)
 
     p = sub.add_parser("study", help="posteriors of many records, theory against identification, a report")

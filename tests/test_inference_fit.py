@@ -48,8 +48,20 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     for group in ("posterior", "log_likelihood", "posterior_predictive", "observed_data", "sample_stats"):
         assert group in idata.groups()
     assert "phi" in idata.posterior
-    moves = json.loads((out / "fit.json").read_text())["moves"]
-    assert any(m.startswith("NutRidgeMove") for m in moves), moves  # the two-port model has the nut's ridge
+    info = json.loads((out / "fit.json").read_text())
+    # walked in the impedance coordinates at the record's 1.5 Hz, where the nut's ridge is an axis
+    assert info["coordinates"].startswith("impedance (M, C at 1.5 Hz"), info["coordinates"]
+    assert not any(m.startswith("NutRidgeMove") for m in info["moves"]), info["moves"]
+
+
+def test_physical_coordinates_keep_the_ridge_move(tmp_path, record_file):
+    from bayes_inerter.records import read_record
+
+    res = fit_record(read_record(record_file), tmp_path / "fit", steps=4, walkers=24, coordinates="physical",
+                     plots=False)
+    info = json.loads((res.out / "fit.json").read_text())
+    assert info["coordinates"] == "physical"
+    assert any(m.startswith("NutRidgeMove") for m in info["moves"]), info["moves"]
 
 
 @pytest.mark.slow  # 3 fits, about a minute; the resume tests check same-seed chains in CI

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..records.record import Record
 from .model import LikelihoodSettings, PosteriorModel
+from .coordinates import default_coordinates
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_summary
 from .sampler import Convergence, check_run_options, run_sampler
 
@@ -88,8 +89,12 @@ def fit_record(
     convergence: Convergence | None = None,
     progress=None,
     plots: bool = True,
+    coordinates: str = "impedance",
 ) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
+
+    ``coordinates``: where the walkers move (``coordinates.COORDINATES``; the outputs are
+    in the model's parameters whichever is used).
 
     Everything that can be checked is checked before sampling starts (record, masses,
     options, output folder); the folder is not touched if any check fails.
@@ -98,13 +103,14 @@ def fit_record(
     pm = PosteriorModel(record, model, m_s=m_s, m_B=m_B, priors=priors or {},
                         likelihood=likelihood or LikelihoodSettings())
     check_run_options(pm.ndim, walkers, steps)
+    coords = default_coordinates(pm, coordinates)
     check_output_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     run = run_sampler(pm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, fresh=fresh,
-                      processes=processes, convergence=convergence, progress=progress)
+                      processes=processes, convergence=convergence, progress=progress, coordinates=coords)
     t_sample = time.perf_counter() - t0
-    sample = posterior_sample(pm, run.sampler, run.tau)
+    sample = posterior_sample(pm, run)
     rows = summary_rows(sample)
     shrink = contraction(pm, sample)
     idata, sims = to_inference_data(pm, sample, rng=np.random.default_rng(seed + 1))
@@ -123,6 +129,7 @@ def fit_record(
         "stride": pm.stride, "priors": {n: p.describe() for n, p in pm.all_priors.items()},
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "moves": list(run.moves),
+        "coordinates": run.coordinates.describe(),
         "contraction": shrink,
         "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total,
                       "sampling_all_runs": _sampling_all_runs(out, t_sample, fresh or run.start_theta is not None)},
@@ -148,6 +155,7 @@ def fit_joint(
     convergence: Convergence | None = None,
     progress=None,
     plots: bool = True,
+    coordinates: str = "impedance",
 ) -> FitResult:
     """Sample the joint posterior of several records (``joint.JointModel``: shared
     frictions and deformations, one b per flywheel setting) into ``out``: chain.h5,
@@ -168,6 +176,7 @@ def fit_joint(
     out = Path(out)
     jm = JointModel(tuple(records), priors=priors or {}, likelihood=likelihood or LikelihoodSettings())
     check_run_options(jm.ndim, walkers, steps)
+    coords = default_coordinates(jm, coordinates)
     check_output_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -180,9 +189,9 @@ def fit_joint(
         return local_optimum(jm, jm.start(given), restarts=NM_RESTARTS)
 
     run = run_sampler(jm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, processes=processes,
-                      convergence=convergence, progress=progress, start=start)
+                      convergence=convergence, progress=progress, start=start, coordinates=coords)
     t_sample = time.perf_counter() - t0
-    sample = posterior_sample(jm, run.sampler, run.tau)
+    sample = posterior_sample(jm, run)
     rows = summary_rows(sample)
     shrink = contraction(jm, sample)
     write_summary(out / "summary.csv", rows)
@@ -213,6 +222,7 @@ def fit_joint(
         "priors": {n: p.describe() for n, p in jm.all_priors.items()},
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "moves": list(run.moves),
+        "coordinates": run.coordinates.describe(),
         "contraction": shrink,
         "timings_s": {"sampling": t_sample, "total": t_total,
                       "sampling_all_runs": _sampling_all_runs(out, t_sample, run.start_theta is not None)},

@@ -58,16 +58,19 @@ def _derived(model: PosteriorModel, values: np.ndarray) -> dict:
     return model.derived({n: values[..., i] for i, n in enumerate(model.names)})
 
 
-def posterior_sample(model: PosteriorModel, sampler, tau) -> PosteriorSample:
+def posterior_sample(model: PosteriorModel, run) -> PosteriorSample:
+    """Kept draws of a finished :class:`.sampler.SamplerRun` (in theta, whatever
+    coordinates its walkers moved in)."""
+    sampler, tau = run.sampler, run.tau
     n = sampler.iteration
     if np.all(np.isfinite(tau)) and 2 * np.max(tau) < n - 10:
         burn = int(2 * np.max(tau))
         thin = max(1, int(0.5 * np.min(tau)))
     else:
         burn, thin = n // 2, 1
-    chain = sampler.get_chain(discard=burn, thin=thin)  # (draws, walkers, ndim)
+    chain = run.chain(discard=burn, thin=thin)  # (draws, walkers, ndim)
     blobs = sampler.get_blobs(discard=burn, thin=thin)
-    lp = sampler.get_log_prob(discard=burn, thin=thin)
+    lp = run.log_prob(discard=burn, thin=thin)
     theta = np.transpose(chain, (1, 0, 2))
     values = model.to_values(theta)
     return PosteriorSample(

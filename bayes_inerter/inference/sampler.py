@@ -9,8 +9,14 @@ refused with a one-line error rather than overwritten; a damaged file is moved a
 the run continues from its intact twin, or, with no intact copy left, stops with a
 one-line error.
 
+The walkers move in the model's sampler coordinates (:mod:`.coordinates`: by default
+the impedance coordinates, with the posterior carried over by its Jacobian), and the
+checkpoint holds them; everything read back from a run (:meth:`SamplerRun.chain`,
+convergence, summaries) is in the model's parameters theta.
+
 Convergence (documented defaults, :class:`Convergence`): emcee's integrated
-autocorrelation time tau (``get_autocorr_time(tol=0)``) per parameter, checked every
+autocorrelation time tau (``emcee.autocorr.integrated_time(tol=0)`` on the chain in
+theta, the reported parameters) per parameter, checked every
 ``check_every`` steps; converged when the chain is longer than ``n_tau`` times the
 largest tau, tau moved less than ``tau_rtol`` since the last check, and, after
 discarding 2 tau of burn-in, R-hat < ``max_rhat`` and bulk ESS >= ``min_ess`` (arviz,
@@ -28,6 +34,7 @@ import emcee
 import numpy as np
 
 from .checkpoint import CheckpointError, new_checkpoint, open_checkpoint
+from .coordinates import Coordinates, default_coordinates
 from .model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, sse
@@ -43,12 +50,16 @@ DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1)
 RIDGE_WEIGHT = 0.2
 
 
-def default_moves(model, ridge_weight: float = RIDGE_WEIGHT) -> list:
-    """emcee's moves for ``model``: :data:`DEFAULT_MOVES`, and where the model samples
-    b, k_n and c_n in log scale, :class:`.moves.NutRidgeMove` in ``ridge_weight`` of
-    the steps (0: none)."""
+def default_moves(model, ridge_weight: float = RIDGE_WEIGHT, coordinates: Coordinates | None = None) -> list:
+    """emcee's moves for ``model``: :data:`DEFAULT_MOVES`, and where the walkers move in
+    theta itself (``coordinates`` None or "physical") and the model samples b, k_n and
+    c_n in log scale, :class:`.moves.NutRidgeMove` in ``ridge_weight`` of the steps (0:
+    none). The impedance coordinates make the nut's ridge a coordinate axis, so there
+    the move has nothing to do."""
     if not 0.0 <= ridge_weight < 1.0:
         raise ValueError(f"ridge move weight must lie in [0, 1), got {ridge_weight}")
+    if coordinates is not None and coordinates.kind != "physical":
+        return list(DEFAULT_MOVES)
     idx = ridge_indices(model.names, [model.all_priors[n].log_scale for n in model.names])
     if idx is None or ridge_weight == 0.0:
         return list(DEFAULT_MOVES)
@@ -86,7 +97,8 @@ class Convergence:
 
 @dataclass
 class SamplerRun:
-    """What a run produced: the sampler (chain in its backend) and convergence facts."""
+    """What a run produced: the sampler (chain in its backend, in sampler coordinates)
+    and convergence facts (in theta)."""
 
     sampler: emcee.EnsembleSampler
     converged: bool
@@ -97,15 +109,34 @@ class SamplerRun:
     recovered: str = ""
     #: the moves of this run and their weights ("DEMove 0.48", ...)
     moves: tuple = ()
+    #: where the walkers moved (``coordinates.describe()`` names them)
+    coordinates: Coordinates | None = None
 
     @property
     def iteration(self) -> int:
         return self.sampler.iteration
 
+    def chain(self, discard: int = 0, thin: int = 1) -> np.ndarray:
+        """The chain in theta, shape (steps, walkers, ndim)."""
+        return _theta_chain(self.sampler, self.coordinates, discard, thin)
 
-def record_digest(model: PosteriorModel) -> str:
+    def log_prob(self, discard: int = 0, thin: int = 1) -> np.ndarray:
+        """The log posterior in theta (without the coordinates' Jacobian), (steps, walkers)."""
+        lp = self.sampler.get_log_prob(discard=discard, thin=thin)
+        if self.coordinates is None:
+            return lp
+        return lp - self.coordinates.log_jacobian(self.sampler.get_chain(discard=discard, thin=thin))
+
+
+def _theta_chain(sampler, coords, discard=0, thin=1):
+    chain = sampler.get_chain(discard=discard, thin=thin)
+    return chain if coords is None else coords.to_theta(chain)
+
+
+def record_digest(model: PosteriorModel, coordinates: Coordinates | None = None) -> str:
     """Identity of the data a checkpoint belongs to (record arrays and model settings);
-    for a joint model (``model.parts``), of every record's part and the joint names."""
+    for a joint model (``model.parts``), of every record's part and the joint names; and
+    of the coordinates its walkers moved in."""
     h = hashlib.sha256()
     parts = getattr(model, "parts", None)
     for part in parts or [model]:
@@ -116,28 +147,40 @@ def record_digest(model: PosteriorModel) -> str:
             (k, repr(v)) for k, v in part.all_priors.items()))).encode())
     if parts:
         h.update(repr(("joint", model.names)).encode())
+    if coordinates is not None and coordinates.kind != "physical":  # physical: as before coordinates existed
+        h.update(repr(("coordinates", coordinates.describe())).encode())
     return h.hexdigest()[:16]
 
 
 # The log-probability for worker processes: a top-level function over a module global set
 # before the pool forks, so that only the parameter vector is pickled per call.
 _MODEL: PosteriorModel | None = None
+_COORDS: Coordinates | None = None
 
 
-def _log_prob(theta):
-    return _MODEL.log_prob(theta)
+def _log_prob(u):
+    """The target in sampler coordinates: log p(theta(u)) + log |d theta / d u|."""
+    theta, logj = _COORDS.transform(u)
+    if not (np.all(np.isfinite(theta)) and np.isfinite(logj)):
+        return -np.inf, np.nan
+    lp, phi = _MODEL.log_prob(theta)
+    if not np.isfinite(lp):
+        return -np.inf, np.nan
+    return lp + float(logj), phi
 
 
 def _sse(phys):
     return sse(_MODEL, phys)
 
 
-def _diagnostics(sampler, conv: Convergence):
+def _diagnostics(sampler, coords, conv: Convergence):
+    """tau, R-hat and bulk ESS of the chain in theta (the reported parameters)."""
     from .diagnostics import rhat_ess
 
-    tau = sampler.get_autocorr_time(tol=0)
+    chain = _theta_chain(sampler, coords)
+    tau = emcee.autocorr.integrated_time(chain, tol=0)
     burn = int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else sampler.iteration // 2
-    rhat, ess = rhat_ess(sampler.get_chain(discard=min(burn, sampler.iteration - 2)))
+    rhat, ess = rhat_ess(chain[min(burn, sampler.iteration - 2):])
     return tau, rhat, ess
 
 
@@ -165,6 +208,7 @@ def run_sampler(
     moves=None,
     progress=None,
     start=None,
+    coordinates: str | Coordinates = "impedance",
 ) -> SamplerRun:
     """Sample the posterior of ``model`` into the HDF5 file ``checkpoint``.
 
@@ -181,14 +225,19 @@ def run_sampler(
         callable returning one, called only when the chain starts over (a continued
         checkpoint needs no start); the walkers are drawn around it by
         ``optimize.laplace_ensemble``.
+    coordinates : where the walkers move: a :class:`.coordinates.Coordinates` or the name
+        of one (``coordinates.COORDINATES``; default "impedance", which falls back to
+        "unconstrained" for models without an impedance map). A checkpoint continues
+        only in the coordinates it was written in.
     """
     from pathlib import Path
 
-    global _MODEL
+    global _MODEL, _COORDS
     conv = convergence or Convergence()
     checkpoint = Path(checkpoint)
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
-    digest = record_digest(model)
+    coords = coordinates if isinstance(coordinates, Coordinates) else default_coordinates(model, coordinates)
+    digest = record_digest(model, coords)
     opened = open_checkpoint(checkpoint, digest=digest, nwalkers=nwalkers, ndim=model.ndim, fresh=fresh)
     recovered = opened.recovered if opened else ""
     if opened is None or opened.steps == 0:
@@ -196,8 +245,8 @@ def run_sampler(
             "bayes_inerter_digest": digest, "parameter_names": ",".join(model.names)}), 0
     else:
         backend, done = opened.backend, opened.steps
-    _MODEL = model
-    moves = moves or default_moves(model)
+    _MODEL, _COORDS = model, coords
+    moves = moves or default_moves(model, coordinates=coords)
     used = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves)
     pool = multiprocessing.get_context("fork").Pool(processes) if processes > 1 else None
     try:
@@ -215,7 +264,11 @@ def run_sampler(
                 start = start()
             start_theta = np.asarray(start[0], dtype=float)
             sampler.random_state = np.random.RandomState(seed).get_state()
-            state, _ = laplace_ensemble(model, start_theta, nwalkers, rng)
+            walkers, _ = laplace_ensemble(model, start_theta, nwalkers, rng)
+            state = coords.to_u(walkers)
+            if not np.all(np.isfinite(state)):
+                raise ValueError(f"the start does not map into the {coords.kind} coordinates; "
+                                 "try coordinates 'unconstrained' or 'physical'")
         else:
             # continue from the checkpoint's last state, with its random state
             state = backend.get_last_sample()
@@ -228,10 +281,10 @@ def run_sampler(
                     if progress:
                         progress(sampler.iteration, target)
                 backend.flush()
-            tau, rhat, ess = _diagnostics(sampler, conv)
+            tau, rhat, ess = _diagnostics(sampler, coords, conv)
             ok = _is_converged(sampler.iteration, tau, None, rhat, ess, conv)
             reason = "converged" if ok else _why_not(sampler.iteration, tau, rhat, ess, conv)
-            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used)
+            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used, coords)
         previous = None
         while True:
             chunk = min(conv.check_every, conv.max_steps - sampler.iteration)
@@ -241,18 +294,18 @@ def run_sampler(
                         progress(sampler.iteration, None)
                 backend.flush()
                 state = sampler.get_last_sample()
-            tau, rhat, ess = _diagnostics(sampler, conv)
+            tau, rhat, ess = _diagnostics(sampler, coords, conv)
             if _is_converged(sampler.iteration, tau, previous, rhat, ess, conv):
-                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used)
+                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used, coords)
             if sampler.iteration >= conv.max_steps:
                 return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, tau, rhat, ess, conv), start_theta,
-                                  recovered, used)
+                                  recovered, used, coords)
             previous = tau
     finally:
         if pool is not None:
             pool.close()
             pool.join()
-        _MODEL = None
+        _MODEL, _COORDS = None, None
         try:  # a run stopped by Ctrl-C or an error: bring the twin up to date if possible
             backend.flush()
         except OSError:  # chain.h5 holds every step; the twin is only behind

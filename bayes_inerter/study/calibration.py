@@ -143,7 +143,7 @@ def replicate(cs: CalibrationSettings, k: int, checkpoint=None) -> dict:
         tmp = tempfile.TemporaryDirectory()
         path = Path(tmp.name) / "chain.h5"
     run = run_sampler(model, path, steps=cs.steps, seed=int(rng.integers(2**31)), fresh=True)
-    sample = posterior_sample(model, run.sampler, run.tau)
+    sample = posterior_sample(model, run)
     flat = sample.theta.reshape(-1, model.ndim)
     if len(flat) < cs.draws:
         raise RuntimeError(f"only {len(flat)} posterior draws kept, fewer than the {cs.draws} to rank among")

@@ -1,0 +1,191 @@
+"""Sampler coordinates: the impedance is the network's, the maps are exact bijections
+with the right Jacobian, and a chain walked in them samples the posterior in theta."""
+
+import math
+
+import emcee
+import numpy as np
+import pytest
+from scipy import stats
+
+from bayes_inerter import paper_parameters
+from bayes_inerter.inference import PosteriorModel
+from bayes_inerter.inference.coordinates import COORDINATES, default_coordinates, drive_omega, driving_point
+from bayes_inerter.inference.joint import JointModel
+from bayes_inerter.inference.sampler import run_sampler
+from bayes_inerter.models import build_network
+from bayes_inerter.network import accel_response
+from bayes_inerter.records import GeneratorSettings, generate_record
+
+SHORT = GeneratorSettings(duration=2.0, ramp=0.6)
+
+
+@pytest.fixture(scope="module")
+def records():
+    return [generate_record(paper_parameters(s), f, settings=SHORT, rng=3, setting_name=s)
+            for s, f in (("A1", 1.0), ("B2", 1.5), ("A1", 0.5))]
+
+
+@pytest.fixture(scope="module")
+def two_port(records):
+    return PosteriorModel(records[0])
+
+
+def test_impedance_is_the_two_port_cascades(two_port):
+    p = paper_parameters("A3")
+    omega = np.array([0.5, 3.0, 6.3, 40.0, 900.0])
+    z, _ = driving_point(omega, p.m_B, p.m_s, p.b, p.c_f1, p.c_f2, p.c_n, p.k_n, p.c_B, p.k_B)
+    a_over_f = accel_response(build_network("reduced", p), omega)  # a / F = j omega / Z
+    assert np.allclose(1j * omega / z, a_over_f, rtol=1e-12, atol=0)
+
+
+def test_sensitivity_g_is_the_derivative_in_the_rotation_nodes_impedance():
+    p = paper_parameters("B2")
+    w, h = 2 * math.pi, 1e-3
+
+    def z_of(b, c2):
+        return driving_point(w, p.m_B, p.m_s, b, p.c_f1, c2, p.c_n, p.k_n, p.c_B, p.k_B)[0]
+
+    _, g = driving_point(w, p.m_B, p.m_s, p.b, p.c_f1, p.c_f2, p.c_n, p.k_n, p.c_B, p.k_B)
+    dz_dc2 = (z_of(p.b, p.c_f2 + h) - z_of(p.b, p.c_f2 - h)) / (2 * h)
+    assert abs(dz_dc2 - g) < 1e-8 * abs(g)
+
+
+def _random_thetas(model, n, rng):
+    """Draws across the whole prior box (orders of magnitude in every stiffness)."""
+    lo, hi = model.bounds().T
+    return lo + (hi - lo) * rng.uniform(0.02, 0.98, size=(n, len(lo)))
+
+
+@pytest.mark.parametrize("name", ["two-port", "linear", "rigid", "joint"])
+def test_round_trip_across_the_prior_box(records, name):
+    model = JointModel(records) if name == "joint" else PosteriorModel(records[0], name)
+    coords = default_coordinates(model)
+    assert coords.kind == ("unconstrained" if name == "rigid" else "impedance")
+    theta = _random_thetas(model, 400, np.random.default_rng(1))
+    u = coords.to_u(theta)
+    ok = np.all(np.isfinite(u), axis=1)
+    # the domain leaves out the corners where a soft nut hides the inertance (rigid: none)
+    assert ok.mean() > (0.99 if name == "rigid" else 0.5)
+    back = coords.to_theta(u[ok])
+    assert np.max(np.abs(back - theta[ok])) < 1e-9  # one to one: each u gives back its theta
+    assert np.max(np.abs(coords.to_u(back) - u[ok])) < 1e-7
+
+
+def test_the_papers_devices_lie_deep_inside_the_domain(records):
+    model = JointModel(records)
+    imp = default_coordinates(model).impedance
+    for name in ("A0", "A3", "B2"):
+        p = paper_parameters(name)
+        for f in (0.5, 1.5):
+            _, g = driving_point(2 * math.pi * f, p.m_B, p.m_s, p.b, p.c_f1, p.c_f2, p.c_n, p.k_n, p.c_B, p.k_B)
+            assert abs(g - 1) < 0.2  # inside the domain's edge at |G - 1| = 1/2 (B2 at 1.5 Hz: 0.19)
+    assert imp is not None
+
+
+@pytest.mark.parametrize("name", ["two-port", "linear", "joint"])
+def test_log_jacobian_is_the_finite_difference_determinant(records, name):
+    model = JointModel(records) if name == "joint" else PosteriorModel(records[0], name)
+    coords = default_coordinates(model)
+    rng = np.random.default_rng(2)
+    checked = 0
+    for theta in _random_thetas(model, 40, rng):
+        u = coords.to_u(theta)
+        if not np.all(np.isfinite(u)):
+            continue
+        n, eps = len(u), 1e-6
+        jac = np.empty((n, n))
+        for i in range(n):
+            e = np.zeros(n)
+            e[i] = eps
+            jac[:, i] = (coords.to_theta(u + e) - coords.to_theta(u - e)) / (2 * eps)
+        if not np.all(np.isfinite(jac)):  # within eps of the domain's edge
+            continue
+        assert coords.log_jacobian(u) == pytest.approx(np.linalg.slogdet(jac)[1], abs=1e-5)
+        checked += 1
+    assert checked >= 15
+
+
+def test_physical_coordinates_are_theta_itself(two_port):
+    coords = default_coordinates(two_port, "physical")
+    theta = _random_thetas(two_port, 5, np.random.default_rng(3))
+    assert np.array_equal(coords.to_u(theta), theta) and np.array_equal(coords.to_theta(theta), theta)
+    assert np.all(coords.log_jacobian(theta) == 0.0)
+
+
+def test_unknown_coordinates_refused(two_port):
+    with pytest.raises(ValueError, match="unknown coordinates 'polar'"):
+        default_coordinates(two_port, "polar")
+
+
+def test_the_command_lines_choices_are_the_packages():
+    from bayes_inerter.cli import FIT_COORDINATES
+
+    assert FIT_COORDINATES == COORDINATES
+
+
+def test_drive_frequency_from_the_force_when_the_metadata_lacks_it(records):
+    rec = records[1]
+    assert drive_omega(rec) == pytest.approx(2 * math.pi * 1.5)
+    bare = type(rec)(rec.time, rec.force, rec.accel, metadata={})
+    assert drive_omega(bare) == pytest.approx(2 * math.pi * 1.5, rel=0.05)  # spectral peak, 0.5 Hz bins
+
+
+# A target in theta whose shape the coordinates must not change: independent normals
+# wide enough that the nut, the bearing and the prior box all bend the map.
+def _target(model):
+    lo, hi = model.bounds().T
+    centre = model.to_theta(paper_parameters("A1"), 3e-3, 0.2)
+    sd = np.minimum(0.08 * (hi - lo), np.minimum(centre - lo, hi - centre) / 4)
+    sd[model.names.index("k_n")] = 1.5  # k_n from 1e5 to 1e8 N/m: the nut's spring matters at the top
+    sd[model.names.index("k_B")] = 1.0
+    return centre, sd
+
+
+def _u_log_target(coords, centre, sd, jacobian=True):
+    def f(u):
+        theta, logj = coords.transform(u)
+        lp = np.sum(stats.norm.logpdf(theta, centre, sd), axis=-1) + (logj if jacobian else 0.0)
+        return np.where(np.all(np.isfinite(theta), axis=-1) & np.isfinite(lp), lp, -np.inf)
+    return f
+
+
+def _invariance_pvalues(model, jacobian):
+    centre, sd = _target(model)
+    coords = default_coordinates(model)
+    rng = np.random.default_rng(4)
+    theta0 = rng.normal(centre, sd, size=(3000, len(centre)))  # exact draws
+    u0 = coords.to_u(theta0)
+    inside = np.all(np.isfinite(u0), axis=1)
+    assert inside.mean() > 0.999  # the domain cuts off a negligible tail of this target
+    u0 = u0[inside][:2000]
+    sampler = emcee.EnsembleSampler(len(u0), len(centre), _u_log_target(coords, centre, sd, jacobian),
+                                    vectorize=True)
+    sampler.random_state = np.random.RandomState(5).get_state()
+    sampler.run_mcmc(u0, 40)
+    theta = coords.to_theta(sampler.get_last_sample().coords)
+    return [stats.kstest(theta[:, i], stats.norm(centre[i], sd[i]).cdf).pvalue for i in range(len(centre))]
+
+
+def test_walks_in_u_keep_the_target_in_theta(two_port):
+    p = _invariance_pvalues(two_port, jacobian=True)
+    assert min(p) > 1e-3, p
+
+
+def test_the_invariance_check_sees_a_missing_jacobian(two_port):
+    p = _invariance_pvalues(two_port, jacobian=False)
+    assert min(p) < 1e-6, p
+
+
+def test_run_sampler_in_impedance_coordinates_samples_theta(two_port, tmp_path):
+    # the sampler's own plumbing (start mapped to u, Jacobian added, chain read back in
+    # theta): the model's posterior swapped for a known density
+    centre, sd = _target(two_port)
+    model = PosteriorModel(two_port.record)
+    model.log_prob = lambda theta: (float(np.sum(stats.norm.logpdf(theta, centre, sd))), 0.0)
+    run = run_sampler(model, tmp_path / "chain.h5", nwalkers=24, steps=1500, seed=1,
+                      start=(centre, 0.0))
+    assert run.coordinates.kind == "impedance"
+    theta = run.chain(discard=300).reshape(-1, len(centre))
+    assert np.all(np.abs(theta.mean(axis=0) - centre) < 0.25 * sd)
+    assert np.all(np.abs(theta.std(axis=0) / sd - 1) < 0.25)
