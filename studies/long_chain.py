@@ -38,7 +38,8 @@ def main():
     import h5py
     from tqdm import tqdm
 
-    from bayes_inerter.inference import fit_record
+    from bayes_inerter.inference import PosteriorModel, fit_record
+    from bayes_inerter.inference.coordinates import default_coordinates
     from bayes_inerter.inference.diagnostics import rhat_ess
     from bayes_inerter.records import read_record
     from bayes_inerter.records.generator import paper_record
@@ -67,8 +68,11 @@ def main():
     with h5py.File(out / "chain.h5", "r") as f:
         g = f["mcmc"]
         n = int(g.attrs["iteration"])
-        chain, lp = g["chain"][:n], g["log_prob"][:n]
+        walked, lp = g["chain"][:n], g["log_prob"][:n]
         names = g.attrs["parameter_names"].split(",")
+    # the checkpoint holds the walkers in the sampler's coordinates: back to theta
+    coords = default_coordinates(PosteriorModel(rec))
+    chain, lp = coords.to_theta(walked), lp - coords.log_jacobian(walked)
 
     rows = []
     for stop in [s for s in (1000, 2000, 3000, 4000, 5000, 7500, 10000) if s <= n] or [n]:

@@ -1,15 +1,18 @@
-"""What the nut-ridge move (``inference.moves.NutRidgeMove``) changes: the same record
-sampled from the same start and seed with emcee's moves alone and with the ridge move
-added (the default), side by side.
+"""Where the walkers move, and what it changes: the same record sampled from the same
+start and seed three ways, side by side:
 
-    python studies/ridge_move.py [--record A3:1 ...] [--steps 1000] [--seed 0]
-        [--processes 2] [--out results/long-chain/ridge_move.csv]
+- ``physical``: in the model's parameters theta, emcee's moves alone;
+- ``physical+ridge``: the same with the nut-ridge move (``inference.moves.NutRidgeMove``);
+- ``impedance``: in the impedance coordinates (``inference.coordinates``, the default).
+
+    python studies/walks.py [--record A3:1 ...] [--steps 3000] [--seed 0]
+        [--processes 2] [--out results/long-chain/walks.csv]
 
 Records are the full study's (the paper grid generated with seed 0), named
-SETTING:FREQUENCY. Each (record, moves) pair is one chain on one process. Writes one row
-per chain: acceptance, the largest autocorrelation time and b's, R-hat and bulk ESS of
-the second half, b's and log10 k_n's 3rd, 50th and 97th percentiles over the second
-half, and whether b's lies between them, and prints them.
+SETTING:FREQUENCY. Each (record, walk) pair is one chain on one process. Writes one row
+per chain: acceptance, the largest autocorrelation time and b's (in theta, over the last
+three quarters), R-hat and bulk ESS of the last three quarters, b's and log10 k_n's 3rd,
+50th and 97th percentiles there, and whether b's generating value lies between them.
 """
 
 import argparse
@@ -26,8 +29,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _table import map_rows, write_rows  # noqa: E402
 
 
+WALKS = ("physical", "physical+ridge", "impedance")
+
+
 def _chain(job):
-    setting, freq, ridge, steps, seed, folder = job
+    setting, freq, walk, steps, seed, folder = job
+    import emcee
+
     from bayes_inerter.inference.diagnostics import rhat_ess
     from bayes_inerter.inference.model import PosteriorModel
     from bayes_inerter.inference.sampler import DEFAULT_MOVES, default_moves, run_sampler
@@ -35,21 +43,23 @@ def _chain(job):
 
     rec = paper_record(setting, freq, seed=0)
     pm = PosteriorModel(rec)
-    moves = default_moves(pm) if ridge else list(DEFAULT_MOVES)
+    coordinates = walk.split("+")[0]
+    moves = default_moves(pm) if walk == "physical+ridge" else list(DEFAULT_MOVES)
     t0 = time.perf_counter()
-    run = run_sampler(pm, Path(folder) / f"{setting}_{freq:g}_{int(ridge)}.h5", steps=steps, seed=seed,
-                      moves=moves, fresh=True)
+    run = run_sampler(pm, Path(folder) / f"{setting}_{freq:g}_{walk}.h5", steps=steps, seed=seed,
+                      moves=moves, fresh=True, coordinates=coordinates)
     minutes = (time.perf_counter() - t0) / 60
-    half = run.sampler.get_chain()[steps // 2:]
+    half = run.chain(discard=steps // 4)
+    tau = emcee.autocorr.integrated_time(half, tol=0)
     rhat, ess = rhat_ess(half)
     ib, ik = pm.names.index("b"), pm.names.index("k_n")
     b = np.percentile(np.exp(half[..., ib]), [3, 50, 97])
     lk = np.percentile(half[..., ik] / np.log(10), [3, 50, 97])
     truth = rec.metadata["true_parameters"]["b"]
     return {
-        "record": f"{setting}_{freq:g}Hz", "moves": "emcee + ridge" if ridge else "emcee", "steps": steps,
+        "record": f"{setting}_{freq:g}Hz", "walk": walk, "steps": steps,
         "minutes": round(minutes, 2), "acceptance": round(float(np.mean(run.sampler.acceptance_fraction)), 3),
-        "max_tau": round(float(np.max(run.tau)), 1), "tau_b": round(float(run.tau[ib]), 1),
+        "max_tau": round(float(np.max(tau)), 1), "tau_b": round(float(tau[ib]), 1),
         "rhat_b": round(float(rhat[ib]), 3), "max_rhat": round(float(np.max(rhat)), 3),
         "ess_b": round(float(ess[ib]), 1),
         "b_3%": round(float(b[0]), 1), "b_50%": round(float(b[1]), 1), "b_97%": round(float(b[2]), 1),
@@ -63,10 +73,10 @@ def _chain(job):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--record", action="append", default=None, help="SETTING:FREQUENCY (default A3:1)")
-    ap.add_argument("--steps", type=int, default=1000)
+    ap.add_argument("--steps", type=int, default=3000)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--processes", type=int, default=2)
-    ap.add_argument("--out", default=str(ROOT / "results" / "long-chain" / "ridge_move.csv"))
+    ap.add_argument("--out", default=str(ROOT / "results" / "long-chain" / "walks.csv"))
     args = ap.parse_args()
     jobs = []
     with tempfile.TemporaryDirectory() as folder:
@@ -76,7 +86,7 @@ def main():
                 freq = float(freq)
             except ValueError:
                 sys.exit(f"error: --record takes SETTING:FREQUENCY, got {item!r}")
-            jobs += [(setting.upper(), freq, ridge, args.steps, args.seed, folder) for ridge in (False, True)]
+            jobs += [(setting.upper(), freq, walk, args.steps, args.seed, folder) for walk in WALKS]
         rows = map_rows(_chain, jobs, args.processes)
     write_rows(args.out, rows)
 
