@@ -126,9 +126,10 @@ class ImpedanceMap:
             return np.exp(v[..., i]) if log else v[..., i]
         return src
 
-    def _viscous(self, v, c_f=None):
+    def _viscous(self, v):
+        """(c_f1, c_f2, the plate's share or None) at v."""
         if "c_f" in self.source:
-            c = self._get(v, "c_f") if c_f is None else c_f
+            c = self._get(v, "c_f")
             s = self._get(v, "c_share")
             return c * s, c * (1.0 - s), s
         return self._get(v, "c_f1"), self._get(v, "c_f2"), None
