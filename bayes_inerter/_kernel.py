@@ -341,6 +341,44 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
                     da[i] = _dot3(RD, mode, i, z)
         pos = np.int64(0)
         events = 0
+        # Fast path, written out in the loop: the whole interval in one step, its guards,
+        # and the cheap Hermite bound; the general loop below takes over only where the
+        # bound fails (near the contacts' switches).
+        for i in range(m):
+            zn[i] = z[i]
+        for j in range(m):
+            zj = z[j]
+            for i in range(n):
+                zn[i] += F[mode, 0, j, i] * zj
+        for q in range(n_in):
+            zn[n + q] += h * z[n + n_in + q]
+        clear = True
+        for i in range(nc):
+            d = 0.0
+            if (mode >> i) & 1:
+                v = 0.0
+                for j in range(m):
+                    v += R[i, j] * zn[j]
+                    d += RD[mode, i, j] * zn[j]
+            else:
+                v = zn[node[i]]
+                for j in range(m):
+                    d += VD[mode, i, j] * zn[j]
+            vb[i] = v
+            db[i] = d
+            slack = HERMITE_SLACK * h * (abs(da[i]) + abs(d))
+            if (mode >> i) & 1:
+                if max(abs(va[i]), abs(v)) + slack > f0[i]:
+                    clear = False
+            elif min(sgn[i] * va[i], sgn[i] * v) - slack <= 0.0:
+                clear = False
+        if clear:
+            for j in range(m):
+                z[j] = zn[j]
+            for i in range(nc):
+                va[i] = vb[i]
+                da[i] = db[i]
+            pos = FULL
         while pos < FULL:
             if pos == 0:
                 tz = J
