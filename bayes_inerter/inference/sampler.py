@@ -285,9 +285,20 @@ def run_sampler(
             ok = _is_converged(sampler.iteration, tau, None, rhat, ess, conv)
             reason = "converged" if ok else _why_not(sampler.iteration, tau, rhat, ess, conv)
             return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used, coords)
+        # Checks fall on multiples of check_every, so that a continued chain is checked
+        # (and stops) where an uninterrupted run would be; a continued chain takes the
+        # tau of that run's previous check from the stored chain, and one that stands
+        # on a check is checked before it samples more (a converged chain comes back
+        # as it is).
         previous = None
+        last = ((done - 1) // conv.check_every) * conv.check_every if done else 0
+        if last > 0:
+            previous = emcee.autocorr.integrated_time(_theta_chain(sampler, coords)[:last], tol=0)
+        check_now = done > 0 and done % conv.check_every == 0
         while True:
-            chunk = min(conv.check_every, conv.max_steps - sampler.iteration)
+            chunk = 0 if check_now else min(conv.check_every - sampler.iteration % conv.check_every,
+                                            conv.max_steps - sampler.iteration)
+            check_now = False
             if chunk > 0:
                 for _ in sampler.sample(state, iterations=chunk, store=True):
                     if progress:
