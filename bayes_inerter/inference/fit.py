@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from ..records.record import Record
-from .model import LikelihoodSettings, PosteriorModel
 from .coordinates import default_coordinates
+from .model import LikelihoodSettings, PosteriorModel
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_summary
 from .sampler import Convergence, check_run_options, run_sampler
 
