@@ -46,6 +46,9 @@ def test_study_writes_tables_figures_and_report(study):
     assert info["plan"]["steps"] == 8 and info["versions"]["emcee"]
     assert info["plan"]["calibration"] == {"force": 0.0025, "accel": 0.005}
     assert "sensitivities as exact" in report and "--sensor-uncertainty" in report
+    # per record, the inertance seen through the nut (what the records fix) beside b, with its coverage
+    assert "b_app_hdi_3%" in (out / "inertance_records.csv").read_text().splitlines()[0]
+    assert "hold the generating b_app = b (1 + b k_n / c_n^2)" in report and "ambiguity.csv" in report
     # the joint model of both records: one b per setting beside the single-record ones
     assert (out / "joint" / "summary.csv").is_file() and (out / "flywheels_joint.csv").is_file()
     assert [r["setting"] for r in study.tables["joint"]] == ["A0", "A2"]

@@ -88,7 +88,8 @@ def _normal(fit: RecordFit) -> tuple[float, float]:
 
 
 def record_table(fits: list[RecordFit]) -> list[dict]:
-    """b and phi of every two-port fit, one row per record."""
+    """b, b_app (the inertance seen through the nut, which the records fix more tightly
+    than b: ``device.apparent_inertance``) and phi of every two-port fit, one row per record."""
     rows = []
     for f in fits:
         if f.model != "two-port":
@@ -101,6 +102,8 @@ def record_table(fits: list[RecordFit]) -> list[dict]:
             "phi_hdi_97%": f.stat("phi", "hdi_97%"), "converged": f.converged,
             "iterations": int(f.info["iterations"]),
         })
+        if "b_app" in f.summary:
+            rows[-1].update({f"b_app_{c}": f.stat("b_app", c) for c in ("mean", "hdi_3%", "hdi_97%")})
     return rows
 
 

@@ -110,6 +110,7 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     # generated records are made with the paper's parameters; a user's records have no truth
     truth = None if plan.records_dir else {s: paper_parameters(s) for s in plan.settings}
     truth_b = None if truth is None else {s: p.b for s, p in truth.items()}
+    truth_app = None if truth is None else {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()}
     tables = {
         "records": record_table(fits), "inertance": inert,
         "regression": flywheel_regression(inert, truth_b=truth_b, calibration=cal),
@@ -118,7 +119,6 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
              "phi": "phi.csv", "models": "model_comparison.csv", "contraction": "contraction.csv"}
     if joint is not None:
-        truth_app = None if truth is None else {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()}
         tables["joint"] = joint_inertance(joint.summary, inert, truth_b=truth_b, truth_app=truth_app, calibration=cal)
         mass = {r["setting"]: r["moving_mass"] for r in inert}
         tables["joint_regression"] = flywheel_regression(
@@ -137,7 +137,7 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
             fig.savefig(out / name, dpi=110)
             plt.close(fig)
     versions = fit_versions()
-    report = write_report(out, plan, tables, outcomes, versions, truth_b)
+    report = write_report(out, plan, tables, outcomes, versions, truth_b, truth_app)
     t3 = time.perf_counter()
     seconds = {"records": t1 - t0, "fits": t2 - t1, "joint": t_joint - t2, "analysis_and_report": t3 - t_joint,
                "total": t3 - t0}
