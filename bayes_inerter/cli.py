@@ -142,6 +142,7 @@ def cmd_fit(args) -> int:
     from tqdm import tqdm
 
     from .inference import fit_record
+    from .inference.coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
     from .inference.model import LikelihoodSettings
     from .records import read_record
 
@@ -170,6 +171,11 @@ def cmd_fit(args) -> int:
           f"{result.iterations} steps")
     phi = result.row("phi")
     print(f"phi = {phi['mean']:.2%} (94 % HDI {phi['hdi_3%']:.2%} to {phi['hdi_97%']:.2%})")
+    edge = json.loads((Path(args.out) / "fit.json").read_text()).get("coordinates_domain_edge")
+    if edge is not None and edge > EDGE_WARNING:
+        print(f"warning: the posterior reaches |dZ/dZ_theta - 1| = {edge:.2f}, near the edge of the impedance "
+              f"coordinates' domain ({MAX_SENSITIVITY_CHANGE:g}), which may cut it; compare with "
+              "--coordinates unconstrained")
     if result.converged:
         print("converged")
     else:

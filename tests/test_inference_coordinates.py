@@ -80,7 +80,14 @@ def test_the_papers_devices_lie_deep_inside_the_domain(records):
         for f in (0.5, 1.5):
             _, g = driving_point(2 * math.pi * f, p.m_B, p.m_s, p.b, p.c_f1, p.c_f2, p.c_n, p.k_n, p.c_B, p.k_B)
             assert abs(g - 1) < 0.2  # inside the domain's edge at |G - 1| = 1/2 (B2 at 1.5 Hz: 0.19)
-    assert imp is not None
+    # the same figure as the coordinates report it for a fit's draws
+    theta = np.array([np.log(paper_parameters(n[2:]).b) if n.startswith("b_") else 0.0 for n in model.names])
+    part = model.parts[0].to_theta(paper_parameters("A1"), 1.0, 0.3)
+    for i, n in enumerate(model.names):
+        if n in model.parts[0].names:
+            theta[i] = part[model.parts[0].names.index(n)]
+    assert 0.0 < default_coordinates(model).domain_edge(theta[None, :]) < 0.2
+    assert imp.b_index == (0, 1)
 
 
 @pytest.mark.parametrize("name", ["two-port", "linear", "joint"])
@@ -186,6 +193,9 @@ def test_run_sampler_in_impedance_coordinates_samples_theta(two_port, tmp_path):
     run = run_sampler(model, tmp_path / "chain.h5", nwalkers=24, steps=1500, seed=1,
                       start=(centre, 0.0))
     assert run.coordinates.kind == "impedance"
+    # the log posterior read back is theta's (the coordinates' Jacobian taken out)
+    draws, lps = run.chain(discard=1490), run.log_prob(discard=1490)
+    assert np.allclose(lps.ravel(), [model.log_prob(t)[0] for t in draws.reshape(-1, len(centre))], atol=1e-8)
     theta = run.chain(discard=300).reshape(-1, len(centre))
     assert np.all(np.abs(theta.mean(axis=0) - centre) < 0.25 * sd)
     assert np.all(np.abs(theta.std(axis=0) / sd - 1) < 0.25)

@@ -52,6 +52,7 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     # walked in the impedance coordinates at the record's 1.5 Hz, where the nut's ridge is an axis
     assert info["coordinates"].startswith("impedance (M, C at 1.5 Hz"), info["coordinates"]
     assert not any(m.startswith("NutRidgeMove") for m in info["moves"]), info["moves"]
+    assert 0.0 < info["coordinates_domain_edge"] < 0.5  # how near the domain's edge its draws came
 
 
 def test_physical_coordinates_keep_the_ridge_move(tmp_path, record_file):

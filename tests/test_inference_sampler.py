@@ -45,6 +45,17 @@ def test_a_continued_chain_stops_where_an_uninterrupted_one_does(model, tmp_path
     assert np.array_equal(again.sampler.get_chain(), whole.sampler.get_chain())
 
 
+def test_a_chain_stopped_on_a_check_continues_with_that_checks_tau(model, tmp_path):
+    # stopped exactly on a check before convergence: continued, it must be checked there
+    # again with the tau of the check before (as the uninterrupted run was) and go on
+    whole = _run(model, tmp_path / "whole.h5", 2000)
+    cut = int(whole.iteration) - CONV.check_every
+    assert not _run(model, tmp_path / "cut.h5", cut).converged
+    again = _run(model, tmp_path / "cut.h5", 2000)
+    assert again.iteration == whole.iteration
+    assert np.array_equal(again.sampler.get_chain(), whole.sampler.get_chain())
+
+
 def test_a_converged_chain_run_again_comes_back_as_it_is(model, tmp_path):
     done = _run(model, tmp_path / "c.h5", 2000)
     again = _run(model, tmp_path / "c.h5", 2000)

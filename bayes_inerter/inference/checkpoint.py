@@ -281,7 +281,8 @@ def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool 
     for s in intact:
         if s.attrs.get("bayes_inerter_digest") != digest:
             raise CheckpointError(
-                f"{s.path}: checkpoint belongs to another record, model or settings; "
+                f"{s.path}: checkpoint belongs to another record, model, settings or sampler coordinates "
+                "(a chain written before the impedance coordinates continues with --coordinates physical); "
                 "use another output folder, or --fresh to start over"
             )
         shape = (int(s.attrs["nwalkers"]), int(s.attrs["ndim"]))

@@ -7,8 +7,9 @@ its target there is the same posterior carried over with its Jacobian,
 
     log p_u(u) = log p(T(u)) + log |det dT/du|,
 
-so the choice changes how fast a chain mixes, never what it converges to. Two changes
-from theta, used together by default (:func:`default_coordinates`):
+so the choice changes how fast a chain mixes, not what it converges to, within the
+coordinates' domain (below: the impedance coordinates restrict the prior to it). Two
+changes from theta, used together by default (:func:`default_coordinates`):
 
 - **impedance**: a record fixes the driving-point impedance Z = F / v of the network's
   linear part at its drive frequency omega very tightly, and not the parameters that
@@ -39,11 +40,15 @@ again, and two b give one M. Where a soft bearing resonates near omega, M has a 
 b. The impedance coordinates therefore cover the part of the prior where the rotation
 node's sensitivity G = dZ / dZ_theta stays within |G - 1| < 1/2 for every inertance
 (then dM / db lies between 1/2 and 3/2, and the 2 x 2 determinant where C is walked too
-exceeds 1/4), with M and C positive: the prior restricted to that domain. The paper's
-devices have |G - 1| <= 0.19 at 0.5-1.5 Hz (the largest at B2, 1.5 Hz, where omega b is
-9 % of the nut's damping c_n), so their posteriors lie inside with room to spare (c_n
-would have to fall by more than half); the sampler sees -inf outside, and a start
-outside is refused. The
+exceeds 1/4), with M and C positive: **the prior restricted to that domain**, an
+assumption of these coordinates. It cuts off much of the default prior box of the
+unidentified deformations (at B2 and 1.5 Hz, a bearing stiffness k_B below 1.1e7 N/m
+leaves it, 6 x below the paper's; c_n below half the paper's), none of the paper's
+devices: they have |G - 1| <= 0.19 at 0.5-1.5 Hz (the largest at B2, 1.5 Hz, where
+omega b is 9 % of the nut's damping c_n), and the full study's posteriors stay well
+inside (``fit.json`` records the largest |G - 1| over the kept draws; the command line
+warns above ``EDGE_WARNING``). The sampler sees -inf outside; start walkers drawn
+outside are drawn again, and a start outside is refused. The
 "unconstrained" and "physical" coordinates cover the whole prior. The maps are exact
 to rounding inside the domain (round trips and Jacobians are tested against finite
 differences across the prior box).
@@ -56,7 +61,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Coordinates", "ImpedanceMap", "driving_point", "default_coordinates", "COORDINATES", "drive_omega"]
+__all__ = ["Coordinates", "ImpedanceMap", "driving_point", "default_coordinates", "COORDINATES", "drive_omega",
+           "MAX_SENSITIVITY_CHANGE", "EDGE_WARNING"]
 
 #: The coordinate systems a fit can use (``--coordinates``).
 COORDINATES = ("impedance", "unconstrained", "physical")
@@ -65,6 +71,8 @@ _NEWTON_ITERATIONS = 30
 _NEWTON_RTOL = 1e-13
 #: The domain: |G - 1| below this for every inertance (see module docstring).
 MAX_SENSITIVITY_CHANGE = 0.5
+#: A posterior whose draws reach |G - 1| above this may be cut by the domain: warn.
+EDGE_WARNING = 0.4
 
 
 def driving_point(omega, m_B, m_s, b, c_f1, c_f2, c_n, k_n, c_B, k_B):
@@ -141,6 +149,18 @@ class ImpedanceMap:
     def _inside(g):
         """Whether a point whose rotation node has sensitivity g is in the domain."""
         return np.abs(g - 1.0) < MAX_SENSITIVITY_CHANGE
+
+    def sensitivity_change(self, theta):
+        """max over the inertances of |G - 1| at theta (any leading axes): how near the
+        domain's edge (``MAX_SENSITIVITY_CHANGE``) a point lies."""
+        theta = np.asarray(theta, dtype=float)
+        c_n, k_n, c_B, k_B = self._network(theta)
+        c1, c2, _ = self._viscous(theta)
+        worst = np.zeros(theta.shape[:-1])
+        for i, m_s in zip(self.b_index, self.m_s):
+            _, g = driving_point(self.omega, self.m_B, m_s, np.exp(theta[..., i]), c1, c2, c_n, k_n, c_B, k_B)
+            worst = np.maximum(worst, np.abs(g - 1.0))
+        return worst
 
     def forward(self, theta):
         """u's impedance entries from theta (other entries copied); NaN rows outside the
@@ -308,6 +328,13 @@ class Coordinates:
     def log_jacobian(self, u) -> np.ndarray | float:
         """log |det d theta / d u| at u."""
         return self.transform(u)[1]
+
+    def domain_edge(self, theta) -> float | None:
+        """The largest |G - 1| over the draws ``theta`` (..., ndim), or None without an
+        impedance map: near ``MAX_SENSITIVITY_CHANGE`` the domain may cut the posterior."""
+        if self.impedance is None:
+            return None
+        return float(np.nanmax(self.impedance.sensitivity_change(theta)))
 
     def describe(self) -> str:
         """One line naming the coordinates (stored with a checkpoint and in fit.json)."""

@@ -274,7 +274,8 @@ def laplace_covariance(model: PosteriorModel, theta: np.ndarray) -> np.ndarray:
     return (root @ root.T) * np.outer(width, width)
 
 
-def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rng: np.random.Generator):
+def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rng: np.random.Generator,
+                     accept=None):
     """Initial walkers spread like the posterior near the optimum ``theta``.
 
     The Hessian of the log posterior at ``theta`` is taken by central differences in
@@ -288,7 +289,9 @@ def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rn
     Walkers started in a tiny ball must first expand across the directions the data do
     not fix (bearing damping, nut stiffness, the viscous split, spanning orders of
     magnitude), which lengthens the burn-in and inflates the autocorrelation estimate;
-    walkers started like this begin near equilibrium.
+    walkers started like this begin near equilibrium. ``accept``: an optional test of a
+    drawn theta (for example, that it lies in the sampler coordinates' domain); a draw
+    it refuses is drawn again too.
     Returns (nwalkers, ndim) and the number of log-posterior evaluations spent.
     """
     f, u0, from_u, n_evals = _unit_objective(model, theta)
@@ -299,7 +302,7 @@ def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rn
     walkers, scale, tries = [], 1.0, 0
     while len(walkers) < nwalkers:
         u = u0 + scale * root @ rng.standard_normal(d)
-        if f(u) >= floor:
+        if f(u) >= floor and (accept is None or accept(from_u(u))):
             walkers.append(u)
         tries += 1
         if tries % (20 * nwalkers) == 0:

@@ -264,11 +264,13 @@ def run_sampler(
                 start = start()
             start_theta = np.asarray(start[0], dtype=float)
             sampler.random_state = np.random.RandomState(seed).get_state()
-            walkers, _ = laplace_ensemble(model, start_theta, nwalkers, rng)
+            if not np.all(np.isfinite(coords.to_u(start_theta))):
+                raise ValueError(f"the start lies outside the {coords.kind} coordinates' domain; "
+                                 "use --coordinates unconstrained or physical")
+            # a walker drawn outside the coordinates' domain is drawn again
+            walkers, _ = laplace_ensemble(model, start_theta, nwalkers, rng,
+                                          accept=lambda t: bool(np.all(np.isfinite(coords.to_u(t)))))
             state = coords.to_u(walkers)
-            if not np.all(np.isfinite(state)):
-                raise ValueError(f"the start does not map into the {coords.kind} coordinates; "
-                                 "try coordinates 'unconstrained' or 'physical'")
         else:
             # continue from the checkpoint's last state, with its random state
             state = backend.get_last_sample()
