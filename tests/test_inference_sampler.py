@@ -8,7 +8,7 @@ from scipy import stats
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import Convergence, PosteriorModel
-from bayes_inerter.inference.sampler import run_sampler
+from bayes_inerter.inference.sampler import run_sampler, transient
 from bayes_inerter.records import GeneratorSettings, generate_record
 
 CONV = Convergence(check_every=40, n_tau=20, min_ess=200, max_steps=2000)
@@ -60,3 +60,13 @@ def test_a_converged_chain_run_again_comes_back_as_it_is(model, tmp_path):
     done = _run(model, tmp_path / "c.h5", 2000)
     again = _run(model, tmp_path / "c.h5", 2000)
     assert again.converged and again.iteration == done.iteration
+
+
+def test_transient_is_none_for_a_chain_in_equilibrium_and_the_climb_for_one_that_is_not():
+    rng = np.random.default_rng(0)
+    still = rng.normal(2700.0, 2.0, size=(4000, 24))
+    assert transient(still) <= 2
+    climbing = still.copy()
+    climbing[:1500] -= np.linspace(440.0, 0.0, 1500)[:, None]  # a start 440 nats below, as A2 at 0.5 Hz
+    assert 1300 <= transient(climbing) <= 1500
+    assert transient(still[:3]) == 0  # too short to say

@@ -1,7 +1,8 @@
 """From a finished chain to arviz's InferenceData, a summary table and predictive draws.
 
-- burn-in: 2 x the largest autocorrelation time (or half the chain if tau is not
-  estimable); thinning: half the smallest tau;
+- burn-in: the chain's transient (``sampler.transient``: the steps before its walkers
+  reach equilibrium) and 2 x the largest autocorrelation time after it (or half the
+  chain if tau is not estimable); thinning: half the smallest tau;
 - the posterior (values in SI units, not logs) and phi, the fit accuracy, for every kept
   draw; sample_stats holds the log posterior;
 - for at most ``max_draws`` of those draws (further thinned): the pointwise
@@ -62,12 +63,12 @@ def posterior_sample(model: PosteriorModel, run) -> PosteriorSample:
     """Kept draws of a finished :class:`.sampler.SamplerRun` (in theta, whatever
     coordinates its walkers moved in)."""
     sampler, tau = run.sampler, run.tau
-    n = sampler.iteration
-    if np.all(np.isfinite(tau)) and 2 * np.max(tau) < n - 10:
-        burn = int(2 * np.max(tau))
+    n, skip = sampler.iteration, run.transient
+    if np.all(np.isfinite(tau)) and skip + 2 * np.max(tau) < n - 10:
+        burn = skip + int(2 * np.max(tau))
         thin = max(1, int(0.5 * np.min(tau)))
     else:
-        burn, thin = n // 2, 1
+        burn, thin = max(skip, n // 2), 1
     chain = run.chain(discard=burn, thin=thin)  # (draws, walkers, ndim)
     blobs = sampler.get_blobs(discard=burn, thin=thin)
     lp = run.log_prob(discard=burn, thin=thin)

@@ -17,9 +17,11 @@ convergence, summaries) is in the model's parameters theta.
 Convergence (documented defaults, :class:`Convergence`): emcee's integrated
 autocorrelation time tau (``emcee.autocorr.integrated_time(tol=0)`` on the chain in
 theta, the reported parameters) per parameter, checked every
-``check_every`` steps; converged when the chain is longer than ``n_tau`` times the
-largest tau, tau moved less than ``tau_rtol`` since the last check, and, after
-discarding 2 tau of burn-in, R-hat < ``max_rhat`` and bulk ESS >= ``min_ess`` (arviz,
+``check_every`` steps, on the chain after its :func:`transient` (the steps before the
+walkers reach equilibrium, none for a chain that starts there); converged when that
+chain is longer than ``n_tau`` times the largest tau, tau moved less than ``tau_rtol``
+since the last check, and, after discarding 2 tau more, R-hat < ``max_rhat`` and bulk
+ESS >= ``min_ess`` (arviz,
 treating walkers as chains: they are not independent, so R-hat here is a check that no
 walker is stuck apart from the others, not a proof). Or stops at ``max_steps``.
 """
@@ -40,7 +42,7 @@ from .moves import NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, sse
 
 __all__ = ["Convergence", "CheckpointError", "SamplerRun", "run_sampler", "record_digest", "check_run_options",
-           "default_moves"]
+           "default_moves", "transient"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
@@ -111,6 +113,8 @@ class SamplerRun:
     moves: tuple = ()
     #: where the walkers moved (``coordinates.describe()`` names them)
     coordinates: Coordinates | None = None
+    #: steps before the walkers reached equilibrium (:func:`transient`), left out of tau
+    transient: int = 0
 
     @property
     def iteration(self) -> int:
@@ -173,15 +177,34 @@ def _sse(phys):
     return sse(_MODEL, phys)
 
 
-def _diagnostics(sampler, coords, conv: Convergence):
-    """tau, R-hat and bulk ESS of the chain in theta (the reported parameters)."""
+def transient(log_prob: np.ndarray) -> int:
+    """Steps at the start of a chain before its walkers reach equilibrium: the first step
+    at which the walkers' median log posterior comes within three robust spreads (at
+    least 1 nat) of its median over the chain's last half. 0 for a chain that starts in
+    equilibrium; a start in a worse basin (the full study's A2 at 0.5 Hz: 2,000 steps
+    about 440 nats below) would otherwise inflate tau, estimated on the whole chain, by
+    an order of magnitude. ``log_prob``: shape (steps, walkers)."""
+    m = np.median(np.asarray(log_prob, dtype=float), axis=1)
+    if len(m) < 4:
+        return 0
+    late = m[len(m) // 2:]
+    ref = np.median(late)
+    spread = max(3.0 * 1.4826 * np.median(np.abs(late - ref)), 1.0)
+    return int(np.argmax(m >= ref - spread))
+
+
+def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None):
+    """tau, R-hat and bulk ESS of the chain in theta (the reported parameters) after its
+    :func:`transient`, and the transient's steps; of its first ``upto`` steps if given."""
     from .diagnostics import rhat_ess
 
-    chain = _theta_chain(sampler, coords)
-    tau = emcee.autocorr.integrated_time(chain, tol=0)
-    burn = int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else sampler.iteration // 2
-    rhat, ess = rhat_ess(chain[min(burn, sampler.iteration - 2):])
-    return tau, rhat, ess
+    n = sampler.iteration if upto is None else upto
+    chain = _theta_chain(sampler, coords)[:n]
+    skip = min(transient(sampler.get_log_prob()[:n]), n // 2)
+    tau = emcee.autocorr.integrated_time(chain[skip:], tol=0)
+    burn = skip + (int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else (n - skip) // 2)
+    rhat, ess = rhat_ess(chain[min(burn, n - 2):])
+    return tau, rhat, ess, skip
 
 
 def check_run_options(ndim: int, nwalkers: int | None, steps: int | None) -> int:
@@ -283,10 +306,10 @@ def run_sampler(
                     if progress:
                         progress(sampler.iteration, target)
                 backend.flush()
-            tau, rhat, ess = _diagnostics(sampler, coords, conv)
-            ok = _is_converged(sampler.iteration, tau, None, rhat, ess, conv)
-            reason = "converged" if ok else _why_not(sampler.iteration, tau, rhat, ess, conv)
-            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used, coords)
+            tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
+            ok = _is_converged(sampler.iteration - skip, tau, None, rhat, ess, conv)
+            reason = "converged" if ok else _why_not(sampler.iteration, skip, tau, rhat, ess, conv)
+            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used, coords, skip)
         # Checks fall on multiples of check_every, so that a continued chain is checked
         # (and stops) where an uninterrupted run would be; a continued chain takes the
         # tau of that run's previous check from the stored chain, and one that stands
@@ -295,7 +318,7 @@ def run_sampler(
         previous = None
         last = ((done - 1) // conv.check_every) * conv.check_every if done else 0
         if last > 0:
-            previous = emcee.autocorr.integrated_time(_theta_chain(sampler, coords)[:last], tol=0)
+            previous = _diagnostics(sampler, coords, conv, upto=last)[0]
         check_now = done > 0 and done % conv.check_every == 0
         while True:
             chunk = 0 if check_now else min(conv.check_every - sampler.iteration % conv.check_every,
@@ -307,12 +330,12 @@ def run_sampler(
                         progress(sampler.iteration, None)
                 backend.flush()
                 state = sampler.get_last_sample()
-            tau, rhat, ess = _diagnostics(sampler, coords, conv)
-            if _is_converged(sampler.iteration, tau, previous, rhat, ess, conv):
-                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used, coords)
+            tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
+            if _is_converged(sampler.iteration - skip, tau, previous, rhat, ess, conv):
+                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used, coords, skip)
             if sampler.iteration >= conv.max_steps:
-                return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, tau, rhat, ess, conv), start_theta,
-                                  recovered, used, coords)
+                return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, skip, tau, rhat, ess, conv),
+                                  start_theta, recovered, used, coords, skip)
             previous = tau
     finally:
         if pool is not None:
@@ -326,6 +349,7 @@ def run_sampler(
 
 
 def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> bool:
+    """``iteration``: the chain's steps after its transient."""
     if not np.all(np.isfinite(tau)):
         return False
     if iteration < conv.n_tau * np.max(tau):
@@ -336,12 +360,13 @@ def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> boo
     return bool(np.nanmax(rhat) < conv.max_rhat and np.nanmin(ess) >= conv.min_ess)
 
 
-def _why_not(iteration, tau, rhat, ess, conv: Convergence) -> str:
+def _why_not(iteration, skip, tau, rhat, ess, conv: Convergence) -> str:
     parts = []
     if np.all(np.isfinite(tau)):
         need = conv.n_tau * np.max(tau)
-        if iteration < need:
-            parts.append(f"chain of {iteration} steps is shorter than {conv.n_tau:g} tau = {need:.0f}")
+        if iteration - skip < need:
+            after = f" after a transient of {skip}" if skip else ""
+            parts.append(f"chain of {iteration - skip} steps{after} is shorter than {conv.n_tau:g} tau = {need:.0f}")
     else:
         parts.append("autocorrelation time not estimable")
     if not np.nanmax(rhat) < conv.max_rhat:
