@@ -201,7 +201,8 @@ def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None):
     n = sampler.iteration if upto is None else upto
     chain = _theta_chain(sampler, coords)[:n]
     skip = min(transient(sampler.get_log_prob()[:n]), n // 2)
-    tau = emcee.autocorr.integrated_time(chain[skip:], tol=0)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a parameter that never moved: tau NaN, handled below
+        tau = emcee.autocorr.integrated_time(chain[skip:], tol=0)
     burn = skip + (int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else (n - skip) // 2)
     rhat, ess = rhat_ess(chain[min(burn, n - 2):])
     return tau, rhat, ess, skip
