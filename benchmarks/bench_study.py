@@ -46,6 +46,9 @@ def main():
     def sampling(f):  # over every run that built the chain (a resumed chain's runs add up)
         return f["timings_s"].get("sampling_all_runs", f["timings_s"]["sampling"])
 
+    def timed_steps(f):  # the steps that time covers (a run killed before fit.json is not timed)
+        return int(f["timings_s"].get("steps_timed", f["iterations"]))
+
     samp = sum(sampling(f) for f in fits)
     post = sum(f["timings_s"].get("posterior_draws", 0.0) for f in fits)
     total = sum(sampling(f) + f["timings_s"]["total"] - f["timings_s"]["sampling"] for f in fits)
@@ -72,7 +75,7 @@ def main():
         tau = [t for t in f["tau"].values() if np.isfinite(t)]
         it = int(f["iterations"])
         steps = max(50 * max(tau), it) if tau else float("nan")
-        need.append(sampling(f) * steps / it)
+        need.append(sampling(f) * steps / timed_steps(f) if timed_steps(f) else float("nan"))
     proj = np.nansum(need) / procs + sec.get("analysis_and_report", 0.0)
     conv = sum(bool(f["converged"]) for f in fits)
     print(f"3. converged chains: {conv} of {len(fits)}. Projected wall time with every chain at 50 tau "
@@ -80,9 +83,13 @@ def main():
     if (out / "joint" / "fit.json").exists():
         j = json.loads((out / "joint" / "fit.json").read_text())
         tau = max(t for t in j["tau"].values() if np.isfinite(t))
-        t = sampling(j)
-        print(f"   joint model: {j['iterations']} steps in {t:.0f} s, largest tau {tau:.0f}: "
-              f"50 tau would take {t * 50 * tau / j['iterations'] / 60:.0f} min")
+        t, n = sampling(j), timed_steps(j)
+        if n == 0:
+            print(f"   joint model: {j['iterations']} steps, largest tau {tau:.0f}; none of its steps were timed "
+                  "(its runs were stopped before writing fit.json)")
+        else:
+            print(f"   joint model: {j['iterations']} steps, {n} of them timed in {t:.0f} s, largest tau {tau:.0f}: "
+                  f"50 tau would take {t * 50 * tau / n / 60:.0f} min")
 
 
 if __name__ == "__main__":

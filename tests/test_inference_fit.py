@@ -82,6 +82,7 @@ def test_same_seed_same_summary(tmp_path, record_file):
         (tmp_path / "a" / name).unlink()
     again = fit_record(rec, tmp_path / "a", steps=20, walkers=24, seed=5, plots=False)
     assert again.timings["sampling_all_runs"] == again.timings["sampling"]
+    assert again.timings["steps_timed"] == 20
     assert (tmp_path / "a" / "summary.csv").read_bytes() == first
 
 

@@ -101,6 +101,14 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     assert again.iterations == 9  # continued the checkpoint, not started over
     # the sampling time of the chain adds up over the two runs that built it
     assert again.timings["sampling_all_runs"] == pytest.approx(res.timings["sampling"] + again.timings["sampling"])
+    assert again.timings["steps_timed"] == 9
+    # a run killed before it wrote fit.json leaves steps in the chain that nobody timed:
+    # the next run times only its own, so seconds per step stay right
+    (tmp_path / "joint" / "fit.json").unlink()
+    third = fit_joint(records, tmp_path / "joint", centres=centres, steps=11, plots=False)
+    assert third.iterations == 11
+    assert third.timings["steps_timed"] == 2
+    assert third.timings["sampling_all_runs"] == third.timings["sampling"]
 
 
 def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_path, monkeypatch):

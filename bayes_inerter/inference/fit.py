@@ -134,7 +134,7 @@ def fit_record(
         "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
         "contraction": shrink,
         "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total,
-                      "sampling_all_runs": _sampling_all_runs(out, t_sample, fresh or run.start_theta is not None)},
+                      **_sampling_all_runs(out, t_sample, run, fresh or run.start_theta is not None)},
         "versions": versions(),
         "record_metadata": record.metadata,
     }
@@ -229,7 +229,7 @@ def fit_joint(
         "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
         "contraction": shrink,
         "timings_s": {"sampling": t_sample, "total": t_total,
-                      "sampling_all_runs": _sampling_all_runs(out, t_sample, run.start_theta is not None)},
+                      **_sampling_all_runs(out, t_sample, run, run.start_theta is not None)},
         "versions": versions(),
     }
     (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
@@ -237,20 +237,26 @@ def fit_joint(
                      run.recovered)
 
 
-def _sampling_all_runs(out: Path, t_sample: float, started_over: bool) -> float:
-    """Sampling seconds of the chain in all runs that built it: this run's plus what the
-    previous fit.json recorded, unless the chain started over (``--fresh``, or no
-    checkpoint was there, as in a fresh clone beside a committed fit.json); a run that
-    continues a checkpoint, or finds it complete, would otherwise report only its own
-    share."""
+def _sampling_all_runs(out: Path, t_sample: float, run, started_over: bool) -> dict:
+    """Sampling seconds of the chain in all runs that built it and the steps they timed
+    (``sampling_all_runs``, ``steps_timed``): this run's plus what the previous fit.json
+    recorded, unless the chain started over (``--fresh``, or no checkpoint was there, as
+    in a fresh clone beside a committed fit.json); a run that continues a checkpoint, or
+    finds it complete, would otherwise report only its own share. Steps of a run killed
+    before it wrote fit.json are in the chain but not timed, so seconds per step are
+    ``sampling_all_runs / steps_timed``, not per ``iterations``."""
+    own = {"sampling_all_runs": t_sample, "steps_timed": int(run.iteration - run.resumed_at)}
     previous = out / "fit.json"
     if started_over or not previous.exists():
-        return t_sample
+        return own
     try:
-        timings = json.loads(previous.read_text()).get("timings_s", {})
-    except (OSError, ValueError):
-        return t_sample
-    return t_sample + float(timings.get("sampling_all_runs", timings.get("sampling", 0.0)))
+        before = json.loads(previous.read_text())
+        timings = before.get("timings_s", {})
+        seconds = float(timings.get("sampling_all_runs", timings.get("sampling", 0.0)))
+        steps = int(timings.get("steps_timed", before.get("iterations", 0)))
+    except (OSError, ValueError, TypeError):
+        return own
+    return {"sampling_all_runs": own["sampling_all_runs"] + seconds, "steps_timed": own["steps_timed"] + steps}
 
 
 def _residual_sd(sample) -> float:

@@ -115,6 +115,8 @@ class SamplerRun:
     coordinates: Coordinates | None = None
     #: steps before the walkers reached equilibrium (:func:`transient`), left out of tau
     transient: int = 0
+    #: steps the checkpoint held when this run began (0 for a new chain)
+    resumed_at: int = 0
 
     @property
     def iteration(self) -> int:
@@ -310,7 +312,7 @@ def run_sampler(
             tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
             ok = _is_converged(sampler.iteration - skip, tau, None, rhat, ess, conv)
             reason = "converged" if ok else _why_not(sampler.iteration, skip, tau, rhat, ess, conv)
-            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used, coords, skip)
+            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used, coords, skip, done)
         # Checks fall on multiples of check_every, so that a continued chain is checked
         # (and stops) where an uninterrupted run would be; a continued chain takes the
         # tau of that run's previous check from the stored chain, and one that stands
@@ -333,10 +335,10 @@ def run_sampler(
                 state = sampler.get_last_sample()
             tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
             if _is_converged(sampler.iteration - skip, tau, previous, rhat, ess, conv):
-                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used, coords, skip)
+                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used, coords, skip, done)
             if sampler.iteration >= conv.max_steps:
                 return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, skip, tau, rhat, ess, conv),
-                                  start_theta, recovered, used, coords, skip)
+                                  start_theta, recovered, used, coords, skip, done)
             previous = tau
     finally:
         if pool is not None:
