@@ -178,3 +178,21 @@ def test_report_flags_records_that_disagree_beyond_chance():
     # 1000 +- 1 against 1010 +- 1: chi2 50 on 1 degree of freedom
     rows = inertance_table([fake_fit("A1", 0.5, 1000.0, 1.0), fake_fit("A1", 1.0, 1010.0, 1.0)])
     assert "A1 the disagreement is beyond chance" in _inertance_text(rows, None)
+
+
+def test_collect_orders_fits_by_setting_and_frequency_as_numbers(tmp_path):
+    import json
+
+    from bayes_inerter.study.analysis import collect
+
+    # folder names sort as text (A0_0.5Hz, A0_1.5Hz, A0_1Hz); the tables want 0.5, 1, 1.5 Hz
+    for model, setting, freq in [("two-port", "A1", 1.0), ("two-port", "A0", 1.5), ("rigid", "A0", 1.0),
+                                 ("two-port", "A0", 0.5), ("two-port", "A0", 1.0)]:
+        folder = tmp_path / model / f"{setting}_{freq:g}Hz"
+        folder.mkdir(parents=True)
+        (folder / "summary.csv").write_text("name,mean,sd\nb,1.0,0.1\n")
+        (folder / "fit.json").write_text(json.dumps(
+            {"model": model, "record_metadata": {"setting": setting, "drive_frequency_hz": freq}}))
+    order = [(f.model, f.name) for f in collect(tmp_path)]
+    assert order == [("rigid", "A0_1Hz"), ("two-port", "A0_0.5Hz"), ("two-port", "A0_1Hz"),
+                     ("two-port", "A0_1.5Hz"), ("two-port", "A1_1Hz")]

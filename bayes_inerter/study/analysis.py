@@ -70,7 +70,8 @@ def _read_summary(path: Path) -> dict:
 
 
 def collect(fits_dir: Path) -> list[RecordFit]:
-    """Every finished fit under ``fits_dir``/<model>/<record>/ (summary.csv and fit.json)."""
+    """Every finished fit under ``fits_dir``/<model>/<record>/ (summary.csv and fit.json),
+    in the order of model, setting, drive frequency (as numbers: 0.5, 1, 1.5 Hz) and name."""
     out = []
     for summary in sorted(Path(fits_dir).glob("*/*/summary.csv")):
         folder = summary.parent
@@ -79,7 +80,7 @@ def collect(fits_dir: Path) -> list[RecordFit]:
         freq = meta.get("drive_frequency_hz")
         out.append(RecordFit(folder.name, meta.get("setting"), float(freq) if freq else None, info["model"],
                              folder, _read_summary(summary), info))
-    return out
+    return sorted(out, key=lambda f: (f.model, f.setting or "", f.freq if f.freq is not None else math.inf, f.name))
 
 
 def _normal(fit: RecordFit) -> tuple[float, float]:

@@ -62,7 +62,9 @@ def run_joint(plan: StudyPlan, out: Path, fits: list, records: dict, *, processe
     from ..inference.fit import fit_joint
     from ..inference.model import PosteriorModel
 
-    chosen = [f for f in fits if f.model == "two-port" and f.name in records and records[f.name][1] in SETTINGS]
+    # in the records' name order: the checkpoint's digest depends on the order of the records
+    chosen = sorted((f for f in fits if f.model == "two-port" and f.name in records and records[f.name][1] in SETTINGS),
+                    key=lambda f: f.name)
     if len(chosen) < 2:
         return None
     recs = [read_record(records[f.name][0]) for f in chosen]
