@@ -196,3 +196,19 @@ def test_collect_orders_fits_by_setting_and_frequency_as_numbers(tmp_path):
     order = [(f.model, f.name) for f in collect(tmp_path)]
     assert order == [("rigid", "A0_1Hz"), ("two-port", "A0_0.5Hz"), ("two-port", "A0_1Hz"),
                      ("two-port", "A0_1.5Hz"), ("two-port", "A1_1Hz")]
+
+
+def test_report_says_how_records_were_combined_and_points_to_the_joint_model():
+    from bayes_inerter.study.report import _combination_note
+
+    inert = inertance_table([fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1010.0, 10.0),
+                             fake_fit("A2", 1.0, 2000.0, 5.0)])
+    alone = _combination_note(inert, [])
+    assert "independent normals" in alone and "joint model" not in alone
+    joint = [{"setting": "A1", "covers_truth": True}, {"setting": "A2", "covers_truth": False}]
+    text = _combination_note(inert, joint)
+    assert "joint model" in text and "for 1 of 2 settings" in text
+    # a user's records (no generating b): no coverage claimed
+    assert "settings" not in _combination_note(inert, [{"setting": "A1"}]).split("joint model")[1]
+    # one record per setting: nothing was combined, nothing to say
+    assert _combination_note(inertance_table([fake_fit("A1", 1.0, 1000.0, 10.0)]), joint) == ""

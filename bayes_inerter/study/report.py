@@ -59,6 +59,24 @@ def _inertance_text(rows, truth_b: dict | None) -> str:
     return text
 
 
+def _combination_note(inert, joint_rows) -> str:
+    """How the per-setting b's above were combined (nothing to say where every setting
+    has one record), and where the joint model (if the study ran it) stands against them."""
+    if all(r.get("records", 1) <= 1 for r in inert):
+        return ""
+    text = ("These combine each setting's records as independent normals (the product of their posteriors): "
+            "each record has its own frictions and deformations, so what every record leaves open and each "
+            "moves b by (where the viscous friction acts, the nut's stiffness) is counted once per record.")
+    if not joint_rows:
+        return text
+    text += (" The joint model (below) shares them across all records, as the paper tuned them, and is the "
+             "better estimate of b per setting")
+    if "covers_truth" in joint_rows[0]:
+        text += (f": its 94 % intervals hold the generating b for {sum(r['covers_truth'] for r in joint_rows)} "
+                 f"of {len(joint_rows)} settings")
+    return text + "."
+
+
 def _calibration_text(rows, calibration, truth_b: dict | None, prefix: str, gains=None) -> str:
     """What the sensors' calibration adds to b (``<prefix>hdi_*`` columns). ``gains``: the
     (load cell, accelerometer) sensitivity errors the records were generated with (None
@@ -195,7 +213,9 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
     if inert:
         cal_cols = [c for c in ("b_cal_hdi_3%", "b_cal_hdi_97%") if c in inert[0]]
         app_cols = [c for c in ("b_app_hdi_3%", "b_app_hdi_97%") if recs and c in recs[0]]
+        note = _combination_note(inert, tables.get("joint"))
         lines += ["## Inertance per flywheel setting", "", _inertance_text(inert, truth_b), "",
+                  *([note, ""] if note else []),
                   _table(inert, ["setting", "b_theory", "b_paper", "b_median", "b_hdi_3%", "b_hdi_97%", *cal_cols,
                                  "records", "converged"],
                          {c: "{:.1f}" for c in ("b_theory", "b_paper", "b_median", "b_hdi_3%", "b_hdi_97%",
