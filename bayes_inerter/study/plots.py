@@ -24,11 +24,11 @@ def plot_inertance(rows: list[dict]):
     ax.plot(x, theory, "s", mfc="none", color="k", ms=9, label="theory (geometry)")
     ax.plot(x, paper, "x", color="tab:red", ms=9, label="paper, identified by hand")
     ax.errorbar(x, med, yerr=err, fmt="o", color="tab:blue", capsize=4, label="posterior median, 94 % interval")
-    joint = "b_joint_mean" in rows[0]
-    if joint:  # the joint model's b beside the single-record combination
-        jm = np.array([r["b_joint_mean"] for r in rows])
-        jerr = np.array([[r["b_joint_mean"] - r["b_joint_hdi_3%"] for r in rows],
-                         [r["b_joint_hdi_97%"] - r["b_joint_mean"] for r in rows]])
+    joint = any("b_joint_mean" in r for r in rows)
+    if joint:  # the joint model's b beside the single-record combination (NaN: not in the joint model)
+        jm, lo, hi = (np.array([r.get(k, np.nan) for r in rows]) for k in ("b_joint_mean", "b_joint_hdi_3%",
+                                                                         "b_joint_hdi_97%"))
+        jerr = np.array([jm - lo, hi - jm])
         ax.errorbar(x + 0.2, jm, yerr=jerr, fmt="D", color="tab:green", capsize=4, ms=5,
                     label="joint model (all records), mean, 94 % interval")
     ax.set_yscale("log")

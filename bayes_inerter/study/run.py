@@ -131,7 +131,9 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
         files.update(joint="joint_inertance.csv", joint_regression="flywheels_joint.csv")
     for key, name in files.items():
         write_csv(out / name, tables[key])
-    figures = {"theory_vs_identified.png": (plot_inertance, inert), "phi_map.png": (plot_phi_map, tables["phi"]),
+    by_setting = {r["setting"]: r for r in tables.get("joint", [])}
+    with_joint = [r | by_setting.get(r["setting"], {}) for r in inert]  # the joint b's beside the product's
+    figures = {"theory_vs_identified.png": (plot_inertance, with_joint), "phi_map.png": (plot_phi_map, tables["phi"]),
                "model_comparison.png": (plot_models, tables["models"])}
     for name, (plot, rows) in figures.items():
         if rows:
