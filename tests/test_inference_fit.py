@@ -4,6 +4,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 
 import h5py
 import numpy as np
@@ -38,7 +39,8 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     assert code == 0
     text = capsys.readouterr().out
     assert "b = " in text and "warning: not converged" in text
-    for name in ("summary.csv", "posterior.nc", "chain.h5", "corner.png", "bands.png", "trace.png", "phi.png", "fit.json"):
+    for name in ("summary.csv", "posterior.nc", "loo.json", "chain.h5", "corner.png", "bands.png", "trace.png", "phi.png",
+                 "fit.json"):
         assert (out / name).exists(), name
     header = (out / "summary.csv").read_text().splitlines()[0]
     assert header == "name,mean,sd,hdi_3%,hdi_97%,r_hat,ess_bulk,ess_tail"
@@ -48,6 +50,15 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     for group in ("posterior", "log_likelihood", "posterior_predictive", "observed_data", "sample_stats"):
         assert group in idata.groups()
     assert "phi" in idata.posterior
+    # loo.json holds what arviz computes from posterior.nc
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # 30 steps: large Pareto k, which loo.json keeps
+        loo = az.loo(idata, pointwise=True)
+    kept = json.loads((out / "loo.json").read_text())
+    assert kept["elpd_loo"] == pytest.approx(float(loo.elpd_loo), rel=1e-12)
+    assert kept["elpd_se"] == pytest.approx(float(loo.se), rel=1e-12)
+    assert kept["pareto_k_max"] == pytest.approx(float(np.max(loo.pareto_k)), rel=1e-12)
+    assert kept["n_points"] == idata.log_likelihood["accel"].shape[-1]
     info = json.loads((out / "fit.json").read_text())
     # walked in the impedance coordinates at the record's 1.5 Hz, where the nut's ridge is an axis
     assert info["coordinates"].startswith("impedance (M, C at 1.5 Hz"), info["coordinates"]

@@ -62,13 +62,32 @@ def test_running_again_reuses_finished_fits(study):
     assert again.tables["inertance"] == study.tables["inertance"]
 
 
-def test_a_fit_whose_posterior_file_is_gone_runs_again(study, tmp_path):
-    """A fresh clone has done.json and the tables' files but not posterior.nc (not
-    committed): the study must fit again, not fail."""
-    out = tmp_path / "copy"
-    shutil.copytree(study.out, out, ignore=shutil.ignore_patterns("posterior.nc", "chain.h5"))
-    again = run_study(tiny_plan(), out, processes=2)
-    assert [o["status"] for o in again.outcomes] == ["done"] * 4
+def test_a_fresh_clone_of_committed_results_reuses_their_fits(tmp_path, monkeypatch):
+    """A fresh clone has done.json, the tables' files and loo.json but not posterior.nc
+    or the checkpoints (not committed): the study reuses the fits, model comparison
+    included. Without loo.json too, the records of the model comparison are fitted again
+    (their LOO cannot be rebuilt) and the others are still reused. Committed studies name
+    their folders relative to the clone, as here."""
+    (tmp_path / "origin").mkdir()
+    monkeypatch.chdir(tmp_path / "origin")
+    first = run_study(tiny_plan(joint=False), "results/tiny", processes=2)
+    assert [o["status"] for o in first.outcomes] == ["done"] * 4
+
+    def clone(name, *dropped):
+        shutil.copytree(tmp_path / "origin", tmp_path / name, ignore=shutil.ignore_patterns(*dropped))
+        monkeypatch.chdir(tmp_path / name)
+        return run_study(tiny_plan(joint=False), "results/tiny", processes=2)
+
+    again = clone("clone", "posterior.nc", "chain*.h5")
+    assert [o["status"] for o in again.outcomes] == ["skipped"] * 4
+    assert again.tables["models"] == first.tables["models"]
+    assert again.tables["inertance"] == first.tables["inertance"]
+    # A2 is in the model comparison: its three fits run again; A0's two-port fit alone
+    # needs no LOO and is reused
+    older = clone("older", "posterior.nc", "chain*.h5", "loo.json")
+    status = {o["key"]: o["status"] for o in older.outcomes}
+    assert status == {"A0_1Hz/two-port": "skipped", "A2_1Hz/two-port": "done", "A2_1Hz/rigid": "done",
+                      "A2_1Hz/linear": "done"}
 
 
 def test_a_users_folder_of_records(study, tmp_path):

@@ -1,8 +1,9 @@
 """Fit one record: the Python API behind ``bayes-inerter fit``.
 
 Writes into the output folder: ``chain.h5`` (the emcee checkpoint, written as it goes),
-``summary.csv``, ``posterior.nc`` (arviz InferenceData), ``corner.png``, ``bands.png``,
-``trace.png``, ``phi.png`` and ``fit.json`` (convergence, settings, versions, timings).
+``summary.csv``, ``posterior.nc`` (arviz InferenceData), ``loo.json`` (its PSIS-LOO in
+five numbers), ``corner.png``, ``bands.png``, ``trace.png``, ``phi.png`` and ``fit.json``
+(convergence, settings, versions, timings).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import numpy as np
 from ..records.record import Record
 from .coordinates import default_coordinates
 from .model import LikelihoodSettings, PosteriorModel
-from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_summary
+from .results import contraction, loo_summary, posterior_sample, summary_rows, to_inference_data, write_summary
 from .sampler import Convergence, check_run_options, run_sampler
 
 __all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions"]
@@ -117,6 +118,7 @@ def fit_record(
     t_post = time.perf_counter() - t0 - t_sample
     write_summary(out / "summary.csv", rows)
     idata.to_netcdf(str(out / "posterior.nc"))
+    (out / "loo.json").write_text(json.dumps(loo_summary(idata), indent=2) + "\n")
     if plots:
         _write_plots(out, pm, sample, sims)
     t_total = time.perf_counter() - t0

@@ -25,8 +25,8 @@ import numpy as np
 
 from .model import PosteriorModel
 
-__all__ = ["PosteriorSample", "ar1_noise", "posterior_sample", "contraction", "to_inference_data", "summary_rows", "write_summary",
-           "SUMMARY_COLUMNS", "MAX_DRAWS"]
+__all__ = ["PosteriorSample", "ar1_noise", "posterior_sample", "contraction", "to_inference_data", "summary_rows",
+           "write_summary", "loo_summary", "SUMMARY_COLUMNS", "MAX_DRAWS"]
 
 SUMMARY_COLUMNS = ("name", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail")
 MAX_DRAWS = 600  # draws that get a simulation for log-likelihood and predictive
@@ -188,3 +188,20 @@ def write_summary(path, rows: list[dict]) -> None:
         w.writerow(SUMMARY_COLUMNS)
         for r in rows:
             w.writerow([r["name"]] + [f"{r[c]:.10g}" for c in SUMMARY_COLUMNS[1:]])
+
+
+def loo_summary(idata) -> dict:
+    """PSIS-LOO of a fit's InferenceData (arviz): elpd_loo, its standard error, p_loo,
+    the largest Pareto k and the number of points. Small enough to keep beside a fit's
+    summary where ``posterior.nc`` is not kept (committed results), so a study's model
+    comparison can be rebuilt without it."""
+    import warnings
+
+    import arviz as az
+
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a large Pareto k is reported in the result instead
+        loo = az.loo(idata, pointwise=True)
+    k = np.asarray(loo.pareto_k)
+    return {"elpd_loo": float(loo.elpd_loo), "elpd_se": float(loo.se), "p_loo": float(loo.p_loo),
+            "pareto_k_max": float(np.max(k)), "n_points": int(k.size)}

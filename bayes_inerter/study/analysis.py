@@ -38,7 +38,7 @@ from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
 from ..records.sensitivity import SensorCalibration
 
 __all__ = ["RecordFit", "birge_ratio", "collect", "inertance_table", "joint_inertance", "record_table",
-           "flywheel_regression", "phi_table", "model_comparison", "contraction_table", "write_csv", "Z94"]
+           "flywheel_regression", "phi_table", "model_comparison", "fit_loo", "LOO_FILE", "contraction_table", "write_csv", "Z94"]
 
 #: Half-width of a central 94 % interval of a normal, in sd.
 Z94 = 1.880793608151251
@@ -275,10 +275,26 @@ def phi_table(fits: list[RecordFit]) -> list[dict]:
     return rows
 
 
-def model_comparison(fits: list[RecordFit]) -> list[dict]:
-    """Per record fitted with several models: LOO (arviz) and phi of each."""
+LOO_FILE = "loo.json"
+
+
+def fit_loo(fit: RecordFit) -> dict:
+    """A fit's PSIS-LOO (``inference.results.loo_summary``): from its ``loo.json``, or
+    computed from its ``posterior.nc`` and kept in ``loo.json`` for next time."""
+    from ..inference.results import loo_summary
+
+    path = fit.folder / LOO_FILE
+    if path.is_file():
+        return json.loads(path.read_text())
     import arviz as az
 
+    loo = loo_summary(az.from_netcdf(str(fit.folder / "posterior.nc")))
+    path.write_text(json.dumps(loo, indent=2) + "\n")
+    return loo
+
+
+def model_comparison(fits: list[RecordFit]) -> list[dict]:
+    """Per record fitted with several models: LOO (arviz, ``fit_loo``) and phi of each."""
     by_record = {}
     for f in fits:
         by_record.setdefault(f.name, []).append(f)
@@ -288,13 +304,9 @@ def model_comparison(fits: list[RecordFit]) -> list[dict]:
         if len(group) < 2:
             continue
         for f in sorted(group, key=lambda g: list(paper).index(g.model)):
-            idata = az.from_netcdf(str(f.folder / "posterior.nc"))
-            with np.errstate(all="ignore"), warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # the Pareto k warning is kept in the table instead
-                loo = az.loo(idata, pointwise=True)
-            k_max = float(np.max(np.asarray(loo.pareto_k)))
-            rows.append({"record": name, "model": f.model, "elpd_loo": float(loo.elpd_loo), "elpd_se": float(loo.se),
-                         "p_loo": float(loo.p_loo), "pareto_k_max": k_max, "phi_mean": f.stat("phi", "mean"),
+            loo = fit_loo(f)
+            rows.append({"record": name, "model": f.model, "elpd_loo": loo["elpd_loo"], "elpd_se": loo["elpd_se"],
+                         "p_loo": loo["p_loo"], "pareto_k_max": loo["pareto_k_max"], "phi_mean": f.stat("phi", "mean"),
                          "phi_paper_overall": paper[f.model], "converged": f.converged})
     return rows
 

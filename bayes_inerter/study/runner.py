@@ -25,16 +25,23 @@ __all__ = ["run_job", "run_jobs", "finished", "DONE_FILE"]
 DONE_FILE = "done.json"
 
 
-#: What a finished fit must still have for the study's tables (``posterior.nc`` is not
-#: committed with results: a fresh clone runs its fits again).
-NEEDED = ("summary.csv", "fit.json", "posterior.nc")
+#: What a finished fit must still have for the study's tables: these, and where its
+#: record is fitted by several models (the model comparison), its LOO
+#: (:data:`LOO_SOURCES`: ``loo.json``, committed with results, or ``posterior.nc``, which
+#: is not), so a fresh clone of committed results reuses their fits.
+NEEDED = ("summary.csv", "fit.json")
+LOO_SOURCES = ("loo.json", "posterior.nc")
 
 
-def finished(job: FitJob) -> dict | None:
+def finished(job: FitJob, needs_loo: bool = True) -> dict | None:
     """The outcome recorded by an earlier run of ``job``, if it finished with the same
-    settings and its outputs are all still there."""
+    settings and the outputs the study needs are all still there (its LOO only if
+    ``needs_loo``)."""
     path = Path(job.out) / DONE_FILE
-    if not all((Path(job.out) / name).is_file() for name in NEEDED):
+    folder = Path(job.out)
+    if not all((folder / name).is_file() for name in NEEDED):
+        return None
+    if needs_loo and not any((folder / name).is_file() for name in LOO_SOURCES):
         return None
     try:
         done = json.loads(path.read_text())
@@ -140,8 +147,11 @@ def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=
     on_done = on_done or (lambda outcome: None)
     outcomes = {}
     todo = []
+    models = {}
     for job in jobs:
-        done = finished(job)
+        models[job.record] = models.get(job.record, 0) + 1
+    for job in jobs:
+        done = finished(job, needs_loo=models[job.record] > 1)
         if done is not None:
             outcomes[job.key] = {**done, "status": "skipped"}
             on_done(outcomes[job.key])
