@@ -1,12 +1,13 @@
 """The nut-ridge move: it must leave the target invariant (its Jacobian matters), keep
-1 / b - k_n / c_n^2 where it is, and be used only where a model has the ridge."""
+1 / b - k_n / c_n^2 where it is, and be used only where a model has the ridge. The
+subspace DE move: invariant too, and it moves only some coordinates of a walker."""
 
 import emcee
 import numpy as np
 import pytest
 from scipy import stats
 
-from bayes_inerter.inference.moves import NutRidgeMove, ridge_indices
+from bayes_inerter.inference.moves import NutRidgeMove, SubspaceDEMove, ridge_indices
 from bayes_inerter.inference.sampler import DEFAULT_MOVES, default_moves
 
 # A target in (log b, log k_n, log c_n) where the Jacobian b'/b is far from 1: c_n near
@@ -81,3 +82,67 @@ def test_ridge_indices_and_default_moves():
         default_moves(Model(), 1.0)
     with pytest.raises(ValueError, match="0 < min <= max"):
         NutRidgeMove(0, 1, [2], scale_min=2.0, scale_max=1.0)
+
+
+# A correlated normal in 4 dimensions: a move that ignored the correlation would still
+# have to keep it.
+COV = 0.9 * np.ones((4, 4)) + 0.1 * np.diag([1.0, 4.0, 9.0, 16.0])
+
+
+def _run_gaussian(move, steps=40, n=2000):
+    rng = np.random.default_rng(3)
+    x0 = rng.multivariate_normal(np.zeros(4), COV, size=n)  # exact draws
+    inv = np.linalg.inv(COV)
+    sampler = emcee.EnsembleSampler(n, 4, lambda x: -0.5 * np.einsum("ij,jk,ik->i", x, inv, x),
+                                    moves=[move], vectorize=True)
+    sampler.random_state = np.random.RandomState(4).get_state()
+    sampler.run_mcmc(x0, steps)
+    x = sampler.get_last_sample().coords
+    sd = np.sqrt(np.diag(COV))
+    diff_sd = np.sqrt(COV[0, 0] + COV[3, 3] - 2 * COV[0, 3])
+    p = [stats.kstest(x[:, i], stats.norm(0.0, sd[i]).cdf).pvalue for i in range(4)]
+    p.append(stats.kstest(x[:, 0] - x[:, 3], stats.norm(0.0, diff_sd).cdf).pvalue)  # the correlation
+    return sampler, min(p)
+
+
+class _StateDependentSubspace(SubspaceDEMove):
+    """Broken on purpose: moves only the coordinates where the walker is positive, so
+    the way back is not proposed as often as the way there."""
+
+    def get_proposal(self, s, c, random):
+        q, f = super().get_proposal(s, c, random)
+        return np.where(s > 0, q, s), f
+
+
+def test_subspace_move_leaves_the_target_invariant():
+    sampler, p = _run_gaussian(SubspaceDEMove())
+    assert 0.2 < np.mean(sampler.acceptance_fraction) < 0.95
+    assert p > 0.01
+
+
+def test_the_invariance_check_sees_a_state_dependent_subspace():
+    assert _run_gaussian(_StateDependentSubspace())[1] < 1e-6
+
+
+def test_subspace_move_moves_some_coordinates_of_each_walker():
+    rng = np.random.RandomState(5)
+    s = rng.normal(size=(500, 10))
+    c = [rng.normal(size=(500, 10))]
+    move = SubspaceDEMove(crossovers=(0.2,))
+    q, factors = move.get_proposal(s, c, rng)
+    moved = q != s
+    assert np.all(moved.sum(axis=1) >= 1)  # at least one coordinate
+    assert moved.mean() == pytest.approx(0.2 + 0.8 ** 10 / 10, abs=0.02)  # CR, plus the forced one
+    np.testing.assert_array_equal(factors, 0.0)  # symmetric: no Hastings factor
+    # the other half: two walkers a difference of ones apart, so each step is +-gamma on
+    # the coordinates it moves, gamma = 2.38 / sqrt(2 d') for d' of them
+    pair = [np.vstack([np.zeros(10), np.ones(10)])]
+    q, _ = SubspaceDEMove(crossovers=(0.5,), sigma=0.0).get_proposal(s, pair, rng)
+    step = q - s
+    d = (step != 0).sum(axis=1, keepdims=True)
+    np.testing.assert_allclose(np.abs(step[step != 0]), np.broadcast_to(2.38 / np.sqrt(2.0 * d), step.shape)[step != 0])
+    assert np.all(np.abs(np.sum(np.sign(step), axis=1)) == d[:, 0])  # one direction per walker
+    with pytest.raises(ValueError, match="crossover"):
+        SubspaceDEMove(crossovers=(0.0, 0.5))
+    with pytest.raises(ValueError, match="crossover"):
+        SubspaceDEMove(crossovers=())

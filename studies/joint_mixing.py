@@ -1,0 +1,108 @@
+"""How fast the joint model's chain mixes under different emcee moves, side by side.
+
+    python studies/joint_mixing.py [--settings A0 A3 B2] [--steps 2500] [--seed 0]
+        [--variants default subspace] [--out results/joint-mixing]
+
+The joint model (``inference.joint``) of the paper grid's records of ``--settings`` at
+0.5, 1 and 1.5 Hz (generated with seed 0 and the default generator, as the full study
+does) is sampled once per move set from the same start (the joint optimum Nelder-Mead
+reaches from the medians of the records' own optima) with the same seed, walkers and
+coordinates (impedance). Move sets:
+
+- ``default``: the sampler's default (DE 0.6, DE snooker 0.1, stretch 0.3);
+- ``subspace``: the same with differential evolution in random subspaces
+  (``moves.SubspaceDEMove``) in place of the full-dimensional DE;
+- ``subspace-only``: subspace DE 0.9, DE snooker 0.1.
+
+Writes ``tau.csv`` (integrated autocorrelation time per parameter and move set, emcee's
+estimator on the chain after its first fifth) and ``summary.csv`` (largest tau, which
+parameter, acceptance, steps per tau) into ``--out`` and prints the table. Each move set's
+checkpoint is kept in ``--out``/<variant>/chain.h5: a rerun continues it.
+"""
+
+import argparse
+import csv
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+VARIANTS = ("default", "subspace", "subspace-only")
+
+
+def moves_for(variant):
+    import emcee
+
+    from bayes_inerter.inference.moves import SubspaceDEMove
+    from bayes_inerter.inference.sampler import DEFAULT_MOVES
+
+    if variant == "default":
+        return list(DEFAULT_MOVES)
+    if variant == "subspace":
+        return [(SubspaceDEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
+    if variant == "subspace-only":
+        return [(SubspaceDEMove(), 0.9), (emcee.moves.DESnookerMove(), 0.1)]
+    raise ValueError(f"unknown move set {variant!r}; choose from {', '.join(VARIANTS)}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--settings", nargs="+", default=["A0", "A3", "B2"])
+    ap.add_argument("--steps", type=int, default=2500)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--variants", nargs="+", default=["default", "subspace"], choices=VARIANTS)
+    ap.add_argument("--out", default=str(ROOT / "results" / "joint-mixing"))
+    args = ap.parse_args()
+
+    import emcee
+    from tqdm import tqdm
+
+    from bayes_inerter.inference.joint import JointModel
+    from bayes_inerter.inference.optimize import NM_RESTARTS, find_start, local_optimum
+    from bayes_inerter.inference.sampler import run_sampler
+    from bayes_inerter.records import paper_grid
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    records = [rec for _, _, rec in paper_grid(seed=0, names=tuple(args.settings))]
+    records.sort(key=lambda r: (r.metadata["setting"], r.drive_frequency))
+    jm = JointModel(tuple(records))
+    start_file = out / "start.npy"
+    if start_file.exists():
+        theta = np.load(start_file)
+        start = (theta, jm.log_prob(theta)[0])
+    else:
+        rng = np.random.default_rng(args.seed)
+        given = [part.values(find_start(part, rng)[0]) for part in tqdm(jm.parts, desc="record optima")]
+        start = local_optimum(jm, jm.start(given), restarts=NM_RESTARTS)
+        np.save(start_file, start[0])
+
+    rows, table = [], []
+    for variant in args.variants:
+        (out / variant).mkdir(exist_ok=True)
+        bar = tqdm(total=args.steps, desc=variant, unit="step")
+        run = run_sampler(jm, out / variant / "chain.h5", steps=args.steps, seed=args.seed, moves=moves_for(variant),
+                          start=start, progress=lambda i, _t: bar.update(i - bar.n))
+        bar.close()
+        chain = run.chain(discard=run.iteration // 5)  # in theta: tau of what the user reads
+        tau = emcee.autocorr.integrated_time(chain, tol=0)
+        rows.append({"variant": variant, **{n: f"{t:.1f}" for n, t in zip(jm.names, tau)}})
+        worst = int(np.argmax(tau))
+        table.append({"variant": variant, "steps": run.iteration, "tau_max": f"{tau[worst]:.1f}",
+                      "slowest": jm.names[worst], "tau_median": f"{np.median(tau):.1f}",
+                      "acceptance": f"{np.mean(run.sampler.acceptance_fraction):.3f}",
+                      "steps_per_tau": f"{len(chain) / tau[worst]:.1f}"})
+    for name, data in (("tau.csv", rows), ("summary.csv", table)):
+        with open(out / name, "w", newline="") as fh:
+            w = csv.DictWriter(fh, fieldnames=list(data[0]))
+            w.writeheader()
+            w.writerows(data)
+    for r in table:
+        print("  ".join(f"{k}={v}" for k, v in r.items()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
