@@ -181,7 +181,8 @@ def cmd_fit(args) -> int:
     else:
         print(f"warning: {result.reason}; do not trust these intervals yet "
               "(run again with more --steps, or without --steps)")
-    print(f"wrote {args.out}/summary.csv, posterior.nc, chain.h5 (and its twin), corner.png, bands.png, trace.png, phi.png, fit.json")
+    print(f"wrote {args.out}/summary.csv, posterior.nc, loo.json, chain.h5 (and its twin), corner.png, bands.png, trace.png, "
+          "phi.png, fit.json")
     return EXIT_OK
 
 
