@@ -21,7 +21,7 @@ import numpy as np
 from ..records.record import Record
 from .coordinates import default_coordinates
 from .model import LikelihoodSettings, PosteriorModel
-from .results import contraction, loo_summary, posterior_sample, summary_rows, to_inference_data, write_summary
+from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
 from .sampler import Convergence, check_run_options, run_sampler
 
 __all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions"]
@@ -118,7 +118,7 @@ def fit_record(
     t_post = time.perf_counter() - t0 - t_sample
     write_summary(out / "summary.csv", rows)
     idata.to_netcdf(str(out / "posterior.nc"))
-    (out / "loo.json").write_text(json.dumps(loo_summary(idata), indent=2) + "\n")
+    write_loo(out, idata)
     if plots:
         _write_plots(out, pm, sample, sims)
     t_total = time.perf_counter() - t0

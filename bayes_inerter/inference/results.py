@@ -26,10 +26,12 @@ import numpy as np
 from .model import PosteriorModel
 
 __all__ = ["PosteriorSample", "ar1_noise", "posterior_sample", "contraction", "to_inference_data", "summary_rows",
-           "write_summary", "loo_summary", "SUMMARY_COLUMNS", "MAX_DRAWS"]
+           "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "MAX_DRAWS"]
 
 SUMMARY_COLUMNS = ("name", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail")
 MAX_DRAWS = 600  # draws that get a simulation for log-likelihood and predictive
+#: A fit's PSIS-LOO (:func:`loo_summary`), beside its summary.
+LOO_FILE = "loo.json"
 
 
 @dataclass
@@ -205,3 +207,13 @@ def loo_summary(idata) -> dict:
     k = np.asarray(loo.pareto_k)
     return {"elpd_loo": float(loo.elpd_loo), "elpd_se": float(loo.se), "p_loo": float(loo.p_loo),
             "pareto_k_max": float(np.max(k)), "n_points": int(k.size)}
+
+
+def write_loo(folder, idata) -> dict:
+    """:func:`loo_summary` of ``idata``, written to ``folder``/:data:`LOO_FILE`; returns it."""
+    import json
+    from pathlib import Path
+
+    loo = loo_summary(idata)
+    (Path(folder) / LOO_FILE).write_text(json.dumps(loo, indent=2) + "\n")
+    return loo

@@ -28,7 +28,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,7 +37,7 @@ from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
 from ..records.sensitivity import SensorCalibration
 
 __all__ = ["RecordFit", "birge_ratio", "collect", "inertance_table", "joint_inertance", "record_table",
-           "flywheel_regression", "phi_table", "model_comparison", "fit_loo", "LOO_FILE", "contraction_table", "write_csv", "Z94"]
+           "flywheel_regression", "phi_table", "model_comparison", "fit_loo", "contraction_table", "write_csv", "Z94"]
 
 #: Half-width of a central 94 % interval of a normal, in sd.
 Z94 = 1.880793608151251
@@ -275,22 +274,17 @@ def phi_table(fits: list[RecordFit]) -> list[dict]:
     return rows
 
 
-LOO_FILE = "loo.json"
-
-
 def fit_loo(fit: RecordFit) -> dict:
     """A fit's PSIS-LOO (``inference.results.loo_summary``): from its ``loo.json``, or
     computed from its ``posterior.nc`` and kept in ``loo.json`` for next time."""
-    from ..inference.results import loo_summary
+    from ..inference.results import LOO_FILE, write_loo
 
     path = fit.folder / LOO_FILE
     if path.is_file():
         return json.loads(path.read_text())
     import arviz as az
 
-    loo = loo_summary(az.from_netcdf(str(fit.folder / "posterior.nc")))
-    path.write_text(json.dumps(loo, indent=2) + "\n")
-    return loo
+    return write_loo(fit.folder, az.from_netcdf(str(fit.folder / "posterior.nc")))
 
 
 def model_comparison(fits: list[RecordFit]) -> list[dict]:

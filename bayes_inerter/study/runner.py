@@ -18,6 +18,7 @@ import multiprocessing.connection
 import time
 from pathlib import Path
 
+from ..inference.results import LOO_FILE
 from .plan import FitJob
 
 __all__ = ["run_job", "run_jobs", "finished", "DONE_FILE"]
@@ -30,21 +31,20 @@ DONE_FILE = "done.json"
 #: (:data:`LOO_SOURCES`: ``loo.json``, committed with results, or ``posterior.nc``, which
 #: is not), so a fresh clone of committed results reuses their fits.
 NEEDED = ("summary.csv", "fit.json")
-LOO_SOURCES = ("loo.json", "posterior.nc")
+LOO_SOURCES = (LOO_FILE, "posterior.nc")
 
 
 def finished(job: FitJob, needs_loo: bool = True) -> dict | None:
     """The outcome recorded by an earlier run of ``job``, if it finished with the same
     settings and the outputs the study needs are all still there (its LOO only if
     ``needs_loo``)."""
-    path = Path(job.out) / DONE_FILE
     folder = Path(job.out)
     if not all((folder / name).is_file() for name in NEEDED):
         return None
     if needs_loo and not any((folder / name).is_file() for name in LOO_SOURCES):
         return None
     try:
-        done = json.loads(path.read_text())
+        done = json.loads((folder / DONE_FILE).read_text())
     except (OSError, ValueError):
         return None
     return done if done.get("job") == dataclasses.asdict(job) else None
