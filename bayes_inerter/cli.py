@@ -144,6 +144,7 @@ def cmd_fit(args) -> int:
     from .inference import fit_record
     from .inference.coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
     from .inference.model import LikelihoodSettings
+    from .inference.sampler import Adaptation
     from .records import read_record
 
     rec = read_record(args.record)  # refused here, before the output folder is touched
@@ -160,7 +161,7 @@ def cmd_fit(args) -> int:
             rec, args.out, model=args.model, m_s=args.m_s, walkers=args.walkers, steps=args.steps,
             seed=args.seed, fresh=args.fresh, processes=processes,
             likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=progress,
-            coordinates=args.coordinates,
+            coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
         )
     finally:
         bar.close()
@@ -306,6 +307,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--fresh", action="store_true", help="start over instead of continuing the checkpoint")
     p.add_argument("--coordinates", choices=FIT_COORDINATES, default="impedance",
                    help="where the walkers move (%(default)s; the outputs are the same parameters either way)")
+    p.add_argument("--no-adaptation", action="store_true",
+                   help="emcee's ensemble moves alone, without the independence move fitted to the chain")
     p.set_defaults(func=cmd_fit)
 
     p = sub.add_parser("study", help="posteriors of many records, theory against identification, a report")

@@ -12,7 +12,10 @@ coordinates (impedance). Move sets:
 - ``default``: the sampler's default (DE 0.6, DE snooker 0.1, stretch 0.3);
 - ``subspace``: the same with differential evolution in random subspaces
   (``moves.SubspaceDEMove``) in place of the full-dimensional DE;
-- ``subspace-only``: subspace DE 0.9, DE snooker 0.1.
+- ``subspace-only``: subspace DE 0.9, DE snooker 0.1;
+- ``adaptive``: the default moves with the fitted independence move
+  (``sampler.Adaptation()``, the package's default since 2026-11-25); the others run
+  without it, as they were measured.
 
 Writes ``tau.csv`` (integrated autocorrelation time per parameter and move set, emcee's
 estimator on the chain after its first fifth) and ``summary.csv`` (largest tau, which
@@ -29,7 +32,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
-VARIANTS = ("default", "subspace", "subspace-only")
+VARIANTS = ("default", "subspace", "subspace-only", "adaptive")
 
 
 def moves_for(variant):
@@ -38,7 +41,7 @@ def moves_for(variant):
     from bayes_inerter.inference.moves import SubspaceDEMove
     from bayes_inerter.inference.sampler import DEFAULT_MOVES
 
-    if variant == "default":
+    if variant in ("default", "adaptive"):
         return list(DEFAULT_MOVES)
     if variant == "subspace":
         return [(SubspaceDEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
@@ -61,7 +64,7 @@ def main():
 
     from bayes_inerter.inference.joint import JointModel
     from bayes_inerter.inference.optimize import NM_RESTARTS, find_start, local_optimum
-    from bayes_inerter.inference.sampler import run_sampler
+    from bayes_inerter.inference.sampler import Adaptation, run_sampler
     from bayes_inerter.records import paper_grid
 
     out = Path(args.out)
@@ -83,8 +86,9 @@ def main():
     for variant in args.variants:
         (out / variant).mkdir(exist_ok=True)
         bar = tqdm(total=args.steps, desc=variant, unit="step")
+        adaptation = Adaptation() if variant == "adaptive" else None
         run = run_sampler(jm, out / variant / "chain.h5", steps=args.steps, seed=args.seed, moves=moves_for(variant),
-                          start=start, progress=lambda i, _t: bar.update(i - bar.n))
+                          adaptation=adaptation, start=start, progress=lambda i, _t: bar.update(i - bar.n))
         bar.close()
         chain = run.chain(discard=run.iteration // 5)  # in theta: tau of what the user reads
         tau = emcee.autocorr.integrated_time(chain, tol=0)

@@ -8,7 +8,9 @@ start and seed three ways, side by side:
     python studies/walks.py [--record A3:1 ...] [--steps 3000] [--seed 0]
         [--processes 2] [--out results/long-chain/walks.csv]
 
-Records are the full study's (the paper grid generated with seed 0), named
+The walks compare where emcee's ensemble moves go, so none of them adds the fitted
+independence move (``sampler.Adaptation``; ``benchmarks/bench_adaptation.py`` measures
+that). Records are the full study's (the paper grid generated with seed 0), named
 SETTING:FREQUENCY. Each (record, walk) pair is one chain on one process. Writes one row
 per chain: acceptance, the largest autocorrelation time and b's (in theta, over the last
 three quarters), R-hat and bulk ESS of the last three quarters, b's and log10 k_n's 3rd,
@@ -47,7 +49,7 @@ def _chain(job):
     moves = default_moves(pm) if walk == "physical+ridge" else list(DEFAULT_MOVES)
     t0 = time.perf_counter()
     run = run_sampler(pm, Path(folder) / f"{setting}_{freq:g}_{walk}.h5", steps=steps, seed=seed,
-                      moves=moves, fresh=True, coordinates=coordinates)
+                      moves=moves, fresh=True, coordinates=coordinates, adaptation=None)
     minutes = (time.perf_counter() - t0) / 60
     half = run.chain(discard=steps // 4)
     tau = emcee.autocorr.integrated_time(half, tol=0)

@@ -63,6 +63,7 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     # walked in the impedance coordinates at the record's 1.5 Hz, where the nut's ridge is an axis
     assert info["coordinates"].startswith("impedance (M, C at 1.5 Hz"), info["coordinates"]
     assert not any(m.startswith("NutRidgeMove") for m in info["moves"]), info["moves"]
+    assert any(m.startswith("IndependenceMove") for m in info["moves"]), info["moves"]  # the adaptation
     assert 0.0 < info["coordinates_domain_edge"] < 0.5  # how near the domain's edge its draws came
 
 
@@ -74,6 +75,14 @@ def test_physical_coordinates_keep_the_ridge_move(tmp_path, record_file):
     info = json.loads((res.out / "fit.json").read_text())
     assert info["coordinates"] == "physical"
     assert any(m.startswith("NutRidgeMove") for m in info["moves"]), info["moves"]
+
+
+def test_no_adaptation_leaves_the_ensemble_moves_alone(tmp_path, record_file):
+    out = tmp_path / "fit"
+    assert main(["fit", str(record_file), "--out", str(out), "--steps", "4", "--walkers", "24", "--processes", "1",
+                 "--no-adaptation"]) == 0
+    moves = json.loads((out / "fit.json").read_text())["moves"]
+    assert moves and not any(m.startswith("IndependenceMove") for m in moves), moves
 
 
 @pytest.mark.slow  # 3 fits, about a minute; the resume tests check same-seed chains in CI

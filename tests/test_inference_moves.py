@@ -1,13 +1,15 @@
 """The nut-ridge move: it must leave the target invariant (its Jacobian matters), keep
 1 / b - k_n / c_n^2 where it is, and be used only where a model has the ridge. The
-subspace DE move: invariant too, and it moves only some coordinates of a walker."""
+subspace DE move: invariant too, and it moves only some coordinates of a walker. The
+independence move: invariant whatever proposal it is given (its Hastings factor
+matters), and fitted only where draws define a proposal."""
 
 import emcee
 import numpy as np
 import pytest
 from scipy import stats
 
-from bayes_inerter.inference.moves import NutRidgeMove, SubspaceDEMove, ridge_indices
+from bayes_inerter.inference.moves import IndependenceMove, NutRidgeMove, SubspaceDEMove, ridge_indices
 from bayes_inerter.inference.sampler import DEFAULT_MOVES, default_moves
 
 # A target in (log b, log k_n, log c_n) where the Jacobian b'/b is far from 1: c_n near
@@ -146,3 +148,56 @@ def test_subspace_move_moves_some_coordinates_of_each_walker():
         SubspaceDEMove(crossovers=(0.0, 0.5))
     with pytest.raises(ValueError, match="crossover"):
         SubspaceDEMove(crossovers=())
+
+
+# A proposal that fits the target badly (off centre, too narrow in one direction, no
+# correlation): the acceptance ratio, not the proposal, must make the draws the target's.
+_OFF = dict(mean=np.array([0.5, -0.5, 0.0, 1.0]), cov=np.diag([1.0, 0.5, 9.0, 4.0]))
+
+
+class _WithoutHastings(IndependenceMove):
+    def _propose(self, coords, random):
+        q, _ = super()._propose(coords, random)
+        return q, np.zeros(len(q))
+
+
+@pytest.mark.parametrize("dof", [10.0, np.inf])
+def test_independence_move_leaves_the_target_invariant(dof):
+    sampler, p = _run_gaussian(IndependenceMove(**_OFF, dof=dof))
+    assert 0.1 < np.mean(sampler.acceptance_fraction) < 0.9
+    assert p > 0.01
+
+
+def test_the_invariance_check_sees_a_missing_hastings_factor():
+    assert _run_gaussian(_WithoutHastings(**_OFF))[1] < 1e-6
+
+
+def test_independence_move_fitted_to_the_targets_draws_is_accepted_often():
+    rng = np.random.default_rng(6)
+    move = IndependenceMove.fit(rng.multivariate_normal(np.zeros(4), COV, size=20000), dof=np.inf, scale=1.0)
+    np.testing.assert_allclose(move.chol @ move.chol.T, COV, atol=0.05)
+    sampler, p = _run_gaussian(move, steps=10)
+    assert np.mean(sampler.acceptance_fraction) > 0.9  # the proposal is the target
+    assert p > 0.01
+
+
+def test_independence_move_log_density_is_the_t_and_the_normal():
+    cov = np.array([[2.0, 0.3], [0.3, 0.5]])
+    x = np.random.default_rng(7).normal(size=(5, 2))
+    for dof, ref in ((np.inf, stats.multivariate_normal([0.0, 0.0], cov)),
+                     (4.0, stats.multivariate_t([0.0, 0.0], cov, df=4.0))):
+        move = IndependenceMove(np.zeros(2), cov, dof=dof, scale=1.0)
+        got = move.log_density(x)
+        np.testing.assert_allclose(got - got[0], ref.logpdf(x) - ref.logpdf(x[0]), rtol=1e-10)
+
+
+def test_independence_move_refuses_what_defines_no_proposal():
+    assert IndependenceMove.fit(np.ones((50, 3))) is None  # walkers on one point
+    assert IndependenceMove.fit(np.random.default_rng(0).normal(size=(3, 3))) is None  # too few draws
+    assert IndependenceMove.fit(np.full((10, 2), np.nan)) is None
+    with pytest.raises(ValueError, match="do not match"):
+        IndependenceMove(np.zeros(3), np.eye(2))
+    with pytest.raises(ValueError, match="positive"):
+        IndependenceMove(np.zeros(2), np.eye(2), dof=0.0)
+    with pytest.raises(np.linalg.LinAlgError):
+        IndependenceMove(np.zeros(2), -np.eye(2))

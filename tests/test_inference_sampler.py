@@ -1,6 +1,7 @@
 """The sampler's open-ended runs: a continued chain is checked where an uninterrupted
 run would be, so it stops at the same step with the same chain; a converged chain run
-again comes back as it is."""
+again comes back as it is. Its adaptation: fitted only after the transient, used in its
+share of the steps, and refitted so that a continued chain is the uninterrupted one."""
 
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ from scipy import stats
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import Convergence, PosteriorModel
-from bayes_inerter.inference.sampler import run_sampler, transient
+from bayes_inerter.inference.sampler import Adaptation, run_sampler, transient
 from bayes_inerter.records import GeneratorSettings, generate_record
 
 CONV = Convergence(check_every=40, n_tau=20, min_ess=200, max_steps=2000)
@@ -36,10 +37,12 @@ def _run(model, path, max_steps):
 def test_a_continued_chain_stops_where_an_uninterrupted_one_does(model, tmp_path):
     whole = _run(model, tmp_path / "whole.h5", 2000)
     assert whole.converged and whole.iteration % CONV.check_every == 0
-    # stopped off a check boundary, then continued
+    # stopped off a check boundary (and between two refits of the adaptive proposal),
+    # then continued; the stopped run may or may not call its shorter chain converged
     cut = int(whole.iteration) - CONV.check_every - 13
+    assert cut > Adaptation().every and cut % Adaptation().every
     first = _run(model, tmp_path / "cut.h5", cut)
-    assert first.iteration == cut and not first.converged
+    assert first.iteration == cut
     again = _run(model, tmp_path / "cut.h5", 2000)
     assert again.converged and again.iteration == whole.iteration
     assert np.array_equal(again.sampler.get_chain(), whole.sampler.get_chain())
@@ -70,3 +73,39 @@ def test_transient_is_none_for_a_chain_in_equilibrium_and_the_climb_for_one_that
     climbing[:1500] -= np.linspace(440.0, 0.0, 1500)[:, None]  # a start 440 nats below, as A2 at 0.5 Hz
     assert 1300 <= transient(climbing) <= 1500
     assert transient(still[:3]) == 0  # too short to say
+
+
+def test_adaptation_fits_after_the_transient_only():
+    rng = np.random.default_rng(1)
+    chain = rng.normal(size=(300, 20, 3))
+    still = rng.normal(0.0, 1.0, size=(300, 20))
+    adapt = Adaptation(every=400)
+    move = adapt.proposal(chain, still)  # 300 steps in equilibrium: at least every // 2
+    assert move is not None
+    np.testing.assert_allclose(move.mean, 0.0, atol=0.05)
+    climbing = still - np.r_[np.linspace(500.0, 0.0, 150), np.zeros(150)][:, None]
+    assert adapt.proposal(chain, climbing) is None  # about 150 steps after the climb: fewer
+    moves = adapt.moves([("a", 0.6), ("b", 0.4)], move)
+    assert [w for _, w in moves] == pytest.approx([0.3, 0.2, 0.5])
+    assert adapt.moves([("a", 1.0)], None) == [("a", 1.0)]
+    for bad in (dict(weight=1.0), dict(weight=0.0), dict(every=1), dict(every=2.5), dict(dof=0.0)):
+        with pytest.raises(ValueError, match="adaptation"):
+            Adaptation(**bad)
+
+
+def test_a_run_stopped_between_refits_continues_to_the_uninterrupted_chain(model, tmp_path):
+    adapt = Adaptation(every=30)
+
+    def run(path, steps):
+        return run_sampler(model, path, nwalkers=24, seed=5, steps=steps, start=model.test_start, adaptation=adapt)
+
+    whole = run(tmp_path / "whole.h5", 100)
+    assert any("IndependenceMove" in m for m in whole.moves)
+    run(tmp_path / "cut.h5", 47)  # after the refit at 30, before the one at 60
+    again = run(tmp_path / "cut.h5", 100)
+    assert np.array_equal(again.sampler.get_chain(), whole.sampler.get_chain())
+    # the proposal did take part: the run differs from one without it after step 30
+    plain = run_sampler(model, tmp_path / "plain.h5", nwalkers=24, seed=5, steps=100, start=model.test_start,
+                        adaptation=None)
+    assert np.array_equal(plain.sampler.get_chain()[:30], whole.sampler.get_chain()[:30])
+    assert not np.array_equal(plain.sampler.get_chain()[30:], whole.sampler.get_chain()[30:])

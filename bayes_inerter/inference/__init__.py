@@ -3,7 +3,7 @@
 from .fit import FitResult, fit_record
 from .model import MODELS, LikelihoodSettings, PosteriorModel
 from .priors import DEFAULT_PRIORS, LogNormal, LogUniform
-from .sampler import CheckpointError, Convergence, run_sampler
+from .sampler import Adaptation, CheckpointError, Convergence, run_sampler
 
 __all__ = [
     "FitResult",
@@ -16,5 +16,6 @@ __all__ = [
     "LogUniform",
     "CheckpointError",
     "Convergence",
+    "Adaptation",
     "run_sampler",
 ]

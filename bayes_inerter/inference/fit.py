@@ -22,7 +22,7 @@ from ..records.record import Record
 from .coordinates import default_coordinates
 from .model import LikelihoodSettings, PosteriorModel
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
-from .sampler import Convergence, check_run_options, run_sampler
+from .sampler import Adaptation, Convergence, check_run_options, run_sampler
 
 __all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions"]
 
@@ -91,11 +91,13 @@ def fit_record(
     progress=None,
     plots: bool = True,
     coordinates: str = "impedance",
+    adaptation: Adaptation | None = Adaptation(),
 ) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
     ``coordinates``: where the walkers move (``coordinates.COORDINATES``; the outputs are
-    in the model's parameters whichever is used).
+    in the model's parameters whichever is used). ``adaptation``: the fitted independence
+    move (``sampler.Adaptation``; None: the ensemble moves alone).
 
     Everything that can be checked is checked before sampling starts (record, masses,
     options, output folder); the folder is not touched if any check fails.
@@ -109,7 +111,8 @@ def fit_record(
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     run = run_sampler(pm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, fresh=fresh,
-                      processes=processes, convergence=convergence, progress=progress, coordinates=coords)
+                      processes=processes, convergence=convergence, progress=progress, coordinates=coords,
+                      adaptation=adaptation)
     t_sample = time.perf_counter() - t0
     sample = posterior_sample(pm, run)
     rows = summary_rows(sample)
@@ -160,6 +163,7 @@ def fit_joint(
     progress=None,
     plots: bool = True,
     coordinates: str = "impedance",
+    adaptation: Adaptation | None = Adaptation(),
 ) -> FitResult:
     """Sample the joint posterior of several records (``joint.JointModel``: shared
     frictions and deformations, one b per flywheel setting) into ``out``: chain.h5,
@@ -193,7 +197,8 @@ def fit_joint(
         return local_optimum(jm, jm.start(given), restarts=NM_RESTARTS)
 
     run = run_sampler(jm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, processes=processes,
-                      convergence=convergence, progress=progress, start=start, coordinates=coords)
+                      convergence=convergence, progress=progress, start=start, coordinates=coords,
+                      adaptation=adaptation)
     t_sample = time.perf_counter() - t0
     sample = posterior_sample(jm, run)
     rows = summary_rows(sample)

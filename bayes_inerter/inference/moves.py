@@ -1,5 +1,5 @@
-"""Moves beside emcee's own: a jump along the nut's ridge, and differential evolution in
-random subspaces.
+"""Moves beside emcee's own: a jump along the nut's ridge, differential evolution in
+random subspaces, and independence proposals from a fitted multivariate t.
 
 The nut's deformation (c_n + k_n / s) sits in series with the inertance b s; at the
 drive frequencies the pair acts as a damper in series with an inerter of
@@ -32,6 +32,17 @@ proposal stays symmetric and the move leaves the posterior invariant. Full-dimen
 in 20 dimensions takes short steps (gamma 0.38); a step in a few coordinates is longer.
 Measured on a joint model of 9 records it did not mix faster than the default moves
 (``studies/joint_mixing.py``), so no default uses it.
+
+:class:`IndependenceMove` proposes, for every walker, a point drawn afresh from a fixed
+multivariate Student t (a mean, a covariance and degrees of freedom), whatever the
+walker's own position, and accepts it with probability min(1, p(x') q(x) / (p(x) q(x')))
+(independence Metropolis-Hastings, Tierney 1994): with the proposal fixed, it leaves any
+posterior invariant. The sampler fits the t to the chain's own draws so far and refits
+it as the chain grows (:class:`.sampler.Adaptation`). Where the posterior is roughly
+that t, a walker crosses it in one step instead of diffusing across it as the ensemble
+moves do (their autocorrelation time grows with the dimension); where it is not (the
+nut's plateau against its cliff), the proposal is refused more often and the ensemble
+moves, which stay in the mixture, do the work.
 """
 
 from __future__ import annotations
@@ -39,7 +50,7 @@ from __future__ import annotations
 import numpy as np
 from emcee.moves import MHMove, RedBlueMove
 
-__all__ = ["NutRidgeMove", "SubspaceDEMove", "ridge_indices"]
+__all__ = ["NutRidgeMove", "SubspaceDEMove", "IndependenceMove", "ridge_indices"]
 
 
 def ridge_indices(names, log_scale) -> tuple[int, int, list[int]] | None:
@@ -131,3 +142,57 @@ class SubspaceDEMove(RedBlueMove):
         moved = mask.sum(axis=1, keepdims=True)
         gamma = 2.38 / np.sqrt(2.0 * moved) * (1.0 + self.sigma * random.randn(ns, 1))
         return s + gamma * diffs * mask, np.zeros(ns)
+
+
+class IndependenceMove(MHMove):
+    """Independence proposals from a fixed multivariate t (see module docstring).
+
+    Parameters
+    ----------
+    mean : (ndim,) centre of the proposal.
+    cov : (ndim, ndim) covariance it is fitted to (positive definite).
+    dof : degrees of freedom (``np.inf``: a normal). Default 10: tails a little heavier
+        than a normal's, which an independence proposal needs to cover the posterior's.
+    scale : factor on the covariance's square root (default 1.1: a little wider).
+    """
+
+    def __init__(self, mean, cov, *, dof: float = 10.0, scale: float = 1.1):
+        mean = np.asarray(mean, dtype=float)
+        cov = np.atleast_2d(np.asarray(cov, dtype=float))
+        if mean.ndim != 1 or cov.shape != (mean.size, mean.size):
+            raise ValueError(f"mean and covariance do not match: {mean.shape} and {cov.shape}")
+        if not (dof > 0 and scale > 0):
+            raise ValueError(f"degrees of freedom and scale must be positive, got {dof} and {scale}")
+        if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(cov))):
+            raise ValueError("the proposal's mean and covariance must be finite")
+        self.mean, self.dof, self.scale = mean, float(dof), float(scale)
+        self.chol = np.linalg.cholesky(cov * self.scale ** 2)  # LinAlgError if not positive definite
+        super().__init__(self._propose)
+
+    @classmethod
+    def fit(cls, draws, **kwargs) -> "IndependenceMove | None":
+        """The move fitted to ``draws`` (n, ndim) by their mean and covariance; None where
+        they cannot define one (fewer draws than dimensions, or a singular covariance)."""
+        draws = np.asarray(draws, dtype=float)
+        if draws.ndim != 2 or len(draws) <= draws.shape[1] or not np.all(np.isfinite(draws)):
+            return None
+        try:
+            return cls(draws.mean(axis=0), np.cov(draws, rowvar=False), **kwargs)
+        except np.linalg.LinAlgError:
+            return None
+
+    def log_density(self, x) -> np.ndarray:
+        """Log density of the proposal at the rows of ``x``, up to a constant."""
+        z = np.linalg.solve(self.chol, (np.atleast_2d(x) - self.mean).T)
+        m2 = np.sum(z * z, axis=0)
+        if np.isinf(self.dof):
+            return -0.5 * m2
+        return -0.5 * (self.dof + self.mean.size) * np.log1p(m2 / self.dof)
+
+    def _propose(self, coords, random):
+        coords = np.asarray(coords, dtype=float)
+        z = random.randn(*coords.shape)
+        if np.isfinite(self.dof):
+            z = z / np.sqrt(random.chisquare(self.dof, size=len(coords)) / self.dof)[:, None]
+        q = self.mean + z @ self.chol.T
+        return q, self.log_density(coords) - self.log_density(q)

@@ -24,6 +24,15 @@ since the last check, and, after discarding 2 tau more, R-hat < ``max_rhat`` and
 ESS >= ``min_ess`` (arviz,
 treating walkers as chains: they are not independent, so R-hat here is a check that no
 walker is stuck apart from the others, not a proof). Or stops at ``max_steps``.
+
+Adaptation (documented defaults, :class:`Adaptation`): at every multiple of ``every``
+steps, a multivariate t is fitted to the chain so far after its transient, in sampler
+coordinates, and :class:`.moves.IndependenceMove` proposes from it in ``weight`` of the
+following steps, the ensemble moves in the rest. The proposal changes only at those
+steps and is fitted to a growing chain (diminishing adaptation, Roberts and Rosenthal
+2007); between two of them it is fixed and every move leaves the posterior invariant.
+A continued chain refits from the same stored steps, so it is the chain an
+uninterrupted run gives.
 """
 
 from __future__ import annotations
@@ -38,11 +47,11 @@ import numpy as np
 from .checkpoint import CheckpointError, new_checkpoint, open_checkpoint
 from .coordinates import Coordinates, default_coordinates
 from .model import PosteriorModel
-from .moves import NutRidgeMove, ridge_indices
+from .moves import IndependenceMove, NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, sse
 
-__all__ = ["Convergence", "CheckpointError", "SamplerRun", "run_sampler", "record_digest", "check_run_options",
-           "default_moves", "transient"]
+__all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "run_sampler", "record_digest",
+           "check_run_options", "default_moves", "transient"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
@@ -95,6 +104,58 @@ class Convergence:
             value = getattr(self, name)
             if not (isinstance(value, int) and value >= 1):
                 raise ValueError(f"convergence setting {name} must be a positive whole number, got {value!r}")
+
+
+@dataclass(frozen=True)
+class Adaptation:
+    """The fitted independence move's share of the steps, and when it is refitted (see
+    module docstring). Measured on the full study's A3 1 Hz record (1,500 steps from the
+    same equilibrated walkers, 24 walkers, proposal fitted once to 500 earlier steps): the
+    largest autocorrelation time fell from 73.9 steps (ensemble moves alone) to 30.4 with
+    the t in half the steps (dof 10, scale 1.1), 35.5 with a normal in half and 36.2 with
+    a normal in 80 %.
+
+    Attributes
+    ----------
+    weight : share of the steps that propose from the fitted t once there is one
+        (default 0.5); the ensemble moves keep their proportions in the rest.
+    every : the proposal is refitted at every multiple of this many steps (default 250),
+        from the chain's steps after its transient, if at least ``every // 2`` of them.
+    dof, scale : the t's degrees of freedom and the factor on its covariance's square
+        root (:class:`.moves.IndependenceMove`; defaults 10 and 1.1).
+    """
+
+    weight: float = 0.5
+    every: int = 250
+    dof: float = 10.0
+    scale: float = 1.1
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.weight < 1.0:
+            raise ValueError(f"adaptation weight must lie in (0, 1), got {self.weight}")
+        if not (isinstance(self.every, int) and self.every >= 2):
+            raise ValueError(f"adaptation period must be a whole number of at least 2 steps, got {self.every!r}")
+        if not (self.dof > 0 and self.scale > 0):
+            raise ValueError(f"adaptation dof and scale must be positive, got {self.dof} and {self.scale}")
+
+    def proposal(self, chain: np.ndarray, log_prob: np.ndarray) -> IndependenceMove | None:
+        """The move fitted to ``chain`` (steps, walkers, ndim; sampler coordinates) after
+        its :func:`transient` (from ``log_prob``, steps x walkers); None where fewer than
+        ``every // 2`` steps follow the transient or they define no proposal."""
+        skip = transient(log_prob)
+        if len(chain) - skip < self.every // 2:
+            return None
+        return IndependenceMove.fit(chain[skip:].reshape(-1, chain.shape[-1]), dof=self.dof, scale=self.scale)
+
+    def moves(self, base: list, proposal: IndependenceMove | None) -> list:
+        """``base`` moves, with ``proposal`` in ``weight`` of the steps where there is one."""
+        if proposal is None:
+            return list(base)
+        return [(m, w * (1.0 - self.weight)) for m, w in base] + [(proposal, self.weight)]
+
+    def describe(self) -> str:
+        return (f"IndependenceMove {self.weight:.3g} (t, dof {self.dof:g}, scale {self.scale:g}, "
+                f"refitted every {self.every} steps; the others scaled by {1 - self.weight:.3g} once fitted)")
 
 
 @dataclass
@@ -235,6 +296,7 @@ def run_sampler(
     progress=None,
     start=None,
     coordinates: str | Coordinates = "impedance",
+    adaptation: Adaptation | None = Adaptation(),
 ) -> SamplerRun:
     """Sample the posterior of ``model`` into the HDF5 file ``checkpoint``.
 
@@ -255,6 +317,8 @@ def run_sampler(
         of one (``coordinates.COORDINATES``; default "impedance", which falls back to
         "unconstrained" for models without an impedance map). A checkpoint continues
         only in the coordinates it was written in.
+    adaptation : the fitted independence move (:class:`Adaptation`); None: the ensemble
+        moves alone.
     """
     from pathlib import Path
 
@@ -273,13 +337,24 @@ def run_sampler(
         backend, done = opened.backend, opened.steps
     _MODEL, _COORDS = model, coords
     moves = moves or default_moves(model, coordinates=coords)
-    used = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves)
+    used = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves) + ((adaptation.describe(),) if adaptation else ())
     pool = multiprocessing.get_context("fork").Pool(processes) if processes > 1 else None
+    fitted: dict[int, IndependenceMove | None] = {}
+
+    def new_sampler(step: int) -> emcee.EnsembleSampler:
+        """The sampler for the steps from ``step`` to the next adaptation: its moves hold the
+        proposal fitted at the last multiple of ``adaptation.every`` at or before it."""
+        chunk_moves = moves
+        if adaptation is not None:
+            at = (step // adaptation.every) * adaptation.every
+            if at > 0 and at not in fitted:
+                fitted[at] = adaptation.proposal(backend.get_chain()[:at], backend.get_log_prob()[:at])
+            chunk_moves = adaptation.moves(moves, fitted.get(at))
+        return emcee.EnsembleSampler(nwalkers, model.ndim, _log_prob, pool=pool, moves=chunk_moves,
+                                     backend=backend, blobs_dtype=float)
+
     try:
-        sampler = emcee.EnsembleSampler(
-            nwalkers, model.ndim, _log_prob, pool=pool, moves=moves,
-            backend=backend, blobs_dtype=float,
-        )
+        sampler = new_sampler(done)
         start_theta = None
         if done == 0:
             rng = np.random.default_rng(seed)
@@ -289,26 +364,35 @@ def run_sampler(
             elif callable(start):
                 start = start()
             start_theta = np.asarray(start[0], dtype=float)
-            sampler.random_state = np.random.RandomState(seed).get_state()
             if not np.all(np.isfinite(coords.to_u(start_theta))):
                 raise ValueError(f"the start lies outside the {coords.kind} coordinates' domain; "
                                  "use --coordinates unconstrained or physical")
             # a walker drawn outside the coordinates' domain is drawn again
             walkers, _ = laplace_ensemble(model, start_theta, nwalkers, rng,
                                           accept=lambda t: bool(np.all(np.isfinite(coords.to_u(t)))))
-            state = coords.to_u(walkers)
+            state = emcee.State(coords.to_u(walkers), random_state=np.random.RandomState(seed).get_state())
         else:
             # continue from the checkpoint's last state, with its random state
             state = backend.get_last_sample()
-        target = steps
-        tau = np.full(model.ndim, np.nan)
-        if steps is not None:
-            n_more = steps - done
-            if n_more > 0:
-                for _ in sampler.sample(state, iterations=n_more, store=True):
+
+        def advance(until: int, target) -> None:
+            """Sample up to step ``until``, in pieces that end where the proposal is refitted."""
+            nonlocal sampler, state
+            while sampler.iteration < until:
+                step = sampler.iteration
+                end = until if adaptation is None else min(until, (step // adaptation.every + 1) * adaptation.every)
+                if adaptation is not None and step > 0 and step % adaptation.every == 0:
+                    sampler = new_sampler(step)
+                for _ in sampler.sample(state, iterations=end - step, store=True):
                     if progress:
                         progress(sampler.iteration, target)
                 backend.flush()
+                state = sampler.get_last_sample()
+
+        target = steps
+        tau = np.full(model.ndim, np.nan)
+        if steps is not None:
+            advance(steps, target)
             tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
             ok = _is_converged(sampler.iteration - skip, tau, None, rhat, ess, conv)
             reason = "converged" if ok else _why_not(sampler.iteration, skip, tau, rhat, ess, conv)
@@ -328,11 +412,7 @@ def run_sampler(
                                             conv.max_steps - sampler.iteration)
             check_now = False
             if chunk > 0:
-                for _ in sampler.sample(state, iterations=chunk, store=True):
-                    if progress:
-                        progress(sampler.iteration, None)
-                backend.flush()
-                state = sampler.get_last_sample()
+                advance(sampler.iteration + chunk, None)
             tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
             if _is_converged(sampler.iteration - skip, tau, previous, rhat, ess, conv):
                 return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used, coords, skip, done)
