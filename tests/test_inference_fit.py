@@ -143,6 +143,34 @@ def test_resume_after_sigkill(tmp_path, record_file):
     _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
 
 
+def test_ctrl_c_on_worker_processes_ends_the_run_with_130_and_keeps_its_steps(tmp_path, record_file):
+    """Ctrl-C goes to the whole process group, the walkers' worker processes included: the
+    run must stop (it used to wait for ever for a worker that died of it), say so with
+    exit status 130, and leave a checkpoint that a second run continues."""
+    out = tmp_path / "interrupted"
+    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
+           "--steps", "400", "--walkers", "24", "--processes", "2", "--seed", "3"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    deadline = time.time() + 300
+    while time.time() < deadline and proc.poll() is None and steps_written(out / "chain.h5") < 5:
+        time.sleep(0.05)
+    assert proc.poll() is None, "the run ended before it could be interrupted"
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+        pytest.fail("the run did not stop within 60 s of Ctrl-C")
+    assert proc.returncode == 130, err
+    assert b"interrupted" in err
+    kept = read_chain(out / "chain.h5")
+    assert 5 <= len(kept) < 400
+    more = [*cmd[:cmd.index("--steps") + 1], str(len(kept) + 3), *cmd[cmd.index("--steps") + 2:]]
+    assert subprocess.run(more, capture_output=True).returncode == 0
+    np.testing.assert_array_equal(_chain(out / "chain.h5")[: len(kept)], kept)
+
+
 @pytest.mark.slow  # about 2 minutes; CI keeps the single kill and the write-interrupted cases below
 def test_resume_after_sigkill_several_times(tmp_path, record_file):
     """Killed three times in a row at random steps and run again: exactly the requested

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import hashlib
 import multiprocessing
+import signal
 from dataclasses import dataclass
 
 import emcee
@@ -236,6 +237,13 @@ def _log_prob(u):
     return lp + float(logj), phi
 
 
+def _ignore_interrupt():
+    """Worker processes leave Ctrl-C (SIGINT, sent to the whole process group) to the
+    parent, which stops the run and ends them: a worker that died of it mid-task would
+    leave the parent waiting for its result for ever."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _sse(phys):
     return sse(_MODEL, phys)
 
@@ -338,7 +346,7 @@ def run_sampler(
     _MODEL, _COORDS = model, coords
     moves = moves or default_moves(model, coordinates=coords)
     used = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves) + ((adaptation.describe(),) if adaptation else ())
-    pool = multiprocessing.get_context("fork").Pool(processes) if processes > 1 else None
+    pool = multiprocessing.get_context("fork").Pool(processes, initializer=_ignore_interrupt) if processes > 1 else None
     fitted: dict[int, IndependenceMove | None] = {}
 
     def new_sampler(step: int) -> emcee.EnsembleSampler:
@@ -421,8 +429,8 @@ def run_sampler(
                                   start_theta, recovered, used, coords, skip, done)
             previous = tau
     finally:
-        if pool is not None:
-            pool.close()
+        if pool is not None:  # nothing is left to compute; after Ctrl-C a task may still be running
+            pool.terminate()
             pool.join()
         _MODEL, _COORDS = None, None
         try:  # a run stopped by Ctrl-C or an error: bring the twin up to date if possible
