@@ -161,10 +161,10 @@ class _WithoutHastings(IndependenceMove):
         return q, np.zeros(len(q))
 
 
-@pytest.mark.parametrize("dof", [10.0, np.inf])
-def test_independence_move_leaves_the_target_invariant(dof):
-    sampler, p = _run_gaussian(IndependenceMove(**_OFF, dof=dof))
-    assert 0.1 < np.mean(sampler.acceptance_fraction) < 0.9
+@pytest.mark.parametrize("dof, wide", [(10.0, 0.2), (np.inf, 0.0)])
+def test_independence_move_leaves_the_target_invariant(dof, wide):
+    sampler, p = _run_gaussian(IndependenceMove(**_OFF, dof=dof, wide=wide))
+    assert 0.05 < np.mean(sampler.acceptance_fraction) < 0.9  # it does move
     assert p > 0.01
 
 
@@ -174,21 +174,35 @@ def test_the_invariance_check_sees_a_missing_hastings_factor():
 
 def test_independence_move_fitted_to_the_targets_draws_is_accepted_often():
     rng = np.random.default_rng(6)
-    move = IndependenceMove.fit(rng.multivariate_normal(np.zeros(4), COV, size=20000), dof=np.inf, scale=1.0)
+    move = IndependenceMove.fit(rng.multivariate_normal(np.zeros(4), COV, size=20000), dof=np.inf, scale=1.0,
+                                wide=0.0)
     np.testing.assert_allclose(move.chol @ move.chol.T, COV, atol=0.05)
     sampler, p = _run_gaussian(move, steps=10)
     assert np.mean(sampler.acceptance_fraction) > 0.9  # the proposal is the target
     assert p > 0.01
 
 
-def test_independence_move_log_density_is_the_t_and_the_normal():
+def test_independence_move_log_density_is_the_t_the_normal_and_their_mixtures():
     cov = np.array([[2.0, 0.3], [0.3, 0.5]])
-    x = np.random.default_rng(7).normal(size=(5, 2))
-    for dof, ref in ((np.inf, stats.multivariate_normal([0.0, 0.0], cov)),
-                     (4.0, stats.multivariate_t([0.0, 0.0], cov, df=4.0))):
-        move = IndependenceMove(np.zeros(2), cov, dof=dof, scale=1.0)
+    x = np.random.default_rng(7).normal(0.0, 3.0, size=(6, 2))
+    for dof, law in ((np.inf, lambda c: stats.multivariate_normal([0.0, 0.0], c)),
+                     (4.0, lambda c: stats.multivariate_t([0.0, 0.0], c, df=4.0))):
+        move = IndependenceMove(np.zeros(2), cov, dof=dof, scale=1.0, wide=0.0)
         got = move.log_density(x)
-        np.testing.assert_allclose(got - got[0], ref.logpdf(x) - ref.logpdf(x[0]), rtol=1e-10)
+        ref = law(cov).logpdf(x)
+        np.testing.assert_allclose(got - got[0], ref - ref[0], rtol=1e-10)
+        # the defensive mixture: 0.7 of the fitted law, 0.3 of it 2.5 times wider
+        move = IndependenceMove(np.zeros(2), cov, dof=dof, scale=1.0, wide=0.3, wide_scale=2.5)
+        got = move.log_density(x)
+        ref = np.log(0.7 * law(cov).pdf(x) + 0.3 * law(2.5**2 * cov).pdf(x))
+        np.testing.assert_allclose(got - got[0], ref - ref[0], rtol=1e-10)
+
+
+def test_independence_move_draws_its_wide_part_as_often_as_it_says():
+    move = IndependenceMove(np.zeros(3), np.eye(3), dof=np.inf, scale=1.0, wide=0.25, wide_scale=10.0)
+    q, _ = move._propose(np.zeros((20000, 3)), np.random.RandomState(8))
+    far = np.linalg.norm(q, axis=1) > 5.0  # beyond 5 sd of the fitted part: the wide part's draws
+    assert far.mean() == pytest.approx(0.25 * stats.chi2(3).sf(0.25), abs=0.01)
 
 
 def test_independence_move_refuses_what_defines_no_proposal():
@@ -199,5 +213,7 @@ def test_independence_move_refuses_what_defines_no_proposal():
         IndependenceMove(np.zeros(3), np.eye(2))
     with pytest.raises(ValueError, match="positive"):
         IndependenceMove(np.zeros(2), np.eye(2), dof=0.0)
+    with pytest.raises(ValueError, match="wide part"):
+        IndependenceMove(np.zeros(2), np.eye(2), wide=1.0)
     with pytest.raises(np.linalg.LinAlgError):
         IndependenceMove(np.zeros(2), -np.eye(2))

@@ -88,7 +88,7 @@ def test_adaptation_fits_after_the_transient_only():
     moves = adapt.moves([("a", 0.6), ("b", 0.4)], move)
     assert [w for _, w in moves] == pytest.approx([0.3, 0.2, 0.5])
     assert adapt.moves([("a", 1.0)], None) == [("a", 1.0)]
-    for bad in (dict(weight=1.0), dict(weight=0.0), dict(every=1), dict(every=2.5), dict(dof=0.0)):
+    for bad in (dict(weight=1.0), dict(weight=0.0), dict(every=1), dict(every=2.5), dict(dof=0.0), dict(wide=1.0)):
         with pytest.raises(ValueError, match="adaptation"):
             Adaptation(**bad)
 

@@ -124,20 +124,27 @@ class Adaptation:
         from the chain's steps after its transient, if at least ``every // 2`` of them.
     dof, scale : the t's degrees of freedom and the factor on its covariance's square
         root (:class:`.moves.IndependenceMove`; defaults 10 and 1.1).
+    wide, wide_scale : share of proposals drawn from the same t ``wide_scale`` times
+        wider (defaults 0.2 and 3; see :class:`.moves.IndependenceMove`).
     """
 
     weight: float = 0.5
     every: int = 250
     dof: float = 10.0
     scale: float = 1.1
+    wide: float = 0.2
+    wide_scale: float = 3.0
 
     def __post_init__(self) -> None:
         if not 0.0 < self.weight < 1.0:
             raise ValueError(f"adaptation weight must lie in (0, 1), got {self.weight}")
         if not (isinstance(self.every, int) and self.every >= 2):
             raise ValueError(f"adaptation period must be a whole number of at least 2 steps, got {self.every!r}")
-        if not (self.dof > 0 and self.scale > 0):
-            raise ValueError(f"adaptation dof and scale must be positive, got {self.dof} and {self.scale}")
+        if not (self.dof > 0 and self.scale > 0 and self.wide_scale > 0):
+            raise ValueError(f"adaptation dof and scales must be positive, got {self.dof}, {self.scale} "
+                             f"and {self.wide_scale}")
+        if not 0.0 <= self.wide < 1.0:
+            raise ValueError(f"adaptation's wide share must lie in [0, 1), got {self.wide}")
 
     def proposal(self, chain: np.ndarray, log_prob: np.ndarray) -> IndependenceMove | None:
         """The move fitted to ``chain`` (steps, walkers, ndim; sampler coordinates) after
@@ -146,7 +153,8 @@ class Adaptation:
         skip = transient(log_prob)
         if len(chain) - skip < self.every // 2:
             return None
-        return IndependenceMove.fit(chain[skip:].reshape(-1, chain.shape[-1]), dof=self.dof, scale=self.scale)
+        return IndependenceMove.fit(chain[skip:].reshape(-1, chain.shape[-1]), dof=self.dof, scale=self.scale,
+                                    wide=self.wide, wide_scale=self.wide_scale)
 
     def moves(self, base: list, proposal: IndependenceMove | None) -> list:
         """``base`` moves, with ``proposal`` in ``weight`` of the steps where there is one."""
@@ -156,7 +164,8 @@ class Adaptation:
 
     def describe(self) -> str:
         return (f"IndependenceMove {self.weight:.3g} (t, dof {self.dof:g}, scale {self.scale:g}, "
-                f"refitted every {self.every} steps; the others scaled by {1 - self.weight:.3g} once fitted)")
+                f"{self.wide:g} of it {self.wide_scale:g} x wider, refitted every {self.every} steps; "
+                f"the others scaled by {1 - self.weight:.3g} once fitted)")
 
 
 @dataclass
