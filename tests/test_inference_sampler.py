@@ -109,3 +109,20 @@ def test_a_run_stopped_between_refits_continues_to_the_uninterrupted_chain(model
                         adaptation=None)
     assert np.array_equal(plain.sampler.get_chain()[:30], whole.sampler.get_chain()[:30])
     assert not np.array_equal(plain.sampler.get_chain()[30:], whole.sampler.get_chain()[30:])
+
+
+def test_a_falling_tau_counts_as_settled_but_a_growing_one_does_not():
+    from bayes_inerter.inference.sampler import _is_converged
+
+    conv = Convergence()  # 50 tau, 5 %
+    good = dict(rhat=np.array([1.01]), ess=np.array([2000.0]))
+    # the adaptive A3 1 Hz chain of benchmarks/bench_adaptation.py at its checks of
+    # 4,500 and 5,000 steps: tau fell 3.7 %, the chain is longer than 50 times either
+    assert _is_converged(5000, np.array([91.7]), np.array([95.2]), conv=conv, **good)
+    # grown by more than 5 %: underestimated, wait
+    assert not _is_converged(5000, np.array([95.2]), np.array([89.0]), conv=conv, **good)
+    # fallen, but the chain is shorter than 50 times the last check's estimate
+    assert not _is_converged(5000, np.array([91.7]), np.array([101.0]), conv=conv, **good)
+    # R-hat and ESS still decide
+    assert not _is_converged(5000, np.array([91.7]), np.array([95.2]), rhat=np.array([1.06]),
+                             ess=np.array([2000.0]), conv=conv)

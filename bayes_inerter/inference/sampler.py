@@ -19,9 +19,10 @@ autocorrelation time tau (``emcee.autocorr.integrated_time(tol=0)`` on the chain
 theta, the reported parameters) per parameter, checked every
 ``check_every`` steps, on the chain after its :func:`transient` (the steps before the
 walkers reach equilibrium, none for a chain that starts there); converged when that
-chain is longer than ``n_tau`` times the largest tau, tau moved less than ``tau_rtol``
-since the last check, and, after discarding 2 tau more, R-hat < ``max_rhat`` and bulk
-ESS >= ``min_ess`` (arviz,
+chain is longer than ``n_tau`` times the largest tau (and than ``n_tau`` times the last
+check's, if that was larger), tau grew by less than ``tau_rtol`` since the last check
+(a tau that still grows with the chain is underestimated), and, after discarding 2 tau
+more, R-hat < ``max_rhat`` and bulk ESS >= ``min_ess`` (arviz,
 treating walkers as chains: they are not independent, so R-hat here is a check that no
 walker is stuck apart from the others, not a proof). Or stops at ``max_steps``.
 
@@ -455,7 +456,10 @@ def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> boo
     if iteration < conv.n_tau * np.max(tau):
         return False
     if previous is not None and np.all(np.isfinite(previous)):
-        if np.max(np.abs(tau - previous) / tau) > conv.tau_rtol:
+        # a tau that grows is not yet to be trusted; one that falls (an early stretch of
+        # slow exploration weighing less as the chain grows) is, but the chain must also
+        # be long enough for the last check's larger estimate
+        if np.max((tau - previous) / tau) > conv.tau_rtol or iteration < conv.n_tau * np.max(previous):
             return False
     return bool(np.nanmax(rhat) < conv.max_rhat and np.nanmin(ess) >= conv.min_ess)
 
@@ -473,4 +477,5 @@ def _why_not(iteration, skip, tau, rhat, ess, conv: Convergence) -> str:
         parts.append(f"max R-hat {np.nanmax(rhat):.3f} >= {conv.max_rhat}")
     if not np.nanmin(ess) >= conv.min_ess:
         parts.append(f"min bulk ESS {np.nanmin(ess):.0f} < {conv.min_ess:g}")
-    return "not converged: " + ("; ".join(parts) if parts else "tau still changing")
+    return "not converged: " + ("; ".join(parts) if parts else "tau still growing, or the chain shorter than "
+                                f"{conv.n_tau:g} times the last check's tau")
