@@ -150,7 +150,11 @@ def test_ctrl_c_on_worker_processes_ends_the_run_with_130_and_keeps_its_steps(tm
     out = tmp_path / "interrupted"
     cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
            "--steps", "400", "--walkers", "24", "--processes", "2", "--seed", "3"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    # a test run in the background of a non-interactive shell (as CI may be) inherits
+    # SIGINT ignored, and Python then never turns it into KeyboardInterrupt: give the
+    # run a terminal's default, as a user pressing Ctrl-C has
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 300
     while time.time() < deadline and proc.poll() is None and steps_written(out / "chain.h5") < 5:
         time.sleep(0.05)

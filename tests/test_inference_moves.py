@@ -198,6 +198,25 @@ def test_independence_move_log_density_is_the_t_the_normal_and_their_mixtures():
         np.testing.assert_allclose(got - got[0], ref - ref[0], rtol=1e-10)
 
 
+@pytest.mark.parametrize("dof", [4.0, np.inf])
+def test_independence_move_draws_from_the_law_its_density_describes(dof):
+    # one dimension: the draws against the exact CDF of the defensive mixture, 0.7 of the
+    # fitted t (scale 1.1 x sd 2) and 0.3 of it 2.5 times wider
+    move = IndependenceMove(np.array([1.0]), np.array([[4.0]]), dof=dof, scale=1.1, wide=0.3, wide_scale=2.5)
+    q, _ = move._propose(np.zeros((40000, 1)), np.random.RandomState(9))
+    law = stats.norm if np.isinf(dof) else stats.t(dof)
+    s = 1.1 * 2.0
+
+    def cdf(x):
+        return 0.7 * law.cdf((x - 1.0) / s) + 0.3 * law.cdf((x - 1.0) / (2.5 * s))
+
+    assert stats.kstest(q[:, 0], cdf).pvalue > 0.01
+    # and the same check tells a wide part drawn too rarely (0.2 where the density says 0.3)
+    rarely = IndependenceMove(np.array([1.0]), np.array([[4.0]]), dof=dof, scale=1.1, wide=0.2, wide_scale=2.5)
+    q, _ = rarely._propose(np.zeros((40000, 1)), np.random.RandomState(9))
+    assert stats.kstest(q[:, 0], cdf).pvalue < 1e-4
+
+
 def test_independence_move_draws_its_wide_part_as_often_as_it_says():
     move = IndependenceMove(np.zeros(3), np.eye(3), dof=np.inf, scale=1.0, wide=0.25, wide_scale=10.0)
     q, _ = move._propose(np.zeros((20000, 3)), np.random.RandomState(8))
