@@ -121,8 +121,10 @@ def test_a_falling_tau_counts_as_settled_but_a_growing_one_does_not():
     assert _is_converged(5000, np.array([91.7]), np.array([95.2]), conv=conv, **good)
     # fallen by 10 %, more than the 5 % that the old two-sided rule allowed: settled
     assert _is_converged(5000, np.array([90.0]), np.array([99.0]), conv=conv, **good)
-    # grown by more than 5 %: underestimated, wait
+    # grown by more than 5 %: underestimated, wait (5 % of the earlier estimate)
     assert not _is_converged(5000, np.array([95.2]), np.array([89.0]), conv=conv, **good)
+    assert not _is_converged(5000, np.array([94.0]), np.array([89.4]), conv=conv, **good)  # 5.1 %
+    assert _is_converged(5000, np.array([93.8]), np.array([89.4]), conv=conv, **good)  # 4.9 %
     # fallen, but the chain is shorter than 50 times the last check's estimate
     assert not _is_converged(5000, np.array([91.7]), np.array([101.0]), conv=conv, **good)
     # R-hat and ESS still decide

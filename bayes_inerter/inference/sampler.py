@@ -459,7 +459,7 @@ def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> boo
         # a tau that grows is not yet to be trusted; one that falls (an early stretch of
         # slow exploration weighing less as the chain grows) is, but the chain must also
         # be long enough for the last check's larger estimate
-        if np.max((tau - previous) / tau) > conv.tau_rtol or iteration < conv.n_tau * np.max(previous):
+        if np.max((tau - previous) / previous) > conv.tau_rtol or iteration < conv.n_tau * np.max(previous):
             return False
     return bool(np.nanmax(rhat) < conv.max_rhat and np.nanmin(ess) >= conv.min_ess)
 
