@@ -394,13 +394,13 @@ def run_sampler(
             state = backend.get_last_sample()
 
         def advance(until: int, target) -> None:
-            """Sample up to step ``until``, in pieces that end where the proposal is refitted."""
+            """Sample up to step ``until``, in pieces that end where the proposal is refitted,
+            each with the sampler :func:`new_sampler` gives for its first step."""
             nonlocal sampler, state
             while sampler.iteration < until:
                 step = sampler.iteration
                 end = until if adaptation is None else min(until, (step // adaptation.every + 1) * adaptation.every)
-                if adaptation is not None and step > 0 and step % adaptation.every == 0:
-                    sampler = new_sampler(step)
+                sampler = new_sampler(step)
                 for _ in sampler.sample(state, iterations=end - step, store=True):
                     if progress:
                         progress(sampler.iteration, target)
