@@ -26,7 +26,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "studies"))
 
-from _table import write_rows  # noqa: E402
+from _table import record_arg, write_rows  # noqa: E402
 
 VARIANTS = ("adaptive", "ensemble-only")
 
@@ -65,12 +65,11 @@ def _start(item, seed):
     from bayes_inerter.inference.optimize import find_start
     from bayes_inerter.records.generator import paper_record
 
+    setting, freq = record_arg(item)
     try:
-        setting, freq = item.split(":")
-        setting, freq = setting.upper(), float(freq)
         rec = paper_record(setting, freq, seed=0)
     except ValueError as exc:
-        sys.exit(f"error: --record takes SETTING:FREQUENCY of the paper grid, got {item!r} ({exc})")
+        sys.exit(f"error: --record {item!r} is not a record of the paper grid ({exc})")
     return setting, freq, find_start(PosteriorModel(rec), np.random.default_rng(seed))
 
 

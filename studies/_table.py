@@ -1,10 +1,20 @@
-"""What the studies' scripts share: run jobs on local processes, write rows of results
-to a CSV file and print them."""
+"""What the studies' scripts share: read a record named SETTING:FREQUENCY, run jobs on
+local processes, write rows of results to a CSV file and print them."""
 
 import csv
 import sys
 from multiprocessing import get_context
 from pathlib import Path
+
+
+def record_arg(item: str) -> tuple[str, float]:
+    """(setting, frequency in Hz) from a ``--record`` value SETTING:FREQUENCY ("A3:1");
+    anything else ends the script with a one-line error."""
+    try:
+        setting, freq = item.split(":")
+        return setting.upper(), float(freq)
+    except ValueError:
+        sys.exit(f"error: --record takes SETTING:FREQUENCY, got {item!r}")
 
 
 def map_rows(func, jobs: list, processes: int) -> list[dict]:

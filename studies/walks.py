@@ -28,7 +28,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _table import map_rows, write_rows  # noqa: E402
+from _table import map_rows, record_arg, write_rows  # noqa: E402
 
 
 WALKS = ("physical", "physical+ridge", "impedance")
@@ -83,12 +83,8 @@ def main():
     jobs = []
     with tempfile.TemporaryDirectory() as folder:
         for item in args.record or ["A3:1"]:
-            try:
-                setting, freq = item.split(":")
-                freq = float(freq)
-            except ValueError:
-                sys.exit(f"error: --record takes SETTING:FREQUENCY, got {item!r}")
-            jobs += [(setting.upper(), freq, walk, args.steps, args.seed, folder) for walk in WALKS]
+            setting, freq = record_arg(item)
+            jobs += [(setting, freq, walk, args.steps, args.seed, folder) for walk in WALKS]
         rows = map_rows(_chain, jobs, args.processes)
     write_rows(args.out, rows)
 
