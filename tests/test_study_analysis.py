@@ -198,17 +198,78 @@ def test_collect_orders_fits_by_setting_and_frequency_as_numbers(tmp_path):
                      ("two-port", "A0_1.5Hz"), ("two-port", "A1_1Hz")]
 
 
-def test_report_says_how_records_were_combined_and_points_to_the_joint_model():
-    from bayes_inerter.study.report import _combination_note
+def test_report_says_how_records_were_combined_or_that_b_is_the_joint_models():
+    from bayes_inerter.study.analysis import joint_estimate
+    from bayes_inerter.study.report import _combination_note, _inertance_text
 
     inert = inertance_table([fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1010.0, 10.0),
                              fake_fit("A2", 1.0, 2000.0, 5.0)])
     alone = _combination_note(inert, [])
-    assert "independent normals" in alone and "joint model" not in alone
-    joint = [{"setting": "A1", "covers_truth": True}, {"setting": "A2", "covers_truth": False}]
-    text = _combination_note(inert, joint)
-    assert "joint model" in text and "for 1 of 2 settings" in text
-    # a user's records (no generating b): no coverage claimed
-    assert "settings" not in _combination_note(inert, [{"setting": "A1"}]).split("joint model")[1]
-    # one record per setting: nothing was combined, nothing to say
-    assert _combination_note(inertance_table([fake_fit("A1", 1.0, 1000.0, 10.0)]), joint) == ""
+    assert "independent normals" in alone and "--no-joint" in alone
+    # one record per setting and no joint model: nothing was combined, nothing to say
+    assert _combination_note(inertance_table([fake_fit("A1", 1.0, 1000.0, 10.0)]), []) == ""
+    rng = np.random.default_rng(1)
+    draws = {"b_A1": 1004.0 + rng.normal(0, 1.0, 4000), "b_A2": 2001.0 + rng.normal(0, 1.0, 4000)}
+    joint = joint_estimate(inert, draws, converged=False)
+    truth = [{"setting": "A1", "b_truth": 1004.0}, {"setting": "A2", "b_truth": 2001.0}]
+    text = _combination_note(joint, truth)
+    # the product's own list and coverage (A1 1005 +- 1.88 * 7.07: holds 1004; A2 2000 +- 9.4: holds 2001)
+    assert "joint model's b's" in text and "A1 1005 kg" in text and "for 2 of 2 settings" in text
+    assert "settings" not in _combination_note(joint, [{"setting": "A1"}]).split("the same records give")[1]
+    lead = _inertance_text(joint, {"A1": 1004.0, "A2": 2010.0})
+    assert "from the joint model" in lead and "holds the true value for 1 of 2 settings" in lead
+    assert "not converged" in lead and "Birge" not in lead
+
+
+def test_joint_estimate_puts_the_joint_b_first_and_keeps_the_product_beside_it():
+    from bayes_inerter.records.sensitivity import SensorCalibration
+    from bayes_inerter.study.analysis import joint_estimate
+
+    fits = [fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1010.0, 10.0), fake_fit("A2", 1.0, 2000.0, 5.0)]
+    for f in fits:
+        f.info.update(m_s=20.0, m_B=50.0)
+    cal = SensorCalibration()
+    inert = inertance_table(fits, calibration=cal)
+    before = [dict(r) for r in inert]
+    x = np.random.default_rng(2).gamma(4.0, 2.0, size=(8, 500)) + 1010.0  # skewed: median != mean
+    rows = joint_estimate(inert, {"b_A1": x}, converged=True, calibration=cal)
+    a1, a2 = rows
+    assert inert == before  # the product's rows are left as they were
+    assert a1["estimate"] == "joint" and a2["estimate"] == "records combined"
+    assert a1["b_median"] == pytest.approx(np.median(x)) and a1["b_sd"] == pytest.approx(np.std(x, ddof=1))
+    inside = np.mean((x >= a1["b_hdi_3%"]) & (x <= a1["b_hdi_97%"]))
+    assert inside == pytest.approx(0.94, abs=0.002)
+    assert a1["b_hdi_3%"] < np.quantile(x, 0.03)  # an HDI of a right-skewed posterior sits left of the central one
+    assert a1["b_product_median"] == before[0]["b_median"] and a1["b_product_sd"] == before[0]["b_sd"]
+    assert a1["records"] == 2 and a1["chi2"] == before[0]["chi2"]
+    assert a1["b_cal_sd"] == pytest.approx(cal.inertance_sd(float(np.mean(x)), a1["b_sd"], 70.0))
+    assert a2 == {**before[1], "estimate": "records combined"}
+
+
+def test_regression_of_joint_draws_keeps_their_correlation():
+    settings = ["A0", "A1", "A3", "B1"]
+    b = np.array([750.0, 1670.0, 3530.0, 10470.0])
+    rng = np.random.default_rng(3)
+    n = 20000
+    sd = np.array([0.5, 1.0, 2.0, 8.0])
+    independent = b + sd * rng.standard_normal((n, 4))
+    rows = [{"setting": s, "b_median": m, "b_sd": v} for s, m, v in zip(settings, b, sd)]
+    normal = {r["term"]: r for r in flywheel_regression(rows)}
+    drawn = {r["term"]: r for r in flywheel_regression(rows, draws=independent)}
+    for term, r in normal.items():  # independent draws: the normal form's result, to Monte Carlo error
+        assert drawn[term]["mean"] == pytest.approx(r["mean"], abs=4 * r["sd"] / np.sqrt(n))
+        assert drawn[term]["sd"] == pytest.approx(r["sd"], rel=0.03)
+        assert drawn[term]["hdi_97%"] - drawn[term]["hdi_3%"] == pytest.approx(2 * Z94 * r["sd"], rel=0.05)
+    # one shift shared by every b (a shared nut stiffness, say): all of it is the base's, none the increments'
+    shift = 3.0 * rng.standard_normal((n, 1))
+    shared = b + shift + 0.01 * sd * rng.standard_normal((n, 4))
+    rows = [{"setting": s, "b_median": m, "b_sd": v} for s, m, v in zip(settings, b, shared.std(axis=0))]
+    normal = {r["term"]: r for r in flywheel_regression(rows)}
+    drawn = {r["term"]: r for r in flywheel_regression(rows, draws=shared, truth_b=dict(zip(settings, b + 4.0)))}
+    assert drawn["base (A0)"]["sd"] == pytest.approx(3.0, rel=0.03)
+    assert drawn["per small flywheel"]["sd"] < 0.1 < normal["per small flywheel"]["sd"]
+    # a truth shifted by 4 kg in every setting: inside the base's interval, and the increments' truth is unmoved
+    assert drawn["base (A0)"]["covers_truth"]
+    assert drawn["per small flywheel"]["truth"] == pytest.approx(normal["per small flywheel"]["mean"])
+    with pytest.raises(ValueError, match="shape"):
+        flywheel_regression(rows, draws=shared[:, :3])

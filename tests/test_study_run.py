@@ -5,6 +5,7 @@ import os
 import shutil
 import signal
 
+import numpy as np
 import pytest
 
 from bayes_inerter.cli import main
@@ -50,9 +51,15 @@ def test_study_writes_tables_figures_and_report(study):
     assert "b_app_hdi_3%" in (out / "inertance_records.csv").read_text().splitlines()[0]
     assert "hold the generating b_app = b (1 + b k_n / c_n^2)" in report and "ambiguity.csv" in report
     # the joint model of both records: one b per setting beside the single-record ones
-    assert (out / "joint" / "summary.csv").is_file() and (out / "flywheels_joint.csv").is_file()
+    assert (out / "joint" / "summary.csv").is_file() and (out / "flywheels_product.csv").is_file()
     assert [r["setting"] for r in study.tables["joint"]] == ["A0", "A2"]
-    assert "b_joint_mean" in (out / "inertance.csv").read_text().splitlines()[0]
+    # inertance.csv's b is the joint model's, the records' product beside it
+    assert "b_product_median" in header and [r["estimate"] for r in study.tables["inertance"]] == ["joint"] * 2
+    draws = np.load(out / "joint" / "b_draws.npz")
+    assert sorted(draws.files) == ["b_A0", "b_A2"]
+    a0 = study.tables["inertance"][0]
+    assert a0["b_median"] == pytest.approx(np.median(draws["b_A0"]))
+    assert "from the joint model of all records" in report
     assert "Joint model" in report and json.loads((out / "joint" / "fit.json").read_text())["iterations"] == 6
 
 

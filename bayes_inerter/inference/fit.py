@@ -24,7 +24,12 @@ from .model import LikelihoodSettings, PosteriorModel
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
 from .sampler import Adaptation, Convergence, check_run_options, run_sampler
 
-__all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions"]
+__all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions", "DRAWS_FILE"]
+
+#: The joint model's kept draws of each b (``b_<setting>``: walkers x draws), numpy's npz:
+#: what the study's regression per flywheel needs, kept beside the summary because the
+#: chain itself is too large to keep with the results.
+DRAWS_FILE = "b_draws.npz"
 
 
 @dataclass
@@ -42,6 +47,8 @@ class FitResult:
     contraction: dict = field(default_factory=dict)
     #: what was done to continue a damaged checkpoint ("" when nothing was)
     recovered: str = ""
+    #: the joint model's kept draws of each b, ``b_<setting>`` -> (walkers, draws) (empty for one record)
+    draws: dict = field(default_factory=dict)
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -167,7 +174,7 @@ def fit_joint(
 ) -> FitResult:
     """Sample the joint posterior of several records (``joint.JointModel``: shared
     frictions and deformations, one b per flywheel setting) into ``out``: chain.h5,
-    summary.csv, fit.json, corner.png (the b's), trace.png.
+    summary.csv, fit.json, b_draws.npz (``DRAWS_FILE``), corner.png (the b's), trace.png.
 
     ``centres``: one dict of single-record posterior centres (sampled values by name) per
     record; the run starts from the joint optimum that Nelder-Mead, restarted while it
@@ -204,12 +211,14 @@ def fit_joint(
     rows = summary_rows(sample)
     shrink = contraction(jm, sample)
     write_summary(out / "summary.csv", rows)
+    nb = len(jm.settings)
+    draws = {name: sample.values[:, :, i] for i, name in enumerate(jm.names[:nb])}
+    np.savez_compressed(out / DRAWS_FILE, **draws)
     if plots:
         import matplotlib.pyplot as plt
 
         from .plots import plot_corner, plot_trace
 
-        nb = len(jm.settings)
         flat = sample.values.reshape(-1, jm.ndim)
         truths = [rec.metadata.get("true_parameters", {}).get("b") for rec in
                   (next(r for r, s in zip(jm.records, jm.setting_of) if s == name) for name in jm.settings)]
@@ -241,7 +250,7 @@ def fit_joint(
     }
     (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
     return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"], shrink,
-                     run.recovered)
+                     run.recovered, draws)
 
 
 def _sampling_all_runs(out: Path, t_sample: float, run, started_over: bool) -> dict:

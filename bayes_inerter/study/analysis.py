@@ -2,18 +2,26 @@
 the inertance added per flywheel, the fit accuracy phi against the paper's Table 2,
 model comparison, and what the data identify.
 
-Combining records: each record's posterior is sampled on its own (its own frictions and
-deformations). A setting's inertance from its records at several frequencies is their
-product, taken in a normal approximation (precision-weighted mean and sd of the
-per-record posteriors); a chi-square of the per-record means about it says whether
-they agree, and where they disagree by more than their sds allow (chi-square above its
-degrees of freedom) the combined sd is scaled up by the Birge ratio
-sqrt(chi2 / (records - 1)), the Particle Data Group's rule for averaging discrepant
-measurements: their sds are then taken to be too small by a common factor. (A
-chi-square far beyond that, p < 1 %, says more: b may change with the frequency; the
-report flags it.) The increments per flywheel come from a weighted least-squares
-regression of those per-setting normals on the numbers of small and big flywheels (a
-normal posterior for base, per-small and per-big inertance under flat priors).
+b per setting: where the study ran the joint model (one set of frictions and
+deformations for all records, one b per setting: the paper's model), ``inertance.csv``
+gives its b (``joint_estimate``), with each setting's records combined one by one
+beside it (``b_product_*``); without it, that combination.
+
+Combining records one by one: each record's posterior is sampled on its own (its own
+frictions and deformations). A setting's inertance from its records at several
+frequencies is their product, taken in a normal approximation (precision-weighted mean
+and sd of the per-record posteriors); a chi-square of the per-record means about it
+says whether they agree, and where they disagree by more than their sds allow
+(chi-square above its degrees of freedom) the combined sd is scaled up by the Birge
+ratio sqrt(chi2 / (records - 1)), the Particle Data Group's rule for averaging
+discrepant measurements: their sds are then taken to be too small by a common factor.
+(A chi-square far beyond that, p < 1 %, says more: b may change with the frequency; the
+report flags it.)
+
+The increments per flywheel come from a weighted least-squares regression of the
+per-setting b's on the numbers of small and big flywheels: of every joint posterior
+draw where there is one (the b's are correlated through the shared parameters), else of
+the per-setting normals (a normal posterior under flat priors).
 
 The sensors' calibration (``records.sensitivity.SensorCalibration``) is what no record
 can check: with one, every table also gives b's sd and 94 % interval with the
@@ -36,7 +44,8 @@ import numpy as np
 from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
 from ..records.sensitivity import SensorCalibration
 
-__all__ = ["RecordFit", "birge_ratio", "collect", "inertance_table", "joint_inertance", "record_table",
+__all__ = ["RecordFit", "birge_ratio", "collect", "inertance_table", "joint_estimate", "joint_inertance",
+           "record_table",
            "flywheel_regression", "phi_table", "model_comparison", "fit_loo", "contraction_table", "write_csv", "Z94"]
 
 #: Half-width of a central 94 % interval of a normal, in sd.
@@ -179,8 +188,8 @@ def inertance_table(fits: list[RecordFit], geometry=None, calibration: SensorCal
 def joint_inertance(joint_rows: list[dict], inertance: list[dict], truth_b: dict | None = None,
                     truth_app: dict | None = None, calibration: SensorCalibration | None = None) -> list[dict]:
     """Per setting, the joint model's b (posterior mean, sd, 94 % HDI) beside theory and
-    the single-record combination; adds ``b_joint_mean``, ``b_joint_hdi_3%`` and
-    ``b_joint_hdi_97%`` to the ``inertance`` rows too. ``covers_truth`` with ``truth_b``.
+    the single-record combination (``inertance``'s ``b_median``, taken before
+    ``joint_estimate``). ``covers_truth`` with ``truth_b``.
     Where the joint summary has the apparent inertance ``b_app_<setting>``
     (``device.apparent_inertance``): its mean and 94 % HDI, and with ``truth_app`` (its
     generating values) ``b_app_truth`` and ``covers_truth_app``. With ``calibration``:
@@ -209,28 +218,50 @@ def joint_inertance(joint_rows: list[dict], inertance: list[dict], truth_b: dict
                 t = truth_app[row["setting"]]
                 out.update(b_app_truth=t,
                            covers_truth_app=bool(out["b_app_joint_hdi_3%"] <= t <= out["b_app_joint_hdi_97%"]))
-        row.update({k: out[k] for k in ("b_joint_mean", "b_joint_hdi_3%", "b_joint_hdi_97%")})
         rows.append(out)
     return rows
 
 
-def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | None = None,
-                        calibration: SensorCalibration | None = None) -> list[dict]:
-    """Base, per-small and per-big-flywheel inertance: posterior (normal) against geometry.
+#: The columns of the records' combination that ``joint_estimate`` keeps beside the joint model's b.
+PRODUCT_COLUMNS = ("b_median", "b_hdi_3%", "b_hdi_97%", "b_sd")
 
-    Only the terms the settings can separate are estimated: the small (big) increment
-    needs a setting with small (big) flywheels, and the base needs more settings than
-    increments. With ``truth_b`` (setting -> the b its records were generated with), the
-    same regression of those values is given as ``truth`` and whether the interval
-    holds it (``covers_truth``). With ``calibration``: ``cal_sd``, ``cal_hdi_3%``,
-    ``cal_hdi_97%`` (and ``covers_truth_cal``), the sensors' share added: ``u`` times the
-    term plus the same regression of the rows' ``moving_mass`` (nan where a row has none).
+
+def joint_estimate(inertance: list[dict], draws: dict, converged: bool,
+                   calibration: SensorCalibration | None = None) -> list[dict]:
+    """The rows of ``inertance`` (``inertance_table``: each setting's records combined as a
+    product of normals) with b from the joint model instead, the model the study is run
+    for: one set of frictions and deformations for all records, one b per setting.
+
+    ``draws``: ``b_<setting>`` -> the joint chain's kept draws of that b (any shape).
+    ``b_median``, ``b_hdi_3%``, ``b_hdi_97%`` (94 % HDI) and ``b_sd`` are then the joint
+    posterior's, ``estimate`` is ``"joint"`` and ``converged`` the joint chain's; the
+    product's values move to ``b_product_median`` ... ``b_product_sd`` (``records``,
+    ``chi2`` and ``scale`` stay: they describe the product). With ``calibration`` the
+    ``b_cal_*`` columns are recomputed about the joint b. Settings the joint model does not
+    have keep the product (``estimate`` ``"records combined"``).
     """
-    geometry = geometry or DEFAULT_GEOMETRY
-    if not inertance:
-        return []
-    ns = np.array([SETTINGS[r["setting"]].n_small for r in inertance], dtype=float)
-    nb = np.array([SETTINGS[r["setting"]].n_big for r in inertance], dtype=float)
+    import arviz as az
+
+    out = []
+    for row in inertance:
+        row = dict(row, estimate="records combined")
+        x = draws.get(f"b_{row['setting']}")
+        if x is not None:
+            x = np.asarray(x, dtype=float).ravel()
+            lo, hi = az.hdi(x, hdi_prob=0.94)
+            row.update({f"b_product_{c[2:]}": row[c] for c in PRODUCT_COLUMNS})
+            row.update({"b_median": float(np.median(x)), "b_hdi_3%": float(lo), "b_hdi_97%": float(hi),
+                        "b_sd": float(np.std(x, ddof=1)), "estimate": "joint", "converged": bool(converged)})
+            _with_calibration(row, calibration, float(np.mean(x)), row["b_sd"], row["moving_mass"], "b_cal_")
+        out.append(row)
+    return out
+
+
+def _design(settings: list[str], geometry):
+    """The regression's terms (name, column, geometric value) that ``settings`` can
+    separate and their design matrix; None where they cannot separate any."""
+    ns = np.array([SETTINGS[s].n_small for s in settings], dtype=float)
+    nb = np.array([SETTINGS[s].n_big for s in settings], dtype=float)
     terms = [("base (A0)", np.ones_like(ns), geometry.inertance(0, 0))]
     if np.any(ns > 0):
         terms.append(("per small flywheel", ns, geometry.inertance(1, 0) - geometry.inertance(0, 0)))
@@ -238,24 +269,67 @@ def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | No
         terms.append(("per big flywheel", nb, geometry.inertance(0, 1) - geometry.inertance(0, 0)))
     X = np.column_stack([t[1] for t in terms])
     if np.linalg.matrix_rank(X) < X.shape[1]:
+        return None
+    return terms, X
+
+
+def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | None = None,
+                        calibration: SensorCalibration | None = None, draws: np.ndarray | None = None) -> list[dict]:
+    """Base, per-small and per-big-flywheel inertance: posterior against geometry.
+
+    A weighted least-squares regression of the rows' b (``b_median``, weights
+    ``1 / b_sd^2``) on the numbers of small and big flywheels. Only the terms the
+    settings can separate are estimated: the small (big) increment needs a setting with
+    small (big) flywheels, and the base needs more settings than increments.
+
+    Without ``draws`` the rows' b are taken as independent normals and so are the terms
+    (a normal posterior under flat priors; intervals mean +- 1.88 sd). With ``draws``,
+    jointly sampled b's of the rows, shape (draws, rows) (the joint model's): every draw
+    is regressed, and each term's mean, sd and 94 % HDI are those of its draws, which keeps
+    the b's correlation (the joint model's b's share the frictions and the nut, and
+    correlate up to 0.98 on the full study) that the normal form leaves out.
+
+    With ``truth_b`` (setting -> the b its records were generated with), the same
+    regression of those values is given as ``truth`` and whether the interval holds it
+    (``covers_truth``). With ``calibration``: ``cal_sd``, ``cal_hdi_3%``, ``cal_hdi_97%``
+    (and ``covers_truth_cal``), the sensors' share added (normal): ``u`` times the term
+    plus the same regression of the rows' ``moving_mass`` (nan where a row has none).
+    """
+    import arviz as az
+
+    geometry = geometry or DEFAULT_GEOMETRY
+    if not inertance:
         return []
-    y = np.array([r["b_median"] for r in inertance])
+    design = _design([r["setting"] for r in inertance], geometry)
+    if design is None:
+        return []
+    terms, X = design
     w = 1.0 / np.array([r["b_sd"] for r in inertance]) ** 2
     cov = np.linalg.inv(X.T @ (w[:, None] * X))
-    coef = cov @ (X.T @ (w * y))
+    project = cov @ (X.T * w)  # terms = project @ b
+    if draws is None:
+        coef = project @ np.array([r["b_median"] for r in inertance])
+        spread = [(float(c), math.sqrt(v), c - Z94 * math.sqrt(v), c + Z94 * math.sqrt(v))
+                  for c, v in zip(coef, np.diag(cov))]
+    else:
+        draws = np.asarray(draws, dtype=float)
+        if draws.ndim != 2 or draws.shape[1] != len(inertance):
+            raise ValueError(f"draws: shape (draws, {len(inertance)}) wanted, got {draws.shape}")
+        coef_draws = draws @ project.T  # (draws, terms)
+        spread = [(float(np.mean(c)), float(np.std(c, ddof=1)), *map(float, az.hdi(c, hdi_prob=0.94)))
+                  for c in coef_draws.T]
     truth = None
     if truth_b and all(r["setting"] in truth_b for r in inertance):
-        truth = cov @ (X.T @ (w * np.array([truth_b[r["setting"]] for r in inertance])))
+        truth = project @ np.array([truth_b[r["setting"]] for r in inertance])
     # b = r (b_id + m) - m for every setting, so each term's share is u (term + that term of m's regression)
-    mass_coef = cov @ (X.T @ (w * np.array([r.get("moving_mass", math.nan) for r in inertance], dtype=float)))
+    mass_coef = project @ np.array([r.get("moving_mass", math.nan) for r in inertance], dtype=float)
     rows = []
-    for k, ((name, _, theory), c, var) in enumerate(zip(terms, coef, np.diag(cov))):
-        sd = math.sqrt(var)
-        row = {"term": name, "theory": theory, "mean": float(c), "sd": sd, "hdi_3%": c - Z94 * sd,
-               "hdi_97%": c + Z94 * sd, "covers_theory": bool(abs(c - theory) <= Z94 * sd)}
+    for k, ((name, _, theory), (mean, sd, lo, hi)) in enumerate(zip(terms, spread)):
+        row = {"term": name, "theory": theory, "mean": mean, "sd": sd, "hdi_3%": lo, "hdi_97%": hi,
+               "covers_theory": bool(lo <= theory <= hi)}
         if truth is not None:
-            row.update(truth=float(truth[k]), covers_truth=bool(abs(c - truth[k]) <= Z94 * sd))
-        _with_calibration(row, calibration, float(c), sd, float(mass_coef[k]), "cal_",
+            row.update(truth=float(truth[k]), covers_truth=bool(lo <= truth[k] <= hi))
+        _with_calibration(row, calibration, mean, sd, float(mass_coef[k]), "cal_",
                           None if truth is None else float(truth[k]))
         rows.append(row)
     return rows

@@ -11,8 +11,9 @@ __all__ = ["plot_inertance", "plot_phi_map", "plot_models", "plot_design", "plot
 
 
 def plot_inertance(rows: list[dict]):
-    """b per setting: theory, the paper's identified value, the posterior (median, 94 %);
-    below, each relative to theory."""
+    """b per setting: theory, the paper's identified value, the posterior (median, 94 %),
+    and where the rows have them (``analysis.joint_estimate``) the records' product
+    beside the joint model's b; below, each relative to theory."""
     import matplotlib.pyplot as plt
 
     fig, (ax, rel) = plt.subplots(2, 1, figsize=(8, 7), sharex=True, gridspec_kw={"height_ratios": [3, 2]})
@@ -21,16 +22,18 @@ def plot_inertance(rows: list[dict]):
     paper = np.array([r["b_paper"] for r in rows])
     med = np.array([r["b_median"] for r in rows])
     err = np.array([[r["b_median"] - r["b_hdi_3%"] for r in rows], [r["b_hdi_97%"] - r["b_median"] for r in rows]])
+    joint = all(r.get("estimate") == "joint" for r in rows)
     ax.plot(x, theory, "s", mfc="none", color="k", ms=9, label="theory (geometry)")
     ax.plot(x, paper, "x", color="tab:red", ms=9, label="paper, identified by hand")
-    ax.errorbar(x, med, yerr=err, fmt="o", color="tab:blue", capsize=4, label="posterior median, 94 % interval")
-    joint = any("b_joint_mean" in r for r in rows)
-    if joint:  # the joint model's b beside the single-record combination (NaN: not in the joint model)
-        jm, lo, hi = (np.array([r.get(k, np.nan) for r in rows]) for k in ("b_joint_mean", "b_joint_hdi_3%",
-                                                                         "b_joint_hdi_97%"))
-        jerr = np.array([jm - lo, hi - jm])
-        ax.errorbar(x + 0.2, jm, yerr=jerr, fmt="D", color="tab:green", capsize=4, ms=5,
-                    label="joint model (all records), mean, 94 % interval")
+    ax.errorbar(x, med, yerr=err, fmt="o", color="tab:blue", capsize=4,
+                label=("joint model (all records)" if joint else "posterior") + ": median, 94 % interval")
+    product = any("b_product_median" in r for r in rows)
+    if product:  # each setting's records combined one by one, beside the joint model (NaN: not there)
+        pm, lo, hi = (np.array([r.get(k, np.nan) for r in rows]) for k in ("b_product_median", "b_product_hdi_3%",
+                                                                         "b_product_hdi_97%"))
+        perr = np.array([pm - lo, hi - pm])
+        ax.errorbar(x + 0.2, pm, yerr=perr, fmt="D", color="tab:green", capsize=4, ms=5,
+                    label="each record on its own, combined per setting (product)")
     ax.set_yscale("log")
     ax.set_ylabel("inertance b (kg)")
     ax.legend(loc="upper left")
@@ -38,8 +41,8 @@ def plot_inertance(rows: list[dict]):
     rel.axhline(0, color="k", lw=0.8)
     rel.plot(x, 100 * (paper / theory - 1), "x", color="tab:red", ms=9)
     rel.errorbar(x, 100 * (med / theory - 1), yerr=100 * err / theory, fmt="o", color="tab:blue", capsize=4)
-    if joint:
-        rel.errorbar(x + 0.2, 100 * (jm / theory - 1), yerr=100 * jerr / theory, fmt="D", color="tab:green",
+    if product:
+        rel.errorbar(x + 0.2, 100 * (pm / theory - 1), yerr=100 * perr / theory, fmt="D", color="tab:green",
                      capsize=4, ms=5)
     rel.set_ylabel("relative to theory (%)")
     rel.set_xticks(x, [r["setting"] for r in rows])

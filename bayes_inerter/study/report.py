@@ -32,26 +32,31 @@ def _table(rows: list[dict], columns: list[str], fmt: dict | None = None) -> str
     return "\n".join(lines)
 
 
-def _inertance_text(rows, truth_b: dict | None) -> str:
-    parts = []
-    for r in rows:
-        ratio = r["b_median"] / r["b_theory"] - 1
-        parts.append(f"{r['setting']} {r['b_median']:.0f} kg ({r['b_hdi_3%']:.0f}-{r['b_hdi_97%']:.0f}; "
-                     f"{100 * ratio:+.1f} % against theory)")
-    text = "Posterior inertance per setting (median, 94 % interval): " + "; ".join(parts) + "."
-    if truth_b:
-        known, missed = _coverage(rows, truth_b)
-        missed = [r["setting"] for r in missed]
-        held = len(known) - len(missed)
-        text += (f" The records were generated with known inertances: the 94 % interval holds the true value for "
-                 f"{held} of {held + len(missed)} settings" + (f" and misses it for {', '.join(missed)}." if missed
-                                                                else "."))
+def _interval_list(rows, prefix: str = "b_") -> str:
+    """'A0 752 kg (751-753; +58.5 % against theory); ...' from ``<prefix>median`` and its interval."""
+    return "; ".join(f"{r['setting']} {r[f'{prefix}median']:.0f} kg ({r[f'{prefix}hdi_3%']:.0f}-"
+                     f"{r[f'{prefix}hdi_97%']:.0f}; {100 * (r[f'{prefix}median'] / r['b_theory'] - 1):+.1f} % "
+                     "against theory)" for r in rows)
+
+
+def _truth_sentence(rows, truth_b: dict | None, prefix: str = "b_") -> str:
+    """'the 94 % interval holds the true value for n of m settings (and misses it for ...)'."""
+    known, missed = _coverage(rows, truth_b, prefix)
+    missed = [r["setting"] for r in missed]
+    return (f"the 94 % interval holds the true value for {len(known) - len(missed)} of {len(known)} settings"
+            + (f" and misses it for {', '.join(missed)}" if missed else ""))
+
+
+def _discrepancy_text(rows) -> str:
+    """What the chi-square of each setting's per-record means says (``analysis.inertance_table``)."""
+    text = ""
     scaled = [f"{r['setting']} ({r['scale']:.2f})" for r in rows if r.get("scale", 1.0) > 1.0]
     if scaled:
         text += (" Where a setting's records at different frequencies disagree on b by more than their intervals "
                  "allow (chi-square of the per-record means above its degrees of freedom), the combined sd is "
                  "widened by the Birge ratio sqrt(chi2 / (records - 1)): " + ", ".join(scaled) + ".")
-    gross = [r["setting"] for r in rows if r["records"] > 1 and stats.chi2.sf(r["chi2"], r["records"] - 1) < 0.01]
+    gross = [r["setting"] for r in rows
+             if r.get("records", 1) > 1 and stats.chi2.sf(r["chi2"], r["records"] - 1) < 0.01]
     if gross:
         text += (f" For {', '.join(gross)} the disagreement is beyond chance (p < 1 %): rather than intervals too "
                  "narrow by a common factor, which is what the widening assumes, it may mean that the identified "
@@ -59,22 +64,45 @@ def _inertance_text(rows, truth_b: dict | None) -> str:
     return text
 
 
+def _is_joint(rows) -> bool:
+    return bool(rows) and all(r.get("estimate") == "joint" for r in rows)
+
+
+def _inertance_text(rows, truth_b: dict | None) -> str:
+    joint = _is_joint(rows)
+    text = ("Posterior inertance per setting, " + ("from the joint model of all records (median, 94 % HDI): "
+                                                   if joint else "(median, 94 % interval): ")
+            + _interval_list(rows) + ".")
+    if truth_b:
+        text += f" The records were generated with known inertances: {_truth_sentence(rows, truth_b)}."
+    if joint and not all(r["converged"] for r in rows):
+        text += " **The joint chain is not converged: read these intervals as indicative.**"
+    return text + ("" if joint else _discrepancy_text(rows))
+
+
 def _combination_note(inert, joint_rows) -> str:
-    """How the per-setting b's above were combined (nothing to say where every setting
-    has one record), and where the joint model (if the study ran it) stands against them."""
+    """Where the per-setting b's above come from: the joint model (and then what each
+    setting's records, fitted one by one and combined, give beside it), or the product of
+    each setting's records (nothing to say where every setting has one record)."""
+    if _is_joint(inert):
+        text = ("These are the joint model's b's (below): one set of friction and deformation parameters for every "
+                "record and one b per setting, as the paper tuned them. Fitted one record at a time and combined per "
+                "setting as independent normals (the product of their posteriors: the `b_product_*` columns of "
+                "`inertance.csv`, green in the figure), the same records give " + _interval_list(inert, "b_product_")
+                + ".")
+        if joint_rows and "b_truth" in joint_rows[0]:
+            truth = {r["setting"]: r["b_truth"] for r in joint_rows}
+            text += f" For those, {_truth_sentence(inert, truth, 'b_product_')}."
+        text += (" Each record on its own leaves open where the viscous friction acts and how stiff the nut is, and "
+                 "b moves with them (below); the joint model shares them across all records, which is the paper's "
+                 "model and uses every record for them." + _discrepancy_text(inert))
+        return text
     if all(r.get("records", 1) <= 1 for r in inert):
         return ""
-    text = ("These combine each setting's records as independent normals (the product of their posteriors): "
+    return ("These combine each setting's records as independent normals (the product of their posteriors): "
             "each record has its own frictions and deformations, so what every record leaves open and each "
-            "moves b by (where the viscous friction acts, the nut's stiffness) is counted once per record.")
-    if not joint_rows:
-        return text
-    text += (" The joint model (below) shares them across all records, as the paper tuned them, and is the "
-             "better estimate of b per setting")
-    if "covers_truth" in joint_rows[0]:
-        text += (f": its 94 % intervals hold the generating b for {sum(r['covers_truth'] for r in joint_rows)} "
-                 f"of {len(joint_rows)} settings")
-    return text + "."
+            "moves b by (where the viscous friction acts, the nut's stiffness) is counted once per record. "
+            "The study's joint model (`--no-joint` left it out, or it has too few records) shares them.")
 
 
 def _calibration_text(rows, calibration, truth_b: dict | None, prefix: str, gains=None) -> str:
@@ -106,7 +134,7 @@ def _calibration_text(rows, calibration, truth_b: dict | None, prefix: str, gain
     return text
 
 
-def _joint_section(rows, reg, info, calibration=None, truth_b=None, gains=None) -> list[str]:
+def _joint_section(rows, info, calibration=None, truth_b=None, gains=None) -> list[str]:
     status = ("converged" if info["converged"] else
               f"**not converged** after {info['iterations']} steps ({info['reason']}): read it as indicative")
     text = ("One set of friction and deformation parameters for every record and one b per setting, as the paper "
@@ -120,8 +148,8 @@ def _joint_section(rows, reg, info, calibration=None, truth_b=None, gains=None) 
                  f"b_app = b (1 + b k_n / c_n^2) (`device.apparent_inertance`): a stiffer nut with a smaller b "
                  f"looks the same at these frequencies. Its 94 % interval holds the generating b_app for {held} of "
                  f"{len(rows)} settings. ")
-    text += ("The joint b's are correlated through the shared parameters; the regression below treats them as "
-             "independent normals, an approximation.")
+    text += ("The joint b's are correlated through the shared parameters (the frictions, the nut); the "
+             "regression per flywheel above is taken draw by draw, which keeps that correlation.")
     if calibration is not None:
         text += " " + _calibration_text(rows, calibration, truth_b, "b_joint_cal_", gains)
     cols = ("setting", "b_theory", "b_truth", "b_single_median", "b_joint_mean", "b_joint_hdi_3%", "b_joint_hdi_97%",
@@ -133,9 +161,6 @@ def _joint_section(rows, reg, info, calibration=None, truth_b=None, gains=None) 
            _table(rows, [c for c in cols if c in rows[0]],
                   {c: "{:.1f}" for c in one} | {"r_hat": "{:.3f}", "ess_bulk": "{:.0f}"}), "",
            "![joint posterior of b](joint/corner.png)", ""]
-    if reg:
-        out += ["Inertance added per flywheel from the joint b's (`flywheels_joint.csv`):", "",
-                _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]], REGRESSION_FORMATS), ""]
     return out
 
 
@@ -144,6 +169,20 @@ REGRESSION_COLUMNS = ("term", "theory", "truth", "mean", "sd", "hdi_3%", "hdi_97
                       "cal_hdi_3%", "cal_hdi_97%", "covers_truth_cal")
 REGRESSION_FORMATS = {c: "{:.1f}" for c in ("theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%", "cal_hdi_3%",
                                             "cal_hdi_97%")}
+
+
+def _regression_text(reg, joint: bool) -> str:
+    """The regression per flywheel in a sentence per term (``analysis.flywheel_regression``)."""
+    sent = "; ".join(f"{r['term']}: {r['mean']:.1f} kg ({r['hdi_3%']:.1f}-{r['hdi_97%']:.1f}), geometry "
+                     f"{r['theory']:.1f} kg, {'inside' if r['covers_theory'] else 'outside'} the interval"
+                     + (f"; the generating values give {r['truth']:.1f} kg, "
+                        f"{'inside' if r['covers_truth'] else 'outside'} it" if "truth" in r else "")
+                     for r in reg)
+    how = ("of the joint model's b's on the numbers of small and big flywheels, every posterior draw regressed "
+           "(`flywheels.csv`; the b's correlation through the shared parameters kept)" if joint else
+           "of the per-setting posteriors on the numbers of small and big flywheels (`flywheels.csv`; independent "
+           "normals)")
+    return f"A weighted least-squares regression {how}: {sent}."
 
 
 def _coverage(rows, truth_b: dict | None, prefix: str = "b_"):
@@ -228,21 +267,18 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
                          {c: "{:.1f}" for c in ("b_mean", "b_hdi_3%", "b_hdi_97%", *app_cols)}), "",
                   _AMBIGUITY if recs and app_cols else "", ""]
     if reg:
-        sent = "; ".join(f"{r['term']}: {r['mean']:.1f} kg ({r['hdi_3%']:.1f}-{r['hdi_97%']:.1f}), geometry "
-                         f"{r['theory']:.1f} kg, {'inside' if r['covers_theory'] else 'outside'} the interval"
-                         + (f"; the generating values give {r['truth']:.1f} kg, "
-                            f"{'inside' if r['covers_truth'] else 'outside'} it" if "truth" in r else "")
-                         for r in reg)
-        lines += ["## Inertance added per flywheel", "",
-                  "A weighted least-squares regression of the per-setting posteriors on the numbers of small and "
-                  f"big flywheels: {sent}.", "",
+        lines += ["## Inertance added per flywheel", "", _regression_text(reg, _is_joint(inert)), "",
                   _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]], REGRESSION_FORMATS), "",
                   "The records were generated with the paper's identified b per setting, not the geometry's: "
                   "`truth` is what the regression gives on those values, `theory` the geometry."
                   if "truth" in reg[0] else "", ""]
+        product = tables.get("product_regression")
+        if product:
+            lines += ["The same regression of each setting's records combined one by one (`flywheels_product.csv`; "
+                      "independent normals):", "",
+                      _table(product, [c for c in REGRESSION_COLUMNS if c in product[0]], REGRESSION_FORMATS), ""]
     if tables.get("joint"):
-        lines += _joint_section(tables["joint"], tables.get("joint_regression", []), tables["joint_info"],
-                                plan.calibration, truth_b, gains)
+        lines += _joint_section(tables["joint"], tables["joint_info"], plan.calibration, truth_b, gains)
     if phi:
         lines += ["## Fit accuracy phi (the paper's Table 2, with uncertainty)", "",
                   "phi (eq. 5) on the 30 Hz low-passed accelerations inside the likelihood's window, for every "

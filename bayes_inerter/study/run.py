@@ -8,10 +8,22 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..device import SETTINGS, apparent_inertance, paper_parameters
 from ..records import paper_grid, read_record, write_record
-from .analysis import (collect, contraction_table, flywheel_regression, inertance_table, joint_inertance,
-                       model_comparison, phi_table, record_table, write_csv)
+from .analysis import (
+    collect,
+    contraction_table,
+    flywheel_regression,
+    inertance_table,
+    joint_estimate,
+    joint_inertance,
+    model_comparison,
+    phi_table,
+    record_table,
+    write_csv,
+)
 from .plan import StudyPlan, record_name
 from .runner import run_jobs
 
@@ -108,32 +120,31 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     joint = run_joint(plan, out, fits, records, processes=processes, progress=on_joint_step) if plan.joint else None
     t_joint = time.perf_counter()
     cal = plan.calibration
-    inert = inertance_table(fits, calibration=cal)
+    inert = inertance_table(fits, calibration=cal)  # each setting's records combined (product of normals)
     # generated records are made with the paper's parameters; a user's records have no truth
     truth = None if plan.records_dir else {s: paper_parameters(s) for s in plan.settings}
     truth_b = None if truth is None else {s: p.b for s, p in truth.items()}
     truth_app = None if truth is None else {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()}
-    tables = {
-        "records": record_table(fits), "inertance": inert,
-        "regression": flywheel_regression(inert, truth_b=truth_b, calibration=cal),
-        "phi": phi_table(fits), "models": model_comparison(fits), "contraction": contraction_table(fits),
-    }
+    tables = {"records": record_table(fits), "phi": phi_table(fits), "models": model_comparison(fits),
+              "contraction": contraction_table(fits)}
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
              "phi": "phi.csv", "models": "model_comparison.csv", "contraction": "contraction.csv"}
+    draws = None
     if joint is not None:
         tables["joint"] = joint_inertance(joint.summary, inert, truth_b=truth_b, truth_app=truth_app, calibration=cal)
-        mass = {r["setting"]: r["moving_mass"] for r in inert}
-        tables["joint_regression"] = flywheel_regression(
-            [{"setting": r["setting"], "b_median": r["b_joint_mean"], "b_sd": r["b_joint_sd"],
-              "moving_mass": mass[r["setting"]]} for r in tables["joint"]],
-            truth_b=truth_b, calibration=cal)
         tables["joint_info"] = {"converged": joint.converged, "reason": joint.reason, "iterations": joint.iterations}
-        files.update(joint="joint_inertance.csv", joint_regression="flywheels_joint.csv")
+        # the regression of the product's b's, to set beside the joint model's
+        tables["product_regression"] = flywheel_regression(inert, truth_b=truth_b, calibration=cal)
+        files.update(joint="joint_inertance.csv", product_regression="flywheels_product.csv")
+        inert = joint_estimate(inert, joint.draws, joint.converged, calibration=cal)
+        joint_rows = [r for r in inert if r["estimate"] == "joint"]
+        if len(joint_rows) == len(inert):  # every setting's b jointly sampled: regress the draws
+            draws = np.column_stack([np.ravel(joint.draws[f"b_{r['setting']}"]) for r in inert])
+    tables["inertance"] = inert
+    tables["regression"] = flywheel_regression(inert, truth_b=truth_b, calibration=cal, draws=draws)
     for key, name in files.items():
         write_csv(out / name, tables[key])
-    by_setting = {r["setting"]: r for r in tables.get("joint", [])}
-    with_joint = [r | by_setting.get(r["setting"], {}) for r in inert]  # the joint b's beside the product's
-    figures = {"theory_vs_identified.png": (plot_inertance, with_joint), "phi_map.png": (plot_phi_map, tables["phi"]),
+    figures = {"theory_vs_identified.png": (plot_inertance, inert), "phi_map.png": (plot_phi_map, tables["phi"]),
                "model_comparison.png": (plot_models, tables["models"])}
     for name, (plot, rows) in figures.items():
         if rows:
