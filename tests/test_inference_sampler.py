@@ -130,3 +130,25 @@ def test_a_falling_tau_counts_as_settled_but_a_growing_one_does_not():
     # R-hat and ESS still decide
     assert not _is_converged(5000, np.array([91.7]), np.array([95.2]), rhat=np.array([1.06]),
                              ess=np.array([2000.0]), conv=conv)
+
+
+def test_a_checkpoint_continues_only_with_the_kernel_it_was_sampled_with(model, tmp_path):
+    import h5py
+
+    from bayes_inerter.inference.checkpoint import KERNEL_ATTR, CheckpointError, twin_path
+
+    path = tmp_path / "c.h5"
+    short = run_sampler(model, path, nwalkers=24, seed=5, steps=20, start=model.test_start, adaptation=Adaptation())
+    # 20 steps: no refit had steps to fit, so the chain used the ensemble moves alone and says so
+    assert not any("IndependenceMove" in m for m in short.moves)
+    with pytest.raises(CheckpointError, match="no adaptation.*--fresh"):
+        run_sampler(model, path, nwalkers=24, seed=5, steps=40, start=model.test_start, adaptation=None)
+    with pytest.raises(CheckpointError, match="kernel"):
+        run_sampler(model, path, nwalkers=24, seed=5, steps=40, start=model.test_start, adaptation=Adaptation(every=30))
+    assert run_sampler(model, path, nwalkers=24, seed=5, steps=40, start=model.test_start).iteration == 40
+    # a checkpoint written before the kernel was recorded is continued with either
+    with h5py.File(path, "a") as f:
+        del f["mcmc"].attrs[KERNEL_ATTR]
+    twin_path(path).unlink()
+    assert run_sampler(model, path, nwalkers=24, seed=5, steps=50, start=model.test_start,
+                       adaptation=None).iteration == 50

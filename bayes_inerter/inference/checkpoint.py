@@ -255,12 +255,19 @@ class Checkpoint:
     recovered: str = ""
 
 
-def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool = False) -> Checkpoint | None:
+#: The checkpoint attribute naming the sampler's kernel (``open_checkpoint``'s ``kernel``).
+KERNEL_ATTR = "bayes_inerter_kernel"
+
+
+def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool = False,
+                    kernel: str | None = None) -> Checkpoint | None:
     """Open the checkpoint at ``path`` (and its twin) to continue it.
 
     Returns None when there is nothing to continue (no files, or ``fresh``: both are
     deleted). Raises :class:`CheckpointError` when no intact copy exists, or the intact
-    one belongs to another record, model or settings, or has another shape.
+    one belongs to another record, model or settings, or has another shape, or (with
+    ``kernel``) was sampled with another kernel than ``kernel`` (its :data:`KERNEL_ATTR`;
+    a checkpoint written before the attribute was kept says nothing and is continued).
     """
     path = Path(path)
     twin = twin_path(path)
@@ -284,6 +291,13 @@ def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool 
                 f"{s.path}: checkpoint belongs to another record, model, settings or sampler coordinates "
                 "(a chain written before the impedance coordinates continues with --coordinates physical); "
                 "use another output folder, or --fresh to start over"
+            )
+        written = s.attrs.get(KERNEL_ATTR)
+        if kernel is not None and written is not None and str(written) != kernel:
+            raise CheckpointError(
+                f"{s.path}: checkpoint was sampled with {written}; this run's kernel is {kernel}, and "
+                "continuing would change the kernel mid-chain: run with the same adaptation setting "
+                "(--no-adaptation or not), or --fresh to start over"
             )
         shape = (int(s.attrs["nwalkers"]), int(s.attrs["ndim"]))
         if shape != (nwalkers, ndim):

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import emcee
 import numpy as np
 
-from .checkpoint import CheckpointError, new_checkpoint, open_checkpoint
+from .checkpoint import KERNEL_ATTR, CheckpointError, new_checkpoint, open_checkpoint
 from .coordinates import Coordinates, default_coordinates
 from .model import PosteriorModel
 from .moves import IndependenceMove, NutRidgeMove, ridge_indices
@@ -57,6 +57,9 @@ __all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "run_sa
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
+
+#: The kernel a checkpoint records when the ensemble moves run alone (``adaptation=None``).
+NO_ADAPTATION = "ensemble moves alone (no adaptation)"
 
 #: Share of the steps that jump along the nut's ridge (:class:`.moves.NutRidgeMove`)
 #: in models that have one; the other moves keep their proportions in the rest.
@@ -346,18 +349,26 @@ def run_sampler(
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
     coords = coordinates if isinstance(coordinates, Coordinates) else default_coordinates(model, coordinates)
     digest = record_digest(model, coords)
-    opened = open_checkpoint(checkpoint, digest=digest, nwalkers=nwalkers, ndim=model.ndim, fresh=fresh)
+    kernel = adaptation.describe() if adaptation is not None else NO_ADAPTATION
+    opened = open_checkpoint(checkpoint, digest=digest, nwalkers=nwalkers, ndim=model.ndim, fresh=fresh,
+                             kernel=kernel)
     recovered = opened.recovered if opened else ""
     if opened is None or opened.steps == 0:
         backend, done = new_checkpoint(checkpoint, nwalkers=nwalkers, ndim=model.ndim, attrs={
-            "bayes_inerter_digest": digest, "parameter_names": ",".join(model.names)}), 0
+            "bayes_inerter_digest": digest, "parameter_names": ",".join(model.names), KERNEL_ATTR: kernel}), 0
     else:
         backend, done = opened.backend, opened.steps
     _MODEL, _COORDS = model, coords
     moves = moves or default_moves(model, coordinates=coords)
-    used = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves) + ((adaptation.describe(),) if adaptation else ())
+    ensemble = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves)
     pool = multiprocessing.get_context("fork").Pool(processes, initializer=_ignore_interrupt) if processes > 1 else None
     fitted: dict[int, IndependenceMove | None] = {}
+
+    def used() -> tuple:
+        """The moves the chain's steps used: the fitted t's only where one was fitted
+        (at least one refit had enough steps after the transient)."""
+        proposed = any(m is not None for m in fitted.values())
+        return ensemble + ((adaptation.describe(),) if adaptation is not None and proposed else ())
 
     def new_sampler(step: int) -> emcee.EnsembleSampler:
         """The sampler for the steps from ``step`` to the next adaptation: its moves hold the
@@ -414,7 +425,7 @@ def run_sampler(
             tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
             ok = _is_converged(sampler.iteration - skip, tau, None, rhat, ess, conv)
             reason = "converged" if ok else _why_not(sampler.iteration, skip, tau, rhat, ess, conv)
-            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used, coords, skip, done)
+            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used(), coords, skip, done)
         # Checks fall on multiples of check_every, so that a continued chain is checked
         # (and stops) where an uninterrupted run would be; a continued chain takes the
         # tau of that run's previous check from the stored chain, and one that stands
@@ -433,10 +444,10 @@ def run_sampler(
                 advance(sampler.iteration + chunk, None)
             tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
             if _is_converged(sampler.iteration - skip, tau, previous, rhat, ess, conv):
-                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used, coords, skip, done)
+                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used(), coords, skip, done)
             if sampler.iteration >= conv.max_steps:
                 return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, skip, tau, rhat, ess, conv),
-                                  start_theta, recovered, used, coords, skip, done)
+                                  start_theta, recovered, used(), coords, skip, done)
             previous = tau
     finally:
         if pool is not None:  # nothing is left to compute; after Ctrl-C a task may still be running
