@@ -39,8 +39,8 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     assert code == 0
     text = capsys.readouterr().out
     assert "b = " in text and "warning: not converged" in text
-    for name in ("summary.csv", "posterior.nc", "loo.json", "chain.h5", "corner.png", "bands.png", "trace.png", "phi.png",
-                 "fit.json"):
+    for name in ("summary.csv", "posterior.nc", "loo.json", "chain.h5", "corner.png", "bands.png", "trace.png",
+                 "phi.png", "fit.json"):
         assert (out / name).exists(), name
     header = (out / "summary.csv").read_text().splitlines()[0]
     assert header == "name,mean,sd,hdi_3%,hdi_97%,r_hat,ess_bulk,ess_tail"
@@ -63,7 +63,9 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     # walked in the impedance coordinates at the record's 1.5 Hz, where the nut's ridge is an axis
     assert info["coordinates"].startswith("impedance (M, C at 1.5 Hz"), info["coordinates"]
     assert not any(m.startswith("NutRidgeMove") for m in info["moves"]), info["moves"]
-    assert any(m.startswith("IndependenceMove") for m in info["moves"]), info["moves"]  # the adaptation
+    # 30 steps are too few for the adaptation to fit a proposal (it refits every 250), so fit.json
+    # names only the ensemble moves the chain used (the fitted case: tests/test_inference_sampler.py)
+    assert info["moves"] and not any(m.startswith("IndependenceMove") for m in info["moves"]), info["moves"]
     assert 0.0 < info["coordinates_domain_edge"] < 0.5  # how near the domain's edge its draws came
 
 
