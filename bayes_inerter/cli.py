@@ -249,6 +249,10 @@ def cmd_study(args) -> int:
     for row in result.tables["inertance"]:
         print(f"{row['setting']}: b = {row['b_median']:.6g} kg (94 % {row['b_hdi_3%']:.6g} to "
               f"{row['b_hdi_97%']:.6g}); theory {row['b_theory']:.6g}, paper {row['b_paper']:.6g}")
+    reused = sum(o["status"] == "skipped" for o in result.outcomes)
+    if reused:
+        print(f"reused {reused} of {len(result.outcomes)} fits finished earlier in {out} "
+              "(their chains were not sampled again; another --out samples every chain)")
     done = [o for o in result.outcomes if o["status"] != "failed"]
     n_conv = sum(bool(o.get("converged")) for o in done)
     if n_conv < len(done):

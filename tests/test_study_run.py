@@ -180,3 +180,21 @@ def test_cli_study_refuses_a_missing_records_folder(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 1 and err.startswith("error:") and "not a folder" in err and "Traceback" not in err
     assert not (tmp_path / "o").exists()
+
+
+def test_cli_study_says_which_fits_it_reused(tmp_path, monkeypatch, capsys):
+    import types
+
+    import bayes_inerter.study as study_pkg
+
+    outcomes = [{"key": "A0_1Hz/two-port", "status": "skipped", "converged": True},
+                {"key": "A3_1Hz/two-port", "status": "done", "converged": True}]
+    result = types.SimpleNamespace(tables={"inertance": []}, outcomes=outcomes, report=tmp_path / "o" / "REPORT.md",
+                                   seconds={"total": 1.0})
+    monkeypatch.setattr(study_pkg, "run_study", lambda plan, out, **kwargs: result)
+    assert main(["study", "--quick", "--out", str(tmp_path / "o")]) == 0
+    text = capsys.readouterr().out
+    assert f"reused 1 of 2 fits finished earlier in {tmp_path / 'o'}" in text and "another --out" in text
+    outcomes[0]["status"] = "done"  # nothing reused: nothing said about it
+    assert main(["study", "--quick", "--out", str(tmp_path / "o")]) == 0
+    assert "reused" not in capsys.readouterr().out

@@ -70,8 +70,8 @@ def _is_joint(rows) -> bool:
 
 def _inertance_text(rows, truth_b: dict | None) -> str:
     joint = _is_joint(rows)
-    text = ("Posterior inertance per setting, " + ("from the joint model of all records (median, 94 % HDI): "
-                                                   if joint else "(median, 94 % interval): ")
+    text = ("Posterior inertance per setting " + ("from the joint model of all records (median, 94 % HDI): "
+                                                  if joint else "(median, 94 % interval): ")
             + _interval_list(rows) + ".")
     if truth_b:
         text += f" The records were generated with known inertances: {_truth_sentence(rows, truth_b)}."
