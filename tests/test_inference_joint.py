@@ -109,6 +109,16 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     assert third.iterations == 11
     assert third.timings["steps_timed"] == 2
     assert third.timings["sampling_all_runs"] == third.timings["sampling"]
+    # a chain started over beside the fit.json of a longer, older chain (the new chain's first
+    # run killed before it wrote its own): the old fit.json's time is not this chain's
+    old = json.loads((tmp_path / "joint" / "fit.json").read_text())
+    for name in ("chain.h5", "chain.twin.h5"):
+        (tmp_path / "joint" / name).unlink()
+    fit_joint(records, tmp_path / "joint", centres=centres, steps=4, plots=False)
+    (tmp_path / "joint" / "fit.json").write_text(json.dumps(old))  # as if the 4-step run had been killed
+    fourth = fit_joint(records, tmp_path / "joint", centres=centres, steps=7, plots=False)
+    assert fourth.iterations == 7 and fourth.timings["steps_timed"] == 3
+    assert fourth.timings["sampling_all_runs"] == fourth.timings["sampling"]
 
 
 def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_path, monkeypatch):

@@ -260,7 +260,10 @@ def _sampling_all_runs(out: Path, t_sample: float, run, started_over: bool) -> d
     in a fresh clone beside a committed fit.json); a run that continues a checkpoint, or
     finds it complete, would otherwise report only its own share. Steps of a run killed
     before it wrote fit.json are in the chain but not timed, so seconds per step are
-    ``sampling_all_runs / steps_timed``, not per ``iterations``."""
+    ``sampling_all_runs / steps_timed``, not per ``iterations``. A fit.json that describes
+    more steps than the checkpoint held when this run began is of another chain (one that
+    started over in a run killed before it wrote fit.json, beside the old fit.json) and
+    adds nothing."""
     own = {"sampling_all_runs": t_sample, "steps_timed": int(run.iteration - run.resumed_at)}
     previous = out / "fit.json"
     if started_over or not previous.exists():
@@ -270,7 +273,10 @@ def _sampling_all_runs(out: Path, t_sample: float, run, started_over: bool) -> d
         timings = before.get("timings_s", {})
         seconds = float(timings.get("sampling_all_runs", timings.get("sampling", 0.0)))
         steps = int(timings.get("steps_timed", before.get("iterations", 0)))
+        other_chain = int(before.get("iterations", 0)) > run.resumed_at
     except (OSError, ValueError, TypeError):
+        return own
+    if other_chain:
         return own
     return {"sampling_all_runs": own["sampling_all_runs"] + seconds, "steps_timed": own["steps_timed"] + steps}
 
