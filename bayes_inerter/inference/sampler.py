@@ -368,7 +368,7 @@ def run_sampler(
         """The moves the chain's steps used: the fitted t's only where one was fitted
         (at least one refit had enough steps after the transient)."""
         proposed = any(m is not None for m in fitted.values())
-        return ensemble + ((adaptation.describe(),) if adaptation is not None and proposed else ())
+        return ensemble + ((kernel,) if adaptation is not None and proposed else ())
 
     def new_sampler(step: int) -> emcee.EnsembleSampler:
         """The sampler for the steps from ``step`` to the next adaptation: its moves hold the

@@ -44,7 +44,7 @@ import numpy as np
 from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
 from ..records.sensitivity import SensorCalibration
 
-__all__ = ["RecordFit", "birge_ratio", "collect", "inertance_table", "joint_estimate", "joint_inertance",
+__all__ = ["RecordFit", "birge_ratio", "collect", "inertance_table", "is_joint", "joint_estimate", "joint_inertance",
            "record_table",
            "flywheel_regression", "phi_table", "model_comparison", "fit_loo", "contraction_table", "write_csv", "Z94"]
 
@@ -255,6 +255,11 @@ def joint_estimate(inertance: list[dict], draws: dict, converged: bool,
             _with_calibration(row, calibration, float(np.mean(x)), row["b_sd"], row["moving_mass"], "b_cal_")
         out.append(row)
     return out
+
+
+def is_joint(rows: list[dict]) -> bool:
+    """Whether every row's b is the joint model's (``joint_estimate``); False for no rows."""
+    return bool(rows) and all(r.get("estimate") == "joint" for r in rows)
 
 
 def _design(settings: list[str], geometry):

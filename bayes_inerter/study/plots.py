@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..device import FREQUENCIES_HZ, SETTINGS
+from .analysis import is_joint
 
 __all__ = ["plot_inertance", "plot_phi_map", "plot_models", "plot_design", "plot_ranks"]
 
@@ -22,7 +23,7 @@ def plot_inertance(rows: list[dict]):
     paper = np.array([r["b_paper"] for r in rows])
     med = np.array([r["b_median"] for r in rows])
     err = np.array([[r["b_median"] - r["b_hdi_3%"] for r in rows], [r["b_hdi_97%"] - r["b_median"] for r in rows]])
-    joint = all(r.get("estimate") == "joint" for r in rows)
+    joint = is_joint(rows)
     ax.plot(x, theory, "s", mfc="none", color="k", ms=9, label="theory (geometry)")
     ax.plot(x, paper, "x", color="tab:red", ms=9, label="paper, identified by hand")
     ax.errorbar(x, med, yerr=err, fmt="o", color="tab:blue", capsize=4,

@@ -11,6 +11,8 @@ from pathlib import Path
 
 from scipy import stats
 
+from .analysis import is_joint
+
 __all__ = ["write_report", "design_report", "calibration_report", "calibration_comparison", "NOT_IDENTIFIED"]
 
 #: Contraction below which a parameter is reported as not identified by the records.
@@ -77,12 +79,8 @@ def _outlying_text(rows, name: str = "phi") -> str:
             "read that record's posterior as holding a second, minor mode that its convergence checks did not catch.")
 
 
-def _is_joint(rows) -> bool:
-    return bool(rows) and all(r.get("estimate") == "joint" for r in rows)
-
-
 def _inertance_text(rows, truth_b: dict | None) -> str:
-    joint = _is_joint(rows)
+    joint = is_joint(rows)
     text = ("Posterior inertance per setting " + ("from the joint model of all records (median, 94 % HDI): "
                                                   if joint else "(median, 94 % interval): ")
             + _interval_list(rows) + ".")
@@ -97,7 +95,7 @@ def _combination_note(inert, joint_rows) -> str:
     """Where the per-setting b's above come from: the joint model (and then what each
     setting's records, fitted one by one and combined, give beside it), or the product of
     each setting's records (nothing to say where every setting has one record)."""
-    if _is_joint(inert):
+    if is_joint(inert):
         text = ("These are the joint model's b's (below): one set of friction and deformation parameters for every "
                 "record and one b per setting, as the paper tuned them. Fitted one record at a time and combined per "
                 "setting as independent normals (the product of their posteriors: the `b_product_*` columns of "
@@ -182,6 +180,11 @@ REGRESSION_COLUMNS = ("term", "theory", "truth", "mean", "sd", "hdi_3%", "hdi_97
                       "cal_hdi_3%", "cal_hdi_97%", "covers_truth_cal")
 REGRESSION_FORMATS = {c: "{:.1f}" for c in ("theory", "truth", "mean", "sd", "hdi_3%", "hdi_97%", "cal_hdi_3%",
                                             "cal_hdi_97%")}
+
+
+def _regression_table(reg) -> str:
+    """A regression per flywheel (``analysis.flywheel_regression``) as a table of the columns it has."""
+    return _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]], REGRESSION_FORMATS)
 
 
 def _regression_text(reg, joint: bool) -> str:
@@ -280,8 +283,8 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
                          {c: "{:.1f}" for c in ("b_mean", "b_hdi_3%", "b_hdi_97%", *app_cols)}), "",
                   _AMBIGUITY if recs and app_cols else "", ""]
     if reg:
-        lines += ["## Inertance added per flywheel", "", _regression_text(reg, _is_joint(inert)), "",
-                  _table(reg, [c for c in REGRESSION_COLUMNS if c in reg[0]], REGRESSION_FORMATS), "",
+        lines += ["## Inertance added per flywheel", "", _regression_text(reg, is_joint(inert)), "",
+                  _regression_table(reg), "",
                   "The records were generated with the paper's identified b per setting, not the geometry's: "
                   "`truth` is what the regression gives on those values, `theory` the geometry."
                   if "truth" in reg[0] else "", ""]
@@ -289,7 +292,7 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
         if product:
             lines += ["The same regression of each setting's records combined one by one (`flywheels_product.csv`; "
                       "independent normals):", "",
-                      _table(product, [c for c in REGRESSION_COLUMNS if c in product[0]], REGRESSION_FORMATS), ""]
+                      _regression_table(product), ""]
     if tables.get("joint"):
         lines += _joint_section(tables["joint"], tables["joint_info"], plan.calibration, truth_b, gains)
     if phi:

@@ -17,6 +17,7 @@ from .analysis import (
     contraction_table,
     flywheel_regression,
     inertance_table,
+    is_joint,
     joint_estimate,
     joint_inertance,
     model_comparison,
@@ -137,8 +138,7 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
         tables["product_regression"] = flywheel_regression(inert, truth_b=truth_b, calibration=cal)
         files.update(joint="joint_inertance.csv", product_regression="flywheels_product.csv")
         inert = joint_estimate(inert, joint.draws, joint.converged, calibration=cal)
-        joint_rows = [r for r in inert if r["estimate"] == "joint"]
-        if len(joint_rows) == len(inert):  # every setting's b jointly sampled: regress the draws
+        if is_joint(inert):  # every setting's b jointly sampled: regress the draws
             draws = np.column_stack([np.ravel(joint.draws[f"b_{r['setting']}"]) for r in inert])
     tables["inertance"] = inert
     tables["regression"] = flywheel_regression(inert, truth_b=truth_b, calibration=cal, draws=draws)
