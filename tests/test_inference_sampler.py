@@ -88,9 +88,22 @@ def test_adaptation_fits_after_the_transient_only():
     moves = adapt.moves([("a", 0.6), ("b", 0.4)], move)
     assert [w for _, w in moves] == pytest.approx([0.3, 0.2, 0.5])
     assert adapt.moves([("a", 1.0)], None) == [("a", 1.0)]
-    for bad in (dict(weight=1.0), dict(weight=0.0), dict(every=1), dict(every=2.5), dict(dof=0.0), dict(wide=1.0)):
+    for bad in (dict(weight=1.0), dict(weight=0.0), dict(every=1), dict(every=2.5), dict(dof=0.0), dict(wide=1.0),
+                dict(components=0), dict(components=2.0)):
         with pytest.raises(ValueError, match="adaptation"):
             Adaptation(**bad)
+
+
+def test_adaptation_with_components_fits_a_mixture_and_says_so():
+    rng = np.random.default_rng(2)
+    chain = np.concatenate([rng.normal(-3.0, 0.3, size=(300, 10, 2)), rng.normal(3.0, 0.3, size=(300, 10, 2))],
+                           axis=1)
+    still = rng.normal(0.0, 1.0, size=(300, 20))
+    assert Adaptation(every=400).proposal(chain, still).components == 1
+    assert Adaptation(every=400, components=3).proposal(chain, still).components >= 2
+    # a checkpoint records the kernel's description: one component describes it as before
+    assert Adaptation().describe().startswith("IndependenceMove 0.5 (t, dof 10,")
+    assert "mixture of 3 t's" in Adaptation(components=3).describe()
 
 
 def test_a_run_stopped_between_refits_continues_to_the_uninterrupted_chain(model, tmp_path):

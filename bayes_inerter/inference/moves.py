@@ -51,7 +51,12 @@ from __future__ import annotations
 import numpy as np
 from emcee.moves import MHMove, RedBlueMove
 
-__all__ = ["NutRidgeMove", "SubspaceDEMove", "IndependenceMove", "ridge_indices"]
+from .mixture import fit_normal_mixture
+
+__all__ = ["NutRidgeMove", "SubspaceDEMove", "IndependenceMove", "ridge_indices", "MIXTURE_DRAWS"]
+
+#: At most this many draws (evenly spaced) go into a mixture proposal's EM fit.
+MIXTURE_DRAWS = 5_000
 
 
 def ridge_indices(names, log_scale) -> tuple[int, int, list[int]] | None:
@@ -146,7 +151,7 @@ class SubspaceDEMove(RedBlueMove):
 
 
 class IndependenceMove(MHMove):
-    """Independence proposals from a fixed defensive mixture of two multivariate t's (see
+    """Independence proposals from a fixed defensive mixture of multivariate t's (see
     module docstring): the fitted one, and in a share ``wide`` of the draws the same t
     ``wide_scale`` times wider (Hesterberg's defensive importance sampling). Without the
     wide part a proposal fitted to an ensemble that has not yet spread over the
@@ -155,59 +160,112 @@ class IndependenceMove(MHMove):
     pull walkers back to the cluster (measured on A3 at 1 Hz: the unidentified bearing
     damping's tail took 1,000 steps to fill instead of 500).
 
+    The fitted part may itself be a mixture of ``k`` t's (``mean`` (k, ndim), ``cov``
+    (k, ndim, ndim), ``weights`` (k,)), each with its own wide twin: :meth:`fit` with
+    ``components > 1`` fits one by EM (:mod:`.mixture`).
+
     Parameters
     ----------
-    mean : (ndim,) centre of the proposal.
-    cov : (ndim, ndim) covariance it is fitted to (positive definite).
-    dof : degrees of freedom of both t's (``np.inf``: normals). Default 10.
-    scale : factor on the covariance's square root (default 1.1: a little wider).
+    mean : (ndim,) centre of the proposal, or (k, ndim) centres of its components.
+    cov : (ndim, ndim) covariance it is fitted to (positive definite), or (k, ndim, ndim).
+    weights : (k,) the components' shares (positive; normalised); default equal.
+    dof : degrees of freedom of every t (``np.inf``: normals). Default 10.
+    scale : factor on the covariances' square roots (default 1.1: a little wider).
     wide, wide_scale : share of the wide part and its width against the fitted one
         (defaults 0.2 and 3; ``wide=0``: the fitted t alone).
     """
 
-    def __init__(self, mean, cov, *, dof: float = 10.0, scale: float = 1.1, wide: float = 0.2,
+    def __init__(self, mean, cov, *, weights=None, dof: float = 10.0, scale: float = 1.1, wide: float = 0.2,
                  wide_scale: float = 3.0):
-        mean = np.asarray(mean, dtype=float)
-        cov = np.atleast_2d(np.asarray(cov, dtype=float))
-        if mean.ndim != 1 or cov.shape != (mean.size, mean.size):
-            raise ValueError(f"mean and covariance do not match: {mean.shape} and {cov.shape}")
+        means = np.asarray(mean, dtype=float)
+        covs = np.asarray(cov, dtype=float)
+        if means.ndim == 1:
+            means, covs = means[None], np.atleast_2d(covs)[None]
+        k, d = means.shape if means.ndim == 2 else (0, 0)
+        if means.ndim != 2 or covs.shape != (k, d, d):
+            raise ValueError(f"mean and covariance do not match: {np.shape(mean)} and {np.shape(cov)}")
+        w = np.ones(k) if weights is None else np.asarray(weights, dtype=float)
+        if w.shape != (k,) or not np.all(w > 0) or not np.all(np.isfinite(w)):
+            raise ValueError(f"weights must be {k} positive numbers, got {weights!r}")
         if not (dof > 0 and scale > 0 and wide_scale > 0):
             raise ValueError(f"degrees of freedom and scales must be positive, got {dof}, {scale} and {wide_scale}")
         if not 0.0 <= wide < 1.0:
             raise ValueError(f"the wide part's share must lie in [0, 1), got {wide}")
-        if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(cov))):
+        if not (np.all(np.isfinite(means)) and np.all(np.isfinite(covs))):
             raise ValueError("the proposal's mean and covariance must be finite")
-        self.mean, self.dof, self.scale = mean, float(dof), float(scale)
+        self.means, self.weights = means, w / w.sum()
+        self.dof, self.scale = float(dof), float(scale)
         self.wide, self.wide_scale = float(wide), float(wide_scale)
-        self.chol = np.linalg.cholesky(cov * self.scale ** 2)  # LinAlgError if not positive definite
+        self.chols = np.linalg.cholesky(covs * self.scale ** 2)  # LinAlgError if not positive definite
         super().__init__(self._propose)
 
+    @property
+    def components(self) -> int:
+        return len(self.weights)
+
+    @property
+    def mean(self) -> np.ndarray:
+        """The centre of a one-component proposal."""
+        self._one("mean")
+        return self.means[0]
+
+    @property
+    def chol(self) -> np.ndarray:
+        """The Cholesky factor (scaled) of a one-component proposal."""
+        self._one("chol")
+        return self.chols[0]
+
+    def _one(self, what: str) -> None:
+        if self.components != 1:
+            raise AttributeError(f"a proposal of {self.components} components has no single {what}")
+
     @classmethod
-    def fit(cls, draws, **kwargs) -> "IndependenceMove | None":
-        """The move fitted to ``draws`` (n, ndim) by their mean and covariance; None where
-        they cannot define one (fewer draws than dimensions, or a singular covariance)."""
+    def fit(cls, draws, *, components: int = 1, seed: int = 0, max_draws: int = MIXTURE_DRAWS,
+            **kwargs) -> "IndependenceMove | None":
+        """The move fitted to ``draws`` (n, ndim): by their mean and covariance, or with
+        ``components > 1`` a normal mixture fitted by EM (seeded by ``seed``, on at most
+        ``max_draws`` of them, evenly spaced) whose weights, means and covariances its
+        t's take. None where they cannot define one (fewer draws than dimensions, or a
+        singular covariance); a mixture that cannot be fitted falls back to one t."""
         draws = np.asarray(draws, dtype=float)
         if draws.ndim != 2 or len(draws) <= draws.shape[1] or not np.all(np.isfinite(draws)):
             return None
+        if components > 1:
+            step = max(1, -(-len(draws) // max_draws))
+            try:
+                w, m, c = fit_normal_mixture(draws[::step], components, seed=seed)
+                return cls(m, c, weights=w, **kwargs)
+            except (ValueError, np.linalg.LinAlgError):
+                pass
         try:
             return cls(draws.mean(axis=0), np.cov(draws, rowvar=False), **kwargs)
         except np.linalg.LinAlgError:
             return None
 
-    def _log_t(self, x, width: float) -> np.ndarray:
-        """Log density of the fitted t widened by ``width``, up to a constant common to
-        every width (the t's normalisation less its determinant)."""
-        z = np.linalg.solve(self.chol, (np.atleast_2d(x) - self.mean).T) / width
+    def _log_t(self, x, j: int, width: float) -> np.ndarray:
+        """Log density of component ``j``'s t widened by ``width``, up to a constant common
+        to every width and component (the t's normalisation less its determinant, which
+        enters where there are several components)."""
+        L = self.chols[j]
+        z = np.linalg.solve(L, (np.atleast_2d(x) - self.means[j]).T) / width
         m2 = np.sum(z * z, axis=0)
-        core = -0.5 * m2 if np.isinf(self.dof) else -0.5 * (self.dof + self.mean.size) * np.log1p(m2 / self.dof)
-        return core - self.mean.size * np.log(width)
+        d = self.means.shape[1]
+        core = -0.5 * m2 if np.isinf(self.dof) else -0.5 * (self.dof + d) * np.log1p(m2 / self.dof)
+        out = core - d * np.log(width)
+        if self.components > 1:
+            out = out + np.log(self.weights[j]) - np.sum(np.log(np.diag(L)))
+        return out
 
     def log_density(self, x) -> np.ndarray:
         """Log density of the proposal at the rows of ``x``, up to a constant."""
-        if self.wide == 0.0:
-            return self._log_t(x, 1.0)
-        return np.logaddexp(np.log1p(-self.wide) + self._log_t(x, 1.0),
-                            np.log(self.wide) + self._log_t(x, self.wide_scale))
+        parts = []
+        for j in range(self.components):
+            if self.wide == 0.0:
+                parts.append(self._log_t(x, j, 1.0))
+            else:
+                parts.append(np.logaddexp(np.log1p(-self.wide) + self._log_t(x, j, 1.0),
+                                          np.log(self.wide) + self._log_t(x, j, self.wide_scale)))
+        return parts[0] if len(parts) == 1 else np.logaddexp.reduce(np.array(parts), axis=0)
 
     def _propose(self, coords, random):
         coords = np.asarray(coords, dtype=float)
@@ -216,5 +274,10 @@ class IndependenceMove(MHMove):
         if np.isfinite(self.dof):
             z = z / np.sqrt(random.chisquare(self.dof, size=n) / self.dof)[:, None]
         width = np.where(random.rand(n) < self.wide, self.wide_scale, 1.0)
-        q = self.mean + (z * width[:, None]) @ self.chol.T
+        if self.components == 1:
+            q = self.means[0] + (z * width[:, None]) @ self.chols[0].T
+        else:
+            j = np.minimum(np.searchsorted(np.cumsum(self.weights), random.rand(n), side="right"),
+                           self.components - 1)
+            q = self.means[j] + np.einsum("nij,nj->ni", self.chols[j], z * width[:, None])
         return q, self.log_density(coords) - self.log_density(q)

@@ -130,6 +130,8 @@ class Adaptation:
         root (:class:`.moves.IndependenceMove`; defaults 10 and 1.1).
     wide, wide_scale : share of proposals drawn from the same t ``wide_scale`` times
         wider (defaults 0.2 and 3; see :class:`.moves.IndependenceMove`).
+    components : the t's fitted as one (default 1) or, above 1, as a mixture of that
+        many, by EM on the chain (``moves.IndependenceMove.fit``).
     """
 
     weight: float = 0.5
@@ -138,8 +140,11 @@ class Adaptation:
     scale: float = 1.1
     wide: float = 0.2
     wide_scale: float = 3.0
+    components: int = 1
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.components, int) and self.components >= 1):
+            raise ValueError(f"adaptation components must be a positive whole number, got {self.components!r}")
         if not 0.0 < self.weight < 1.0:
             raise ValueError(f"adaptation weight must lie in (0, 1), got {self.weight}")
         if not (isinstance(self.every, int) and self.every >= 2):
@@ -157,8 +162,8 @@ class Adaptation:
         skip = transient(log_prob)
         if len(chain) - skip < self.every // 2:
             return None
-        return IndependenceMove.fit(chain[skip:].reshape(-1, chain.shape[-1]), dof=self.dof, scale=self.scale,
-                                    wide=self.wide, wide_scale=self.wide_scale)
+        return IndependenceMove.fit(chain[skip:].reshape(-1, chain.shape[-1]), components=self.components,
+                                    dof=self.dof, scale=self.scale, wide=self.wide, wide_scale=self.wide_scale)
 
     def moves(self, base: list, proposal: IndependenceMove | None) -> list:
         """``base`` moves, with ``proposal`` in ``weight`` of the steps where there is one."""
@@ -167,7 +172,8 @@ class Adaptation:
         return [(m, w * (1.0 - self.weight)) for m, w in base] + [(proposal, self.weight)]
 
     def describe(self) -> str:
-        return (f"IndependenceMove {self.weight:.3g} (t, dof {self.dof:g}, scale {self.scale:g}, "
+        law = "t" if self.components == 1 else f"mixture of {self.components} t's fitted by EM"
+        return (f"IndependenceMove {self.weight:.3g} ({law}, dof {self.dof:g}, scale {self.scale:g}, "
                 f"{self.wide:g} of it {self.wide_scale:g} x wider, refitted every {self.every} steps; "
                 f"the others scaled by {1 - self.weight:.3g} once fitted)")
 

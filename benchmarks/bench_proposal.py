@@ -1,0 +1,79 @@
+"""Benchmark: how often the adaptive sampler's independence proposals would be accepted,
+fitted as one t or as a mixture of several, on a converged joint chain.
+
+Run by hand after a full study whose joint chain converged (its checkpoint stays in the
+study folder; it is not committed): ``python benchmarks/bench_proposal.py
+[results/full] [--components 1 3 5 8] [--proposals 400] [--fit-from 130] [--seed 0]``.
+
+For each proposal (fitted, like ``sampler.Adaptation``'s, to the chain's steps from
+``--fit-from`` on, in the sampler's coordinates, with its default dof, scale and wide
+part), ``--proposals`` draws y are evaluated under the joint posterior and paired with
+the chain's own stationary draws x (its second half): the independence move accepts y
+from x with probability min(1, w(y) / w(x)), w = p / q, so the mean over the pairs is
+its acceptance rate at equilibrium. One core; the proposals share the machine alike.
+"""
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("study", nargs="?", default="results/full")
+    ap.add_argument("--components", type=int, nargs="+", default=[1, 3, 5, 8])
+    ap.add_argument("--proposals", type=int, default=400)
+    ap.add_argument("--fit-from", type=int, default=130, help="first step the proposals are fitted to")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+
+    import h5py
+
+    import bayes_inerter.inference.sampler as sampler
+    from bayes_inerter.inference.coordinates import default_coordinates
+    from bayes_inerter.inference.joint import JointModel
+    from bayes_inerter.inference.moves import IndependenceMove
+    from bayes_inerter.inference.sampler import Adaptation
+    from bayes_inerter.records import read_record
+
+    study = Path(args.study)
+    chain_file = study / "joint" / "chain.h5"
+    if not chain_file.exists():
+        sys.exit(f"error: {chain_file} not found (the joint chain's checkpoint is not committed: run the study)")
+    records = [read_record(p) for p in sorted((study / "records").glob("*.csv"))]
+    jm = JointModel(tuple(records))
+    sampler._MODEL, sampler._COORDS = jm, default_coordinates(jm)
+    with h5py.File(chain_file, "r") as f:
+        chain, log_p = f["mcmc/chain"][:], f["mcmc/log_prob"][:]
+    if not sampler._log_prob(chain[-1, 0])[0] == log_p[-1, 0]:
+        sys.exit(f"error: {chain_file} was not sampled from {study}/records with this model")
+    d = chain.shape[-1]
+    fit_draws = chain[args.fit_from:].reshape(-1, d)
+    half = len(chain) // 2
+    x, lx = chain[half:].reshape(-1, d), log_p[half:].reshape(-1)
+    rng = np.random.default_rng(args.seed)
+    pairs = rng.integers(len(x), size=20_000)
+    adapt = Adaptation()
+    print(f"{chain_file}: {len(chain)} steps x {chain.shape[1]} walkers; proposals fitted to steps "
+          f"{args.fit_from}-{len(chain)}, paired with steps {half}-{len(chain)}")
+    for k in args.components:
+        t0 = time.perf_counter()
+        move = IndependenceMove.fit(fit_draws, components=k, dof=adapt.dof, scale=adapt.scale, wide=adapt.wide,
+                                    wide_scale=adapt.wide_scale)
+        t_fit = time.perf_counter() - t0
+        y, _ = move._propose(np.zeros((args.proposals, d)), np.random.RandomState(args.seed))
+        t0 = time.perf_counter()
+        ly = np.array([sampler._log_prob(u)[0] for u in y])
+        t_eval = (time.perf_counter() - t0) / len(y)
+        lwx = (lx - move.log_density(x))[pairs]
+        lwy = ly - move.log_density(y)
+        acc = np.mean([np.mean(np.exp(np.minimum(0.0, v - lwx))) if np.isfinite(v) else 0.0 for v in lwy])
+        print(f"  {move.components} component(s): acceptance {acc:.3f}; fit {t_fit:.1f} s, "
+              f"{1e3 * t_eval:.0f} ms an evaluation, {np.sum(~np.isfinite(ly))} proposals outside the domain")
+
+
+if __name__ == "__main__":
+    main()
