@@ -1,15 +1,17 @@
 """Benchmark: what the fitted independence move (``sampler.Adaptation``) buys, side by side.
 
 Run by hand: ``python benchmarks/bench_adaptation.py [--record A3:1 ...] [--seed 0]
-[--max-steps 20000] [--out results/performance/adaptation.csv]``.
+[--max-steps 20000] [--variants adaptive ensemble-only] [--out results/performance/adaptation.csv]``.
 
 Each record (the full study's: the paper grid generated with seed 0, named
 SETTING:FREQUENCY; default A3 at 1 Hz and B2 at 1 Hz) is sampled until the package's
 convergence criteria hold (``Convergence()``: 50 tau after the transient, tau settled,
 R-hat < 1.05, bulk ESS >= 400), twice from the same start (one restarted Nelder-Mead
 optimum per record) with the same seed, walkers and coordinates: with the default
-adaptation and without it (the ensemble moves alone). The two runs of a record run at
-the same time, one process each, so they share the machine alike: read the ratios.
+adaptation and without it (the ensemble moves alone), or with the variants named
+(``mixture``: the adaptation with its proposal a mixture of 5 t's, the joint model's
+default). The two runs of a record run at the same time, one process each, so they
+share the machine alike: read the ratios.
 Writes one row per run (steps and seconds to converge, the largest autocorrelation
 time, acceptance, b's 94 % interval) and prints the ratios.
 """
@@ -28,7 +30,8 @@ sys.path.insert(0, str(ROOT / "studies"))
 
 from _table import record_arg, write_rows  # noqa: E402
 
-VARIANTS = ("adaptive", "ensemble-only")
+VARIANTS = ("adaptive", "ensemble-only", "mixture")
+ADAPTATIONS = {"adaptive": {}, "mixture": {"components": 5}}
 
 
 def _run(job):
@@ -43,7 +46,7 @@ def _run(job):
     t0 = time.perf_counter()
     run = run_sampler(pm, Path(folder) / f"{setting}_{freq:g}_{variant}.h5", seed=seed, start=start, fresh=True,
                       convergence=Convergence(max_steps=max_steps),
-                      adaptation=Adaptation() if variant == "adaptive" else None)
+                      adaptation=Adaptation(**ADAPTATIONS[variant]) if variant in ADAPTATIONS else None)
     seconds = time.perf_counter() - t0
     burn = run.transient + int(2 * np.max(run.tau))
     b = np.percentile(np.exp(run.chain(discard=burn)[..., pm.names.index("b")]), [3, 50, 97])
@@ -78,18 +81,20 @@ def main():
     ap.add_argument("--record", action="append", default=None, help="SETTING:FREQUENCY (default A3:1 and B2:1)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--max-steps", type=int, default=20_000)
+    ap.add_argument("--variants", nargs=2, default=["adaptive", "ensemble-only"], choices=VARIANTS,
+                    help="the two samplers compared (default adaptive ensemble-only)")
     ap.add_argument("--out", default=str(ROOT / "results" / "performance" / "adaptation.csv"))
     args = ap.parse_args()
     starts = [_start(item, args.seed) for item in (args.record or ["A3:1", "B2:1"])]
     rows = []
     with tempfile.TemporaryDirectory() as folder, get_context("fork").Pool(2) as pool:
         for setting, freq, start in starts:
-            jobs = [(setting, freq, v, args.seed, args.max_steps, start, folder) for v in VARIANTS]
+            jobs = [(setting, freq, v, args.seed, args.max_steps, start, folder) for v in args.variants]
             rows += pool.map(_run, jobs)
     write_rows(args.out, rows)
     for i in range(0, len(rows), 2):
         a, e = rows[i], rows[i + 1]
-        print(f"{a['record']}: ensemble-only / adaptive = {e['steps'] / a['steps']:.2f} x the steps, "
+        print(f"{a['record']}: {e['variant']} / {a['variant']} = {e['steps'] / a['steps']:.2f} x the steps, "
               f"{e['seconds'] / a['seconds']:.2f} x the seconds"
               + ("" if a["converged"] and e["converged"] else " (not both converged: a lower bound at most)"))
 
