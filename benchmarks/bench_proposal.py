@@ -3,10 +3,11 @@ fitted as one t or as a mixture of several, on a converged joint chain.
 
 Run by hand after a full study whose joint chain converged (its checkpoint stays in the
 study folder; it is not committed): ``python benchmarks/bench_proposal.py
-[results/full] [--components 1 3 5 8] [--proposals 400] [--fit-from 130] [--seed 0]``.
+[results/full] [--components 1 3 5 8] [--proposals 400] [--fit-from 130] [--fit-to STEP]
+[--seed 0]``.
 
 For each proposal (fitted, like ``sampler.Adaptation``'s, to the chain's steps from
-``--fit-from`` on, in the sampler's coordinates, with its default dof, scale and wide
+``--fit-from`` to ``--fit-to`` (default its last), in the sampler's coordinates, with its default dof, scale and wide
 part), ``--proposals`` draws y are evaluated under the joint posterior and paired with
 the chain's own stationary draws x (its second half): the independence move accepts y
 from x with probability min(1, w(y) / w(x)), w = p / q, so the mean over the pairs is
@@ -27,6 +28,7 @@ def main():
     ap.add_argument("--components", type=int, nargs="+", default=[1, 3, 5, 8])
     ap.add_argument("--proposals", type=int, default=400)
     ap.add_argument("--fit-from", type=int, default=130, help="first step the proposals are fitted to")
+    ap.add_argument("--fit-to", type=int, default=None, help="last step they are fitted to (default: the chain's)")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
 
@@ -51,14 +53,15 @@ def main():
     if not sampler._log_prob(chain[-1, 0])[0] == log_p[-1, 0]:
         sys.exit(f"error: {chain_file} was not sampled from {study}/records with this model")
     d = chain.shape[-1]
-    fit_draws = chain[args.fit_from:].reshape(-1, d)
+    fit_to = len(chain) if args.fit_to is None else args.fit_to
+    fit_draws = chain[args.fit_from:fit_to].reshape(-1, d)
     half = len(chain) // 2
     x, lx = chain[half:].reshape(-1, d), log_p[half:].reshape(-1)
     rng = np.random.default_rng(args.seed)
     pairs = rng.integers(len(x), size=20_000)
     adapt = Adaptation()
     print(f"{chain_file}: {len(chain)} steps x {chain.shape[1]} walkers; proposals fitted to steps "
-          f"{args.fit_from}-{len(chain)}, paired with steps {half}-{len(chain)}")
+          f"{args.fit_from}-{fit_to}, paired with steps {half}-{len(chain)}")
     for k in args.components:
         t0 = time.perf_counter()
         move = IndependenceMove.fit(fit_draws, components=k, dof=adapt.dof, scale=adapt.scale, wide=adapt.wide,

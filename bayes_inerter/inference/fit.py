@@ -33,11 +33,12 @@ DRAWS_FILE = "b_draws.npz"
 
 #: The joint model's default adaptation: the independence proposal fitted as a mixture of
 #: five t's (``sampler.Adaptation``'s ``components``). Measured on the full study's
-#: converged joint chain (27 records, 20 parameters; 400 proposals each, evaluated):
-#: proposals from one t fitted to the whole chain were accepted with probability 0.08,
-#: from a mixture of 5 fitted by EM 0.29 (3 components: 0.27, 8: 0.29). Fitted to steps
-#: 130-1,000 only (before the walkers spread over the nut's plateau) the mixture does no
-#: better (0.08 against 0.11): it pays once the chain has explored.
+#: converged joint chain (27 records, 20 parameters; ``benchmarks/bench_proposal.py``,
+#: 400 proposals each, evaluated): proposals from one t fitted to the whole chain were
+#: accepted with probability 0.078, from a mixture of 5 fitted by EM 0.261 (3: 0.245,
+#: 8: 0.273). Fitted to steps 130-1,000 only (before the walkers spread over the nut's
+#: plateau) the mixture does no better (0.085 against 0.101): it pays once the chain
+#: has explored.
 JOINT_ADAPTATION = Adaptation(components=5)
 
 
