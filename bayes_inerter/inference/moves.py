@@ -1,5 +1,6 @@
 """Moves beside emcee's own: a jump along the nut's ridge, differential evolution in
-random subspaces, and independence proposals from a fitted multivariate t.
+random subspaces, and independence proposals from a fitted multivariate t (or a mixture
+of them).
 
 The nut's deformation (c_n + k_n / s) sits in series with the inertance b s; at the
 drive frequencies the pair acts as a damper in series with an inerter of
@@ -43,7 +44,10 @@ the same t made wider, so that tails the fit has not yet seen are proposed too. 
 that t, a walker crosses it in one step instead of diffusing across it as the ensemble
 moves do (their autocorrelation time grows with the dimension); where it is not (the
 nut's plateau against its cliff), the proposal is refused more often and the ensemble
-moves, which stay in the mixture, do the work.
+moves, which stay in the mixture, do the work. A proposal of several t's, fitted as a
+normal mixture by EM (:mod:`.mixture`), follows such a shape more closely: on the joint
+model's converged chain its proposals were accepted 3.3 times as often as one t's
+(:data:`.fit.JOINT_ADAPTATION`).
 """
 
 from __future__ import annotations
