@@ -1,12 +1,14 @@
 """How fast the joint model's chain mixes under different emcee moves, side by side.
 
     python studies/joint_mixing.py [--settings A0 A3 B2] [--steps 2500] [--seed 0]
-        [--variants default subspace] [--out results/joint-mixing]
+        [--variants default subspace] [--centres results/full] [--out results/joint-mixing]
 
 The joint model (``inference.joint``) of the paper grid's records of ``--settings`` at
 0.5, 1 and 1.5 Hz (generated with seed 0 and the default generator, as the full study
 does) is sampled once per move set from the same start (the joint optimum Nelder-Mead
-reaches from the medians of the records' own optima) with the same seed, walkers and
+reaches from the medians of the records' own optima, or with ``--centres STUDY`` of the
+posterior means of that study's two-port fits of the same records, as the study's joint
+model starts) with the same seed, walkers and
 coordinates (impedance). Move sets:
 
 - ``default``: the sampler's default (DE 0.6, DE snooker 0.1, stretch 0.3);
@@ -15,7 +17,9 @@ coordinates (impedance). Move sets:
 - ``subspace-only``: subspace DE 0.9, DE snooker 0.1;
 - ``adaptive``: the default moves with the fitted independence move
   (``sampler.Adaptation()``, the package's default since 2026-11-25); the others run
-  without it, as they were measured.
+  without it, as they were measured;
+- ``mixture``: the same with the independence proposal a mixture of 5 t's
+  (``Adaptation(components=5)``).
 
 Writes ``tau.csv`` (integrated autocorrelation time per parameter and move set, emcee's
 estimator on the chain after its first fifth) and ``summary.csv`` (largest tau, which
@@ -32,7 +36,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
-VARIANTS = ("default", "subspace", "subspace-only", "adaptive")
+VARIANTS = ("default", "subspace", "subspace-only", "adaptive", "mixture")
+ADAPTATIONS = {"adaptive": {}, "mixture": {"components": 5}}
 
 
 def moves_for(variant):
@@ -41,7 +46,7 @@ def moves_for(variant):
     from bayes_inerter.inference.moves import SubspaceDEMove
     from bayes_inerter.inference.sampler import DEFAULT_MOVES
 
-    if variant in ("default", "adaptive"):
+    if variant in ("default", "adaptive", "mixture"):
         return list(DEFAULT_MOVES)
     if variant == "subspace":
         return [(SubspaceDEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
@@ -56,6 +61,7 @@ def main():
     ap.add_argument("--steps", type=int, default=2500)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--variants", nargs="+", default=["default", "subspace"], choices=VARIANTS)
+    ap.add_argument("--centres", default=None, help="a study folder whose two-port fits give the start's centres")
     ap.add_argument("--out", default=str(ROOT / "results" / "joint-mixing"))
     args = ap.parse_args()
 
@@ -77,8 +83,19 @@ def main():
         theta = np.load(start_file)
         start = (theta, jm.log_prob(theta)[0])
     else:
-        rng = np.random.default_rng(args.seed)
-        given = [part.values(find_start(part, rng)[0]) for part in tqdm(jm.parts, desc="record optima")]
+        if args.centres:
+            from bayes_inerter.study.analysis import collect
+            from bayes_inerter.study.plan import record_name
+
+            fits = {f.name: f for f in collect(Path(args.centres) / "fits") if f.model == "two-port"}
+            names = [record_name(r.metadata["setting"], r.drive_frequency) for r in records]
+            missing = [n for n in names if n not in fits]
+            if missing:
+                sys.exit(f"error: {args.centres} has no two-port fit of {', '.join(missing)}")
+            given = [{n: fits[name].stat(n, "mean") for n in jm.parts[0].names} for name in names]
+        else:
+            rng = np.random.default_rng(args.seed)
+            given = [part.values(find_start(part, rng)[0]) for part in tqdm(jm.parts, desc="record optima")]
         start = local_optimum(jm, jm.start(given), restarts=NM_RESTARTS)
         np.save(start_file, start[0])
 
@@ -86,7 +103,7 @@ def main():
     for variant in args.variants:
         (out / variant).mkdir(exist_ok=True)
         bar = tqdm(total=args.steps, desc=variant, unit="step")
-        adaptation = Adaptation() if variant == "adaptive" else None
+        adaptation = Adaptation(**ADAPTATIONS[variant]) if variant in ADAPTATIONS else None
         run = run_sampler(jm, out / variant / "chain.h5", steps=args.steps, seed=args.seed, moves=moves_for(variant),
                           adaptation=adaptation, start=start, progress=lambda i, _t: bar.update(i - bar.n))
         bar.close()

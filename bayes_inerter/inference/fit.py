@@ -24,22 +24,12 @@ from .model import LikelihoodSettings, PosteriorModel
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
 from .sampler import Adaptation, Convergence, check_run_options, run_sampler
 
-__all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions", "DRAWS_FILE", "JOINT_ADAPTATION"]
+__all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions", "DRAWS_FILE"]
 
 #: The joint model's kept draws of each b (``b_<setting>``: walkers x draws), numpy's npz:
 #: what the study's regression per flywheel needs, kept beside the summary because the
 #: chain itself is too large to keep with the results.
 DRAWS_FILE = "b_draws.npz"
-
-#: The joint model's default adaptation: the independence proposal fitted as a mixture of
-#: five t's (``sampler.Adaptation``'s ``components``). Measured on the full study's
-#: converged joint chain (27 records, 20 parameters; ``benchmarks/bench_proposal.py``,
-#: 400 proposals each, evaluated): proposals from one t fitted to the whole chain were
-#: accepted with probability 0.078, from a mixture of 5 fitted by EM 0.261 (3: 0.245,
-#: 8: 0.273). Fitted to steps 130-1,000 only (before the walkers spread over the nut's
-#: plateau) the mixture does no better (0.085 against 0.101): it pays once the chain
-#: has explored.
-JOINT_ADAPTATION = Adaptation(components=5)
 
 
 @dataclass
@@ -180,7 +170,7 @@ def fit_joint(
     progress=None,
     plots: bool = True,
     coordinates: str = "impedance",
-    adaptation: Adaptation | None = JOINT_ADAPTATION,
+    adaptation: Adaptation | None = Adaptation(),
 ) -> FitResult:
     """Sample the joint posterior of several records (``joint.JointModel``: shared
     frictions and deformations, one b per flywheel setting) into ``out``: chain.h5,
