@@ -15,12 +15,11 @@ simulations, measured side by side in one run (the machine is shared: read ratio
 """
 
 import argparse
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
+from _timing import median_time
 from scipy import signal
 
 
@@ -36,16 +35,6 @@ def coarse_acceleration(params, time_s, force, q):
     _, states = run_piecewise_linear(compiled, A, B, signal.resample_poly(force, 1, q), h * q, store=True)
     velocity = signal.resample_poly(states[:, 0], q, 1)[: len(time_s)]
     return np.gradient(velocity, h)
-
-
-def median_seconds(fn, repeats):
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def main():
@@ -75,12 +64,12 @@ def main():
 
         ref = lowpass(full(), fs, cut)
         resid = np.sqrt(np.mean((ref[w] - model.measured_lp[w]) ** 2))
-        t_full = median_seconds(full, args.repeats)
+        t_full = median_time(full, args.repeats)
         parts = [f"{name}: residual at the truth {resid:.2e} m/s^2, full rate {1e3 * t_full:.2f} ms"]
         for q in args.factors:
             a = lowpass(coarse_acceleration(params, rec.time, rec.force, q), fs, cut)
             err = np.sqrt(np.mean((a[w] - ref[w]) ** 2))
-            t_q = median_seconds(lambda: coarse_acceleration(params, rec.time, rec.force, q), args.repeats)
+            t_q = median_time(lambda: coarse_acceleration(params, rec.time, rec.force, q), args.repeats)
             parts.append(f"1/{q} rate: error {err:.1e}, {t_q / t_full:.2f} x the time")
         print("; ".join(parts))
 
