@@ -9,8 +9,8 @@ convergence criteria hold (``Convergence()``: 50 tau after the transient, tau se
 R-hat < 1.05, bulk ESS >= 400), twice from the same start (one restarted Nelder-Mead
 optimum per record) with the same seed, walkers and coordinates: with the default
 adaptation and without it (the ensemble moves alone), or with the variants named
-(``mixture``: the adaptation with its proposal a mixture of 5 t's, the joint model's
-default). The two runs of a record run at the same time, one process each, so they
+(``mixture``: the adaptation with its proposal a mixture of 5 t's, an option).
+The two runs of a record run at the same time, one process each, so they
 share the machine alike: read the ratios.
 Writes one row per run (steps and seconds to converge, the largest autocorrelation
 time, acceptance, b's 94 % interval) and prints the ratios.
