@@ -28,10 +28,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "studies"))
 
-from _table import record_arg, write_rows  # noqa: E402
+from _table import ADAPTATIONS, record_arg, write_rows  # noqa: E402
 
 VARIANTS = ("adaptive", "ensemble-only", "mixture")
-ADAPTATIONS = {"adaptive": {}, "mixture": {"components": 5}}
 
 
 def _run(job):

@@ -7,8 +7,8 @@ study folder; it is not committed): ``python benchmarks/bench_proposal.py
 [--seed 0]``.
 
 For each proposal (fitted, like ``sampler.Adaptation``'s, to the chain's steps from
-``--fit-from`` to ``--fit-to`` (default its last), in the sampler's coordinates, with its default dof, scale and wide
-part), ``--proposals`` draws y are evaluated under the joint posterior and paired with
+``--fit-from`` to ``--fit-to`` (default its last), in the sampler's coordinates, with
+its default dof, scale and wide part), ``--proposals`` draws y are evaluated under the joint posterior and paired with
 the chain's own stationary draws x (its second half): the independence move accepts y
 from x with probability min(1, w(y) / w(x)), w = p / q, so the mean over the pairs is
 its acceptance rate at equilibrium. One core; the proposals share the machine alike.
@@ -71,7 +71,7 @@ def main():
         t0 = time.perf_counter()
         ly = np.array([sampler._log_prob(u)[0] for u in y])
         t_eval = (time.perf_counter() - t0) / len(y)
-        lwx = (lx - move.log_density(x))[pairs]
+        lwx = lx[pairs] - move.log_density(x[pairs])
         lwy = ly - move.log_density(y)
         acc = np.mean([np.mean(np.exp(np.minimum(0.0, v - lwx))) if np.isfinite(v) else 0.0 for v in lwy])
         print(f"  {move.components} component(s): acceptance {acc:.3f}; fit {t_fit:.1f} s, "

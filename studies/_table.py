@@ -1,10 +1,16 @@
 """What the studies' scripts share: read a record named SETTING:FREQUENCY, run jobs on
-local processes, write rows of results to a CSV file and print them."""
+local processes, write rows of results to a CSV file and print them, and the adaptive
+samplers they compare by name."""
 
 import csv
 import sys
 from multiprocessing import get_context
 from pathlib import Path
+
+#: The adaptive samplers compared side by side, by name: keyword arguments of
+#: ``sampler.Adaptation`` (``adaptive``: the default; ``mixture``: its proposal a mixture
+#: of 5 t's, an option).
+ADAPTATIONS = {"adaptive": {}, "mixture": {"components": 5}}
 
 
 def record_arg(item: str) -> tuple[str, float]:

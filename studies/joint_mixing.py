@@ -33,11 +33,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from _table import ADAPTATIONS
 
 ROOT = Path(__file__).resolve().parents[1]
 
 VARIANTS = ("default", "subspace", "subspace-only", "adaptive", "mixture")
-ADAPTATIONS = {"adaptive": {}, "mixture": {"components": 5}}
 
 
 def moves_for(variant):

@@ -28,8 +28,9 @@ walker is stuck apart from the others, not a proof). Or stops at ``max_steps``.
 
 Adaptation (documented defaults, :class:`Adaptation`): at every multiple of ``every``
 steps, a multivariate t (or a mixture of ``components`` t's, by EM) is fitted to the
-chain so far after its transient, in sampler coordinates, and :class:`.moves.IndependenceMove` proposes from it in ``weight`` of the
-following steps, the ensemble moves in the rest. The proposal changes only at those
+chain so far after its transient, in sampler coordinates, and
+:class:`.moves.IndependenceMove` proposes from it in ``weight`` of the following steps,
+the ensemble moves in the rest. The proposal changes only at those
 steps and is fitted to a growing chain (diminishing adaptation, Roberts and Rosenthal
 2007); between two of them it is fixed and every move leaves the posterior invariant.
 A continued chain refits from the same stored steps, so it is the chain an
