@@ -3,15 +3,18 @@ fitted as one t or as a mixture of several, on a converged joint chain.
 
 Run by hand after a full study whose joint chain converged (its checkpoint stays in the
 study folder; it is not committed): ``python benchmarks/bench_proposal.py
-[results/full] [--components 1 3 5 8] [--proposals 400] [--fit-from 130] [--fit-to STEP]
-[--seed 0]``.
+[results/full] [--components 1 3 5 8] [--knots 0 200] [--wide W] [--proposals 400]
+[--fit-from 130] [--fit-to STEP] [--seed 0]``.
 
 For each proposal (fitted, like ``sampler.Adaptation``'s, to the chain's steps from
 ``--fit-from`` to ``--fit-to`` (default its last), in the sampler's coordinates, with
 its default dof, scale and wide part), ``--proposals`` draws y are evaluated under the joint posterior and paired with
 the chain's own stationary draws x (its second half): the independence move accepts y
 from x with probability min(1, w(y) / w(x)), w = p / q, so the mean over the pairs is
-its acceptance rate at equilibrium. One core; the proposals share the machine alike.
+its acceptance rate at equilibrium. The spread of the log weights log w(x) over the
+chain's draws is printed too: a walker where w is e^s times its median accepts about
+e^-s of the proposals, so the upper quantiles say how long the stickiest places hold a
+walker. One core; the proposals share the machine alike.
 """
 
 import argparse
@@ -29,6 +32,9 @@ def main():
     ap.add_argument("--proposals", type=int, default=400)
     ap.add_argument("--fit-from", type=int, default=130, help="first step the proposals are fitted to")
     ap.add_argument("--fit-to", type=int, default=None, help="last step they are fitted to (default: the chain's)")
+    ap.add_argument("--knots", type=int, nargs="+", default=[0],
+                    help="knots of the normal-scores map (0: none, the t's in the sampler's coordinates)")
+    ap.add_argument("--wide", type=float, default=None, help="the wide part's share (default: Adaptation's)")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
 
@@ -60,12 +66,13 @@ def main():
     rng = np.random.default_rng(args.seed)
     pairs = rng.integers(len(x), size=20_000)
     adapt = Adaptation()
+    wide = adapt.wide if args.wide is None else args.wide
     print(f"{chain_file}: {len(chain)} steps x {chain.shape[1]} walkers; proposals fitted to steps "
           f"{args.fit_from}-{fit_to}, paired with steps {half}-{len(chain)}")
-    for k in args.components:
+    for k, knots in ((k, n) for n in args.knots for k in args.components):
         t0 = time.perf_counter()
-        move = IndependenceMove.fit(fit_draws, components=k, dof=adapt.dof, scale=adapt.scale, wide=adapt.wide,
-                                    wide_scale=adapt.wide_scale)
+        move = IndependenceMove.fit(fit_draws, components=k, knots=knots or None, dof=adapt.dof, scale=adapt.scale,
+                                    wide=wide, wide_scale=adapt.wide_scale)
         t_fit = time.perf_counter() - t0
         y, _ = move._propose(np.zeros((args.proposals, d)), np.random.RandomState(args.seed))
         t0 = time.perf_counter()
@@ -74,8 +81,12 @@ def main():
         lwx = lx[pairs] - move.log_density(x[pairs])
         lwy = ly - move.log_density(y)
         acc = np.mean([np.mean(np.exp(np.minimum(0.0, v - lwx))) if np.isfinite(v) else 0.0 for v in lwy])
-        print(f"  {move.components} component(s): acceptance {acc:.3f}; fit {t_fit:.1f} s, "
-              f"{1e3 * t_eval:.0f} ms an evaluation, {np.sum(~np.isfinite(ly))} proposals outside the domain")
+        spread = np.quantile(lwx - np.median(lwx), [0.99, 0.999, 1.0])
+        where = f"in normal scores ({knots} knots)" if knots else "in the sampler's coordinates"
+        print(f"  {move.components} component(s) {where}: acceptance {acc:.3f}; log weight p/q of the chain's "
+              f"draws above its median: {spread[0]:.1f} (99 %), {spread[1]:.1f} (99.9 %), {spread[2]:.1f} (max); "
+              f"fit {t_fit:.1f} s, {1e3 * t_eval:.0f} ms an evaluation, {np.sum(~np.isfinite(ly))} proposals "
+              f"outside the domain")
 
 
 if __name__ == "__main__":

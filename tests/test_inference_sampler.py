@@ -9,6 +9,7 @@ from scipy import stats
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import Convergence, PosteriorModel
+from bayes_inerter.inference.moves import BlockMove
 from bayes_inerter.inference.sampler import Adaptation, run_sampler, transient
 from bayes_inerter.records import GeneratorSettings, generate_record
 
@@ -104,6 +105,23 @@ def test_adaptation_with_components_fits_a_mixture_and_says_so():
     # a checkpoint records the kernel's description: one component describes it as before
     assert Adaptation().describe().startswith("IndependenceMove 0.5 (t, dof 10,")
     assert "mixture of 3 t's" in Adaptation(components=3).describe()
+
+
+def test_adaptation_in_normal_scores_with_block_moves_shares_its_weight_and_says_so():
+    rng = np.random.default_rng(3)
+    chain = rng.lognormal(size=(300, 20, 3))
+    still = rng.normal(0.0, 1.0, size=(300, 20))
+    adapt = Adaptation(every=400, knots=100, blocks=0.4)
+    move, block = adapt.proposal(chain, still), adapt.block_proposal(chain, still)
+    assert move.scores is not None and isinstance(block, BlockMove)
+    moves = adapt.moves([("a", 0.6), ("b", 0.4)], move, block)
+    assert [w for _, w in moves] == pytest.approx([0.3, 0.2, 0.3, 0.2])
+    assert moves[2][0] is move and moves[3][0] is block
+    assert Adaptation(every=400, knots=100).block_proposal(chain, still) is None  # no blocks asked for
+    assert "normal scores (100 knots); 0.4 of its share to block moves" in adapt.describe()
+    for bad in (dict(blocks=0.5), dict(knots=100, blocks=1.0), dict(knots=3)):
+        with pytest.raises(ValueError, match="adaptation"):
+            Adaptation(**bad)
 
 
 def test_a_run_stopped_between_refits_continues_to_the_uninterrupted_chain(model, tmp_path):

@@ -50,7 +50,7 @@ import numpy as np
 from .checkpoint import KERNEL_ATTR, CheckpointError, new_checkpoint, open_checkpoint
 from .coordinates import Coordinates, default_coordinates
 from .model import PosteriorModel
-from .moves import IndependenceMove, NutRidgeMove, ridge_indices
+from .moves import BlockMove, IndependenceMove, NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, sse
 
 __all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "run_sampler", "record_digest",
@@ -133,6 +133,10 @@ class Adaptation:
         wider (defaults 0.2 and 3; see :class:`.moves.IndependenceMove`).
     components : the t's fitted as one (default 1) or, above 1, as a mixture of that
         many, by EM on the chain (``moves.IndependenceMove.fit``).
+    knots : the t's fitted in the chain's normal scores (:mod:`.marginals`) with this
+        many knots per coordinate, or (None) in the sampler's coordinates.
+    blocks : share of ``weight`` given to a :class:`.moves.BlockMove` fitted in the
+        same normal scores (needs ``knots``; default 0: none).
     """
 
     weight: float = 0.5
@@ -142,8 +146,16 @@ class Adaptation:
     wide: float = 0.2
     wide_scale: float = 3.0
     components: int = 1
+    knots: int | None = None
+    blocks: float = 0.0
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.blocks < 1.0:
+            raise ValueError(f"adaptation's block share must lie in [0, 1), got {self.blocks}")
+        if self.blocks > 0.0 and self.knots is None:
+            raise ValueError("adaptation block moves are fitted in normal scores: give knots too")
+        if self.knots is not None and not (isinstance(self.knots, int) and self.knots >= 4):
+            raise ValueError(f"adaptation knots must be a whole number of at least 4 or None, got {self.knots!r}")
         if not (isinstance(self.components, int) and self.components >= 1):
             raise ValueError(f"adaptation components must be a positive whole number, got {self.components!r}")
         if not 0.0 < self.weight < 1.0:
@@ -164,16 +176,32 @@ class Adaptation:
         if len(chain) - skip < self.every // 2:
             return None
         return IndependenceMove.fit(chain[skip:].reshape(-1, chain.shape[-1]), components=self.components,
-                                    dof=self.dof, scale=self.scale, wide=self.wide, wide_scale=self.wide_scale)
+                                    knots=self.knots, dof=self.dof, scale=self.scale, wide=self.wide,
+                                    wide_scale=self.wide_scale)
 
-    def moves(self, base: list, proposal: IndependenceMove | None) -> list:
-        """``base`` moves, with ``proposal`` in ``weight`` of the steps where there is one."""
+    def block_proposal(self, chain: np.ndarray, log_prob: np.ndarray) -> BlockMove | None:
+        """The block move fitted to the same steps as :meth:`proposal`; None without
+        ``blocks`` or where they define none."""
+        skip = transient(log_prob)
+        if self.blocks == 0.0 or len(chain) - skip < self.every // 2:
+            return None
+        return BlockMove.fit(chain[skip:].reshape(-1, chain.shape[-1]), knots=self.knots)
+
+    def moves(self, base: list, proposal: IndependenceMove | None, block: BlockMove | None = None) -> list:
+        """``base`` moves, with ``proposal`` (and ``block``, in ``blocks`` of their share)
+        in ``weight`` of the steps where there is one."""
         if proposal is None:
             return list(base)
-        return [(m, w * (1.0 - self.weight)) for m, w in base] + [(proposal, self.weight)]
+        fitted = [(proposal, self.weight)] if block is None else [
+            (proposal, self.weight * (1.0 - self.blocks)), (block, self.weight * self.blocks)]
+        return [(m, w * (1.0 - self.weight)) for m, w in base] + fitted
 
     def describe(self) -> str:
         law = "t" if self.components == 1 else f"mixture of {self.components} t's fitted by EM"
+        if self.knots is not None:
+            law += f" in normal scores ({self.knots} knots)"
+        if self.blocks > 0.0:
+            law += f"; {self.blocks:g} of its share to block moves from a normal in the same scores"
         return (f"IndependenceMove {self.weight:.3g} ({law}, dof {self.dof:g}, scale {self.scale:g}, "
                 f"{self.wide:g} of it {self.wide_scale:g} x wider, refitted every {self.every} steps; "
                 f"the others scaled by {1 - self.weight:.3g} once fitted)")
@@ -369,12 +397,12 @@ def run_sampler(
     moves = moves or default_moves(model, coordinates=coords)
     ensemble = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves)
     pool = multiprocessing.get_context("fork").Pool(processes, initializer=_ignore_interrupt) if processes > 1 else None
-    fitted: dict[int, IndependenceMove | None] = {}
+    fitted: dict[int, tuple[IndependenceMove | None, BlockMove | None]] = {}
 
     def used() -> tuple:
         """The moves the chain's steps used: the fitted t's only where one was fitted
         (at least one refit had enough steps after the transient)."""
-        proposed = any(m is not None for m in fitted.values())
+        proposed = any(m[0] is not None for m in fitted.values())
         return ensemble + ((kernel,) if adaptation is not None and proposed else ())
 
     def new_sampler(step: int) -> emcee.EnsembleSampler:
@@ -384,8 +412,9 @@ def run_sampler(
         if adaptation is not None:
             at = (step // adaptation.every) * adaptation.every
             if at > 0 and at not in fitted:
-                fitted[at] = adaptation.proposal(backend.get_chain()[:at], backend.get_log_prob()[:at])
-            chunk_moves = adaptation.moves(moves, fitted.get(at))
+                chain, log_prob = backend.get_chain()[:at], backend.get_log_prob()[:at]
+                fitted[at] = (adaptation.proposal(chain, log_prob), adaptation.block_proposal(chain, log_prob))
+            chunk_moves = adaptation.moves(moves, *fitted.get(at, (None, None)))
         return emcee.EnsembleSampler(nwalkers, model.ndim, _log_prob, pool=pool, moves=chunk_moves,
                                      backend=backend, blobs_dtype=float)
 
