@@ -10,7 +10,8 @@ from pathlib import Path
 #: The adaptive samplers compared side by side, by name: keyword arguments of
 #: ``sampler.Adaptation`` (``adaptive``: the default; ``mixture``: its proposal a mixture
 #: of 5 t's, an option).
-ADAPTATIONS = {"adaptive": {}, "mixture": {"components": 5}}
+ADAPTATIONS = {"adaptive": {}, "mixture": {"components": 5}, "scores": {"knots": 200},
+               "blocks": {"knots": 200, "blocks": 0.5}}
 
 
 def record_arg(item: str) -> tuple[str, float]:

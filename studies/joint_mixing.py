@@ -19,7 +19,11 @@ coordinates (impedance). Move sets:
   (``sampler.Adaptation()``, the package's default since 2026-11-25); the others run
   without it, as they were measured;
 - ``mixture``: the same with the independence proposal a mixture of 5 t's
-  (``Adaptation(components=5)``).
+  (``Adaptation(components=5)``);
+- ``scores``: the same with the independence proposal's t fitted in the chain's
+  normal scores (``Adaptation(knots=200)``, :mod:`bayes_inerter.inference.marginals`);
+- ``blocks``: the same, half of the fitted share to block moves from a normal in those
+  scores (``Adaptation(knots=200, blocks=0.5)``, ``moves.BlockMove``).
 
 Writes ``tau.csv`` (integrated autocorrelation time per parameter and move set, emcee's
 estimator on the chain after its first fifth) and ``summary.csv`` (largest tau, which
@@ -37,7 +41,7 @@ from _table import ADAPTATIONS
 
 ROOT = Path(__file__).resolve().parents[1]
 
-VARIANTS = ("default", "subspace", "subspace-only", "adaptive", "mixture")
+VARIANTS = ("default", "subspace", "subspace-only", "adaptive", "mixture", "scores", "blocks")
 
 
 def moves_for(variant):
@@ -46,7 +50,7 @@ def moves_for(variant):
     from bayes_inerter.inference.moves import SubspaceDEMove
     from bayes_inerter.inference.sampler import DEFAULT_MOVES
 
-    if variant in ("default", "adaptive", "mixture"):
+    if variant in ("default", "adaptive", "mixture", "scores", "blocks"):
         return list(DEFAULT_MOVES)
     if variant == "subspace":
         return [(SubspaceDEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
