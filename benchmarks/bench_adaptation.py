@@ -7,11 +7,11 @@ Each record (the full study's: the paper grid generated with seed 0, named
 SETTING:FREQUENCY; default A3 at 1 Hz and B2 at 1 Hz) is sampled until the package's
 convergence criteria hold (``Convergence()``: 50 tau after the transient, tau settled,
 R-hat < 1.05, bulk ESS >= 400), twice from the same start (one restarted Nelder-Mead
-optimum per record) with the same seed, walkers and coordinates: with the default
-adaptation and without it (the ensemble moves alone), or with the variants named
-(``mixture``: the adaptation with its proposal a mixture of 5 t's, an option;
-``scores``: its t fitted in the chain's normal scores, 200 knots; ``blocks``: the same with half
-the fitted share to block moves, ``moves.BlockMove``).
+optimum per record) with the same seed, walkers and coordinates: with the one-t
+adaptation (``adaptive``, the default until 2026-11-25) and without it (the ensemble
+moves alone), or with the variants named (``mixture``: its proposal a mixture of 5 t's;
+``scores``: its t fitted in the chain's normal scores, 200 knots; ``blocks``: the same
+with half the fitted share to block moves, ``moves.BlockMove``, the default since).
 The two runs of a record run at the same time, one process each, so they
 share the machine alike: read the ratios.
 Writes one row per run (steps and seconds to converge, the largest autocorrelation

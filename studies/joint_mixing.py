@@ -15,15 +15,17 @@ coordinates (impedance). Move sets:
 - ``subspace``: the same with differential evolution in random subspaces
   (``moves.SubspaceDEMove``) in place of the full-dimensional DE;
 - ``subspace-only``: subspace DE 0.9, DE snooker 0.1;
-- ``adaptive``: the default moves with the fitted independence move
-  (``sampler.Adaptation()``, the package's default since 2026-11-25); the others run
-  without it, as they were measured;
+- ``adaptive``: the default moves with the fitted independence move, one t in the
+  sampler's coordinates (``Adaptation(knots=None, blocks=0)``, the package's default on
+  2026-11-25 until normal scores and block moves replaced it); the first three run
+  without adaptation, as they were measured;
 - ``mixture``: the same with the independence proposal a mixture of 5 t's
-  (``Adaptation(components=5)``);
+  (``Adaptation(components=5, knots=None, blocks=0)``);
 - ``scores``: the same with the independence proposal's t fitted in the chain's
-  normal scores (``Adaptation(knots=200)``, :mod:`bayes_inerter.inference.marginals`);
+  normal scores (``Adaptation(knots=200, blocks=0)``,
+  :mod:`bayes_inerter.inference.marginals`);
 - ``blocks``: the same, half of the fitted share to block moves from a normal in those
-  scores (``Adaptation(knots=200, blocks=0.5)``, ``moves.BlockMove``).
+  scores (``Adaptation(knots=200, blocks=0.5)``, ``moves.BlockMove``: the default since).
 
 Writes ``tau.csv`` (integrated autocorrelation time per parameter and move set, emcee's
 estimator on the chain after its first fifth) and ``summary.csv`` (largest tau, which

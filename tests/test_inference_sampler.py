@@ -102,8 +102,9 @@ def test_adaptation_with_components_fits_a_mixture_and_says_so():
     still = rng.normal(0.0, 1.0, size=(300, 20))
     assert Adaptation(every=400).proposal(chain, still).components == 1
     assert Adaptation(every=400, components=3).proposal(chain, still).components >= 2
-    # a checkpoint records the kernel's description: one component describes it as before
-    assert Adaptation().describe().startswith("IndependenceMove 0.5 (t, dof 10,")
+    # a checkpoint records the kernel's description: one t in the sampler's coordinates
+    # (the default until 2026-11-25) describes it as before
+    assert Adaptation(knots=None, blocks=0.0).describe().startswith("IndependenceMove 0.5 (t, dof 10,")
     assert "mixture of 3 t's" in Adaptation(components=3).describe()
 
 
@@ -117,9 +118,10 @@ def test_adaptation_in_normal_scores_with_block_moves_shares_its_weight_and_says
     moves = adapt.moves([("a", 0.6), ("b", 0.4)], move, block)
     assert [w for _, w in moves] == pytest.approx([0.3, 0.2, 0.3, 0.2])
     assert moves[2][0] is move and moves[3][0] is block
-    assert Adaptation(every=400, knots=100).block_proposal(chain, still) is None  # no blocks asked for
+    assert Adaptation(every=400, knots=100, blocks=0.0).block_proposal(chain, still) is None  # none asked for
     assert "normal scores (100 knots); 0.4 of its share to block moves" in adapt.describe()
-    for bad in (dict(blocks=0.5), dict(knots=100, blocks=1.0), dict(knots=3)):
+    assert Adaptation().knots == 200 and Adaptation().blocks == 0.5  # the defaults
+    for bad in (dict(knots=None), dict(knots=100, blocks=1.0), dict(knots=3)):
         with pytest.raises(ValueError, match="adaptation"):
             Adaptation(**bad)
 

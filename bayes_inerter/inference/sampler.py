@@ -28,9 +28,10 @@ walker is stuck apart from the others, not a proof). Or stops at ``max_steps``.
 
 Adaptation (documented defaults, :class:`Adaptation`): at every multiple of ``every``
 steps, a multivariate t (or a mixture of ``components`` t's, by EM) is fitted to the
-chain so far after its transient, in sampler coordinates, and
-:class:`.moves.IndependenceMove` proposes from it in ``weight`` of the following steps,
-the ensemble moves in the rest. The proposal changes only at those
+chain so far after its transient, in its normal scores (``knots``; or in sampler
+coordinates), and :class:`.moves.IndependenceMove` proposes from it, with
+:class:`.moves.BlockMove` from a normal in the same scores in ``blocks`` of their
+share, in ``weight`` of the following steps, the ensemble moves in the rest. The proposal changes only at those
 steps and is fitted to a growing chain (diminishing adaptation, Roberts and Rosenthal
 2007); between two of them it is fixed and every move leaves the posterior invariant.
 A continued chain refits from the same stored steps, so it is the chain an
@@ -50,6 +51,7 @@ import numpy as np
 from .checkpoint import KERNEL_ATTR, CheckpointError, new_checkpoint, open_checkpoint
 from .coordinates import Coordinates, default_coordinates
 from .model import PosteriorModel
+from .marginals import KNOTS
 from .moves import BlockMove, IndependenceMove, NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, sse
 
@@ -114,12 +116,19 @@ class Convergence:
 
 @dataclass(frozen=True)
 class Adaptation:
-    """The fitted independence move's share of the steps, and when it is refitted (see
-    module docstring). Measured on the full study's A3 1 Hz record (3,000 steps from the
-    optimum's ensemble, 24 walkers, one seed): the largest autocorrelation time over steps
-    1,000-3,000 was 96.3 steps with the ensemble moves alone, 44.8 with the fitted t alone
-    (``wide=0``) and 38.4 with these defaults; ``benchmarks/bench_adaptation.py`` measures
-    the steps to a converged chain.
+    """The fitted moves' share of the steps, and when they are refitted (see module
+    docstring). By default the independence move's t is fitted in the chain's normal
+    scores (:mod:`.marginals`), and half of the fitted moves' share goes to block moves
+    (:class:`.moves.BlockMove`) from a normal in the same scores; ``knots=None,
+    blocks=0`` is the one t in the sampler's coordinates that was the default until
+    2026-11-25. Measured side by side with it (same starts and seeds): on the joint model
+    of 9 records (``studies/joint_mixing.py``, 3,000 steps) the largest autocorrelation
+    time over the last four fifths fell from 115.0 to 30.0 steps; on single records to
+    convergence (``benchmarks/bench_adaptation.py``), A3 at 1 Hz took 4,500 steps
+    against 8,000, B2 at 1 Hz 2,000 against 1,500. Earlier, on A3 at 1 Hz (3,000 steps
+    from the optimum's ensemble, 24 walkers, one seed): the largest autocorrelation time
+    over steps 1,000-3,000 was 96.3 steps with the ensemble moves alone, 44.8 with the
+    fitted t alone (``wide=0``) and 38.4 with the t and its wide part.
 
     Attributes
     ----------
@@ -134,9 +143,9 @@ class Adaptation:
     components : the t's fitted as one (default 1) or, above 1, as a mixture of that
         many, by EM on the chain (``moves.IndependenceMove.fit``).
     knots : the t's fitted in the chain's normal scores (:mod:`.marginals`) with this
-        many knots per coordinate, or (None) in the sampler's coordinates.
+        many knots per coordinate (default 200), or (None) in the sampler's coordinates.
     blocks : share of ``weight`` given to a :class:`.moves.BlockMove` fitted in the
-        same normal scores (needs ``knots``; default 0: none).
+        same normal scores (needs ``knots``; default 0.5; 0: none).
     """
 
     weight: float = 0.5
@@ -146,8 +155,8 @@ class Adaptation:
     wide: float = 0.2
     wide_scale: float = 3.0
     components: int = 1
-    knots: int | None = None
-    blocks: float = 0.0
+    knots: int | None = KNOTS
+    blocks: float = 0.5
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.blocks < 1.0:
