@@ -381,11 +381,11 @@ class BlockMove(MHMove):
         except (ValueError, np.linalg.LinAlgError):
             return None
 
-    def _log_q(self, z, mean, sd) -> np.ndarray:
+    def _log_q(self, w) -> np.ndarray:
         """Log density of the block's proposal (the defensive pair of normals, up to a
-        constant) at the rows of ``z`` (n, m)."""
-        r2 = np.sum(((z - mean) / sd) ** 2, axis=1)
-        m = z.shape[1]
+        constant) at the rows of ``w`` (n, m), whitened by its conditional law."""
+        r2 = np.sum(w ** 2, axis=1)
+        m = w.shape[1]
         narrow = -0.5 * r2
         if self.wide == 0.0:
             return narrow
@@ -411,7 +411,7 @@ class BlockMove(MHMove):
             w_new = width * random.randn(len(block))
             znew[i, block] = mean_b + chol @ w_new
             w_old = np.linalg.solve(chol, z[i, block] - mean_b)
-            log_q[i] = self._log_q(w_old[None], 0.0, 1.0)[0] - self._log_q(w_new[None], 0.0, 1.0)[0]
+            log_q[i] = self._log_q(w_old[None])[0] - self._log_q(w_new[None])[0]
             moved[i, block] = True
         q = np.where(moved, self.scores.inverse(znew), x)  # the rest kept exactly
         _, jac_new = self.scores.forward(q)  # the rest's slopes are the same in both

@@ -31,9 +31,10 @@ steps, a multivariate t (or a mixture of ``components`` t's, by EM) is fitted to
 chain so far after its transient, in its normal scores (``knots``; or in sampler
 coordinates), and :class:`.moves.IndependenceMove` proposes from it, with
 :class:`.moves.BlockMove` from a normal in the same scores in ``blocks`` of their
-share, in ``weight`` of the following steps, the ensemble moves in the rest. The proposal changes only at those
-steps and is fitted to a growing chain (diminishing adaptation, Roberts and Rosenthal
-2007); between two of them it is fixed and every move leaves the posterior invariant.
+share, in ``weight`` of the following steps, the ensemble moves in the rest. The
+proposals change only at those steps and are fitted to a growing chain (diminishing
+adaptation, Roberts and Rosenthal 2007); between two of them they are fixed and every
+move leaves the posterior invariant.
 A continued chain refits from the same stored steps, so it is the chain an
 uninterrupted run gives.
 """
@@ -50,8 +51,8 @@ import numpy as np
 
 from .checkpoint import KERNEL_ATTR, CheckpointError, new_checkpoint, open_checkpoint
 from .coordinates import Coordinates, default_coordinates
-from .model import PosteriorModel
 from .marginals import KNOTS
+from .model import PosteriorModel
 from .moves import BlockMove, IndependenceMove, NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, sse
 
