@@ -10,6 +10,7 @@ from scipy import signal
 from scipy.linalg import expm
 
 from bayes_inerter import SimulationError, paper_parameters, simulate, simulate_network
+from bayes_inerter.simulate import Drive, mean_acceleration
 from bayes_inerter._kernel import _levels, _tables
 from bayes_inerter.models import NETWORKS, build_network
 from bayes_inerter.network import accel_response, compile_network
@@ -176,6 +177,27 @@ def test_bad_records(make, message):
     t2, f2 = make(t, f)
     with pytest.raises(ValueError, match=message):
         simulate(p, t2, f2)
+
+
+def test_a_drive_checked_once_gives_the_same_simulation():
+    p = paper_parameters("A3")
+    t, f = inverse_dynamics_force(p, 1.0, duration=0.6, ramp=0.2)
+    drive = Drive.of(t, f)
+    assert drive.h == pytest.approx(t[1] - t[0])
+    for sampling in ("instant", "mean"):
+        np.testing.assert_array_equal(simulate(p, drive, sampling=sampling), simulate(p, t, f, sampling=sampling))
+    with pytest.raises(ValueError, match="not both"):
+        simulate(p, drive, f)
+    with pytest.raises(ValueError, match="force record is missing"):
+        simulate(p, t)
+    with pytest.raises(ValueError, match="strictly increasing"):
+        Drive.of(t[::-1], f)
+
+
+def test_mean_acceleration_is_numpys_gradient():
+    v = np.random.default_rng(3).normal(size=101).cumsum()
+    for x in (v, v[:2], v[:3]):
+        np.testing.assert_array_equal(mean_acceleration(x, 1e-3), np.gradient(x, 1e-3))
 
 
 def test_bad_options():

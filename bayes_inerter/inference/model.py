@@ -27,7 +27,7 @@ from scipy import signal
 from ..device import TABLE_I, InerterParameters, apparent_inertance, setting as get_setting
 from ..records.conditioning import LOWPASS_HZ, lowpass
 from ..records.record import Record
-from ..simulate import SAMPLINGS, SimulationError, check_record, simulate
+from ..simulate import SAMPLINGS, Drive, SimulationError, check_record, simulate
 from .priors import DEFAULT_PRIORS, NOISE_PRIORS, SPLIT_PRIORS
 
 __all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
@@ -193,6 +193,7 @@ class PosteriorModel:
             self._sim_time = rec.time[0] + np.arange(len(self._sim_force)) / (self.fs * q)
         else:
             self._sim_force, self._sim_time = rec.force, rec.time
+        self._drive = Drive.of(self._sim_time, self._sim_force)  # checked once, not at every evaluation
         fixed = dict(TABLE_I, m_s=self.m_s, m_B=self.m_B, b=1.0)
         if self.model == "rigid":
             fixed.update(f2_0=0.0, c_f2=0.0)
@@ -267,8 +268,7 @@ class PosteriorModel:
 
     def simulate_lp(self, theta) -> np.ndarray:
         """Low-passed simulated acceleration over the whole record."""
-        a = simulate(self.parameters(theta), self._sim_time, self._sim_force, network=self.network,
-                     sampling=self.likelihood.sampling)
+        a = simulate(self.parameters(theta), self._drive, network=self.network, sampling=self.likelihood.sampling)
         q = self.likelihood.upsample
         if q > 1:
             a = signal.resample_poly(a, 1, q)[: len(self.record.time)]
