@@ -10,10 +10,10 @@ from scipy import signal
 from scipy.linalg import expm
 
 from bayes_inerter import SimulationError, paper_parameters, simulate, simulate_network
-from bayes_inerter.simulate import Drive, mean_acceleration
 from bayes_inerter._kernel import _levels, _tables
 from bayes_inerter.models import NETWORKS, build_network
 from bayes_inerter.network import accel_response, compile_network
+from bayes_inerter.simulate import Drive, mean_acceleration
 
 
 def rel_error(a, ref):
