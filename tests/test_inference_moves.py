@@ -437,6 +437,17 @@ def test_block_move_changes_only_its_block_and_follows_the_conditional():
 def test_block_move_refuses_what_defines_none():
     assert BlockMove.fit(np.ones((100, 3)), knots=50) is None
     assert BlockMove.fit(np.zeros((2, 3)), knots=50) is None
+    with pytest.raises(ValueError, match="normal-scores map or the knots"):
+        BlockMove.fit(np.random.default_rng(0).normal(size=(100, 3)))
+
+
+def test_block_move_fitted_in_a_given_map_is_the_one_fitted_with_its_knots():
+    draws = np.random.default_rng(23).lognormal(size=(4000, 3))
+    scores = NormalScores.fit(draws, 100)
+    given, own = BlockMove.fit(draws, scores=scores), BlockMove.fit(draws, knots=100)
+    assert given.scores is scores
+    np.testing.assert_array_equal(given.mean, own.mean)
+    np.testing.assert_array_equal(given.precision, own.precision)
     with pytest.raises(ValueError, match="block sizes"):
         BlockMove(np.zeros(4), np.eye(4), _SCORES, sizes=(5,))
     with pytest.raises(ValueError, match="do not match"):

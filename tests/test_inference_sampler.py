@@ -81,11 +81,11 @@ def test_adaptation_fits_after_the_transient_only():
     chain = rng.normal(size=(300, 20, 3))
     still = rng.normal(0.0, 1.0, size=(300, 20))
     adapt = Adaptation(every=400)
-    move = adapt.proposal(chain, still)  # 300 steps in equilibrium: at least every // 2
-    assert move is not None
+    move, block = adapt.fit(chain, still)  # 300 steps in equilibrium: at least every // 2
+    assert move is not None and isinstance(block, BlockMove)
     np.testing.assert_allclose(move.mean, 0.0, atol=0.05)
     climbing = still - np.r_[np.linspace(500.0, 0.0, 150), np.zeros(150)][:, None]
-    assert adapt.proposal(chain, climbing) is None  # about 150 steps after the climb: fewer
+    assert adapt.fit(chain, climbing) == (None, None)  # about 150 steps after the climb: fewer
     moves = adapt.moves([("a", 0.6), ("b", 0.4)], move)
     assert [w for _, w in moves] == pytest.approx([0.3, 0.2, 0.5])
     assert adapt.moves([("a", 1.0)], None) == [("a", 1.0)]
@@ -100,8 +100,8 @@ def test_adaptation_with_components_fits_a_mixture_and_says_so():
     chain = np.concatenate([rng.normal(-3.0, 0.3, size=(300, 10, 2)), rng.normal(3.0, 0.3, size=(300, 10, 2))],
                            axis=1)
     still = rng.normal(0.0, 1.0, size=(300, 20))
-    assert Adaptation(every=400).proposal(chain, still).components == 1
-    assert Adaptation(every=400, components=3).proposal(chain, still).components >= 2
+    assert Adaptation(every=400).fit(chain, still)[0].components == 1
+    assert Adaptation(every=400, components=3).fit(chain, still)[0].components >= 2
     # a checkpoint records the kernel's description: one t in the sampler's coordinates
     # (the default until 2026-11-25) describes it as before
     assert Adaptation(knots=None, blocks=0.0).describe().startswith("IndependenceMove 0.5 (t, dof 10,")
@@ -113,12 +113,13 @@ def test_adaptation_in_normal_scores_with_block_moves_shares_its_weight_and_says
     chain = rng.lognormal(size=(300, 20, 3))
     still = rng.normal(0.0, 1.0, size=(300, 20))
     adapt = Adaptation(every=400, knots=100, blocks=0.4)
-    move, block = adapt.proposal(chain, still), adapt.block_proposal(chain, still)
+    move, block = adapt.fit(chain, still)
     assert move.scores is not None and isinstance(block, BlockMove)
+    assert block.scores is move.scores  # one map, fitted once
     moves = adapt.moves([("a", 0.6), ("b", 0.4)], move, block)
     assert [w for _, w in moves] == pytest.approx([0.3, 0.2, 0.3, 0.2])
     assert moves[2][0] is move and moves[3][0] is block
-    assert Adaptation(every=400, knots=100, blocks=0.0).block_proposal(chain, still) is None  # none asked for
+    assert Adaptation(every=400, knots=100, blocks=0.0).fit(chain, still)[1] is None  # none asked for
     assert "normal scores (100 knots); 0.4 of its share to block moves" in adapt.describe()
     assert Adaptation().knots == 200 and Adaptation().blocks == 0.5  # the defaults
     for bad in (dict(knots=None), dict(knots=100, blocks=1.0), dict(knots=3)):

@@ -75,6 +75,15 @@ __all__ = ["NutRidgeMove", "SubspaceDEMove", "IndependenceMove", "BlockMove", "r
 MIXTURE_DRAWS = 5_000
 
 
+def _usable(draws) -> np.ndarray | None:
+    """``draws`` as an (n, ndim) float array if a proposal can be fitted to them (finite,
+    more draws than dimensions); else None."""
+    draws = np.asarray(draws, dtype=float)
+    if draws.ndim != 2 or len(draws) <= draws.shape[1] or not np.all(np.isfinite(draws)):
+        return None
+    return draws
+
+
 def ridge_indices(names, log_scale) -> tuple[int, int, list[int]] | None:
     """(index of k_n, index of c_n, indices of the inertances) in a parameter vector
     named ``names``, or None if it has no nut ridge (a model without b, k_n or c_n, or
@@ -252,8 +261,8 @@ class IndependenceMove(MHMove):
         define one (fewer draws than dimensions, or a singular covariance); a mixture that
         cannot be fitted falls back to one t, and draws too few for a normal-scores map to
         the t's in their own coordinates."""
-        draws = np.asarray(draws, dtype=float)
-        if draws.ndim != 2 or len(draws) <= draws.shape[1] or not np.all(np.isfinite(draws)):
+        draws = _usable(draws)
+        if draws is None:
             return None
         if knots is not None:
             try:
@@ -368,14 +377,19 @@ class BlockMove(MHMove):
         super().__init__(self._propose)
 
     @classmethod
-    def fit(cls, draws, *, knots: int, **kwargs) -> "BlockMove | None":
-        """The move fitted to ``draws`` (n, ndim): their normal-scores map with ``knots``
-        knots and the mean and covariance of their scores; None where they define none."""
-        draws = np.asarray(draws, dtype=float)
-        if draws.ndim != 2 or len(draws) <= draws.shape[1] or not np.all(np.isfinite(draws)):
+    def fit(cls, draws, *, knots: int | None = None, scores: NormalScores | None = None,
+            **kwargs) -> "BlockMove | None":
+        """The move fitted to ``draws`` (n, ndim): the mean and covariance of their normal
+        scores, in the map ``scores`` if given (one already fitted to the same draws, such
+        as an :class:`IndependenceMove`'s) or else in their map with ``knots`` knots; None
+        where they define none."""
+        if scores is None and knots is None:
+            raise ValueError("a block move needs a normal-scores map or the knots to fit one")
+        draws = _usable(draws)
+        if draws is None:
             return None
         try:
-            scores = NormalScores.fit(draws, knots)
+            scores = scores if scores is not None else NormalScores.fit(draws, knots)
             z = scores.forward(draws)[0]
             return cls(z.mean(axis=0), np.cov(z, rowvar=False), scores, **kwargs)
         except (ValueError, np.linalg.LinAlgError):

@@ -178,24 +178,22 @@ class Adaptation:
         if not 0.0 <= self.wide < 1.0:
             raise ValueError(f"adaptation's wide share must lie in [0, 1), got {self.wide}")
 
-    def proposal(self, chain: np.ndarray, log_prob: np.ndarray) -> IndependenceMove | None:
-        """The move fitted to ``chain`` (steps, walkers, ndim; sampler coordinates) after
-        its :func:`transient` (from ``log_prob``, steps x walkers); None where fewer than
-        ``every // 2`` steps follow the transient or they define no proposal."""
+    def fit(self, chain: np.ndarray, log_prob: np.ndarray) -> tuple[IndependenceMove | None, BlockMove | None]:
+        """The moves fitted to ``chain`` (steps, walkers, ndim; sampler coordinates) after
+        its :func:`transient` (from ``log_prob``, steps x walkers): the independence move,
+        and with ``blocks`` the block move in the same normal-scores map (fitted once, to
+        the same draws). Each None where fewer than ``every // 2`` steps follow the
+        transient or the draws define none."""
         skip = transient(log_prob)
         if len(chain) - skip < self.every // 2:
-            return None
-        return IndependenceMove.fit(chain[skip:].reshape(-1, chain.shape[-1]), components=self.components,
-                                    knots=self.knots, dof=self.dof, scale=self.scale, wide=self.wide,
-                                    wide_scale=self.wide_scale)
-
-    def block_proposal(self, chain: np.ndarray, log_prob: np.ndarray) -> BlockMove | None:
-        """The block move fitted to the same steps as :meth:`proposal`; None without
-        ``blocks`` or where they define none."""
-        skip = transient(log_prob)
-        if self.blocks == 0.0 or len(chain) - skip < self.every // 2:
-            return None
-        return BlockMove.fit(chain[skip:].reshape(-1, chain.shape[-1]), knots=self.knots)
+            return None, None
+        draws = chain[skip:].reshape(-1, chain.shape[-1])
+        proposal = IndependenceMove.fit(draws, components=self.components, knots=self.knots, dof=self.dof,
+                                        scale=self.scale, wide=self.wide, wide_scale=self.wide_scale)
+        if self.blocks == 0.0:
+            return proposal, None
+        scores = proposal.scores if proposal is not None else None
+        return proposal, BlockMove.fit(draws, knots=self.knots, scores=scores)
 
     def moves(self, base: list, proposal: IndependenceMove | None, block: BlockMove | None = None) -> list:
         """``base`` moves, with ``proposal`` (and ``block``, in ``blocks`` of their share)
@@ -423,7 +421,7 @@ def run_sampler(
             at = (step // adaptation.every) * adaptation.every
             if at > 0 and at not in fitted:
                 chain, log_prob = backend.get_chain()[:at], backend.get_log_prob()[:at]
-                fitted[at] = (adaptation.proposal(chain, log_prob), adaptation.block_proposal(chain, log_prob))
+                fitted[at] = adaptation.fit(chain, log_prob)
             chunk_moves = adaptation.moves(moves, *fitted.get(at, (None, None)))
         return emcee.EnsembleSampler(nwalkers, model.ndim, _log_prob, pool=pool, moves=chunk_moves,
                                      backend=backend, blobs_dtype=float)
