@@ -63,6 +63,15 @@ def test_study_writes_tables_figures_and_report(study):
     assert "Joint model" in report and json.loads((out / "joint" / "fit.json").read_text())["iterations"] == 6
 
 
+def test_the_two_port_fits_come_first_with_each_records_seed(tmp_path):
+    records = {name: (tmp_path / f"{name}.csv", name[:2], 1.0) for name in ("A0_1Hz", "A2_1Hz", "B2_1Hz")}
+    plan = tiny_plan(settings=("A0", "A2", "B2"), comparison=(("A0", "A2"), (1.0,)))
+    jobs = plan.jobs(records, tmp_path)
+    assert [(j.key, j.seed) for j in jobs] == [
+        ("A0_1Hz/two-port", 0), ("A2_1Hz/two-port", 1), ("B2_1Hz/two-port", 2),
+        ("A0_1Hz/rigid", 0), ("A0_1Hz/linear", 0), ("A2_1Hz/rigid", 1), ("A2_1Hz/linear", 1)]
+
+
 def test_running_again_reuses_finished_fits(study):
     again = run_study(tiny_plan(), study.out, processes=1)
     assert [o["status"] for o in again.outcomes] == ["skipped"] * 4

@@ -94,7 +94,10 @@ class StudyPlan:
                 raise ValueError(f"{name} must be a positive whole number or None, got {value!r}")
 
     def jobs(self, records: dict, out: Path) -> list[FitJob]:
-        """Fit jobs for ``records`` (name -> (CSV path, setting, frequency))."""
+        """Fit jobs for ``records`` (name -> (CSV path, setting, frequency)): the two-port
+        fits first, in the records' order, then the comparison's. The two-port fits take
+        longest (more parameters, so more walkers and steps), and processes that take the
+        short ones last leave less of the machine idle while the last fit ends."""
         jobs = []
         comp_settings, comp_freqs = self.comparison
         for i, (name, (path, setting, freq)) in enumerate(sorted(records.items())):
@@ -104,7 +107,7 @@ class StudyPlan:
             for model in models:
                 jobs.append(FitJob(str(path), str(out / "fits" / model / name), model, self.steps,
                                    self.walkers, self.seed + i))
-        return jobs
+        return sorted(jobs, key=lambda job: job.model != "two-port")  # stable: records' order within each
 
 
 def quick_plan(**changes) -> StudyPlan:
