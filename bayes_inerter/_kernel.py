@@ -80,21 +80,43 @@ def _tables(Abar, h, J):
 
 @njit(cache=True)
 def _step(F, mode, level, z, out, n, n_in, T):
-    """out = z + F z over a time T, with F[mode, level] = the table transposed (column
-    sweeps: independent adds). Only the n state rows need the product: the inputs move
-    linearly (u += du T) and their slopes and the Coulomb forces stay. The tables are
-    indexed in place rather than through a view per call.
+    """out = z + F z over a time T, F = F[mode, level] (its n state rows). Only the n state
+    rows need the product: the inputs move linearly (u += du T) and their slopes and the
+    Coulomb forces stay. The tables are indexed in place rather than through a view per
+    call. Each row's sum runs in the order of j; five rows at a time (independent chains,
+    each z[j] loaded once for five rows; the paper's networks have n = 5).
 
     The small helpers are left to LLVM to inline: numba's own ``inline="always"`` made
     the simulation of a 10 s record 5-7 % slower (measured side by side)."""
     m = z.shape[0]
-    for i in range(m):
+    i = 0
+    while i + 5 <= n:
+        s0 = z[i]
+        s1 = z[i + 1]
+        s2 = z[i + 2]
+        s3 = z[i + 3]
+        s4 = z[i + 4]
+        for j in range(m):
+            zj = z[j]
+            s0 += F[mode, level, i, j] * zj
+            s1 += F[mode, level, i + 1, j] * zj
+            s2 += F[mode, level, i + 2, j] * zj
+            s3 += F[mode, level, i + 3, j] * zj
+            s4 += F[mode, level, i + 4, j] * zj
+        out[i] = s0
+        out[i + 1] = s1
+        out[i + 2] = s2
+        out[i + 3] = s3
+        out[i + 4] = s4
+        i += 5
+    while i < n:
+        s0 = z[i]
+        for j in range(m):
+            s0 += F[mode, level, i, j] * z[j]
+        out[i] = s0
+        i += 1
+    for i in range(n, m):
         out[i] = z[i]
-    for j in range(m):
-        zj = z[j]
-        if zj != 0.0:
-            for i in range(n):
-                out[i] += F[mode, level, j, i] * zj
     for q in range(n_in):
         out[n + q] += T * z[n + n_in + q]
 
@@ -202,11 +224,13 @@ def _bisect(F, mode, level, size, z, zc, zm, zn, n, n_in, tick, nc, node, R, VD,
     advanced = np.int64(0)
     for j in range(z.shape[0]):
         zc[j] = z[j]
+    # the guards at zc (va, da): computed once here, then carried along (they are those
+    # at zm whenever zc moves to zm)
+    _guards(zc, mode, nc, node, R, VD, RD, va, da)
     while size > 1:
         size >>= 1
         level += 1
         _step(F, mode, level, zc, zm, n, n_in, tick * size)
-        _guards(zc, mode, nc, node, R, VD, RD, va, da)
         _guards(zm, mode, nc, node, R, VD, RD, vb, db)
         if _crossed(va, da, vb, db, tick * size, mode, nc, sgn, f0):
             for j in range(z.shape[0]):
@@ -214,6 +238,9 @@ def _bisect(F, mode, level, size, z, zc, zm, zn, n, n_in, tick, nc, node, R, VD,
         else:
             for j in range(z.shape[0]):
                 zc[j] = zm[j]
+            for i in range(nc):
+                va[i] = vb[i]
+                da[i] = db[i]
             advanced += size
     return advanced
 
@@ -273,8 +300,8 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
     J = _levels(Abar, h)
     FULL = np.int64(1) << J
 
-    # Per mode: tables (transposed, see _step), derivative rows, output row.
-    F = np.zeros((n_modes, J + 1, m, m))
+    # Per mode: tables (their n state rows, see _step), derivative rows, output row.
+    F = np.zeros((n_modes, J + 1, n, m))
     VD = np.zeros((n_modes, max(nc, 1), m))
     RD = np.zeros((n_modes, max(nc, 1), m))
     OUT = np.zeros((n_modes, m))
@@ -290,7 +317,7 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
                 As[node[i], :] = 0.0
         T = _tables(As, h, J)
         for lev in range(J + 1):
-            F[mode, lev] = T[lev].T
+            F[mode, lev] = T[lev][:n]
         for i in range(nc):
             VD[mode, i] = As[node[i]]
             RD[mode, i] = R[i] @ As
@@ -320,6 +347,15 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
     if store:
         states[0] = z[:n]
 
+    # The current mode's level-0 table, copied into a small contiguous array at each mode
+    # change (a copy rather than the 4-d index in the fast path: about 5 % faster).
+    FS = np.empty((n, m))
+    cur = -1
+    # A sliding contact acon at out_node has VD[mode, acon] = OUT[mode] (both are
+    # As[out_node]), and at an interval's end da holds the guards at z, whichever path got
+    # there: the output is then da[acon], the very same sum (no second product).
+    acon = -1
+
     zn = np.empty(m)
     zc = np.empty(m)
     zm = np.empty(m)
@@ -328,6 +364,15 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
     vb = np.empty(max(nc, 1))
     db = np.empty(max(nc, 1))
     for k in range(K - 1):
+        if mode != cur:
+            cur = mode
+            acon = -1
+            for i in range(nc):
+                if node[i] == out_node and not (mode >> i) & 1:
+                    acon = i
+            for i in range(n):
+                for j in range(m):
+                    FS[i, j] = F[mode, 0, i, j]
         for q in range(n_in):
             z[n + q] = inputs[k, q]
             z[n + n_in + q] = (inputs[k + 1, q] - inputs[k, q]) / h
@@ -344,12 +389,34 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
         # Fast path, written out in the loop: the whole interval in one step, its guards,
         # and the cheap Hermite bound; the general loop below takes over only where the
         # bound fails (near the contacts' switches).
-        for i in range(m):
+        i = 0
+        while i + 5 <= n:
+            s0 = z[i]
+            s1 = z[i + 1]
+            s2 = z[i + 2]
+            s3 = z[i + 3]
+            s4 = z[i + 4]
+            for j in range(m):
+                zj = z[j]
+                s0 += FS[i, j] * zj
+                s1 += FS[i + 1, j] * zj
+                s2 += FS[i + 2, j] * zj
+                s3 += FS[i + 3, j] * zj
+                s4 += FS[i + 4, j] * zj
+            zn[i] = s0
+            zn[i + 1] = s1
+            zn[i + 2] = s2
+            zn[i + 3] = s3
+            zn[i + 4] = s4
+            i += 5
+        while i < n:
+            s0 = z[i]
+            for j in range(m):
+                s0 += FS[i, j] * z[j]
+            zn[i] = s0
+            i += 1
+        for i in range(n, m):
             zn[i] = z[i]
-        for j in range(m):
-            zj = z[j]
-            for i in range(n):
-                zn[i] += F[mode, 0, j, i] * zj
         for q in range(n_in):
             zn[n + q] += h * z[n + n_in + q]
         clear = True
@@ -418,7 +485,10 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             if events > max_events:
                 return accel, vel, states, STATUS_TOO_MANY_EVENTS, stats
             _guards(z, mode, nc, node, R, VD, RD, va, da)
-        accel[k + 1] = _dot2(OUT, mode, z)
+        if acon >= 0 and mode == cur:
+            accel[k + 1] = da[acon]
+        else:
+            accel[k + 1] = _dot2(OUT, mode, z)
         vel[k + 1] = z[out_node]
         if store:
             states[k + 1] = z[:n]

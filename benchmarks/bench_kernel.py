@@ -1,0 +1,143 @@
+"""Benchmark: the exact kernel ``bayes_inerter/_kernel.py`` against its earlier version.
+
+Run by hand from the project root: ``python benchmarks/bench_kernel.py``.
+
+The earlier version is read from git (``git show 4e20f7c3f24f:bayes_inerter/_kernel.py``, the
+kernel as it was before it was tuned (tables stored by rows and the current mode's level-0 table copied
+into a contiguous array at each mode change; the products summed five rows at a time in
+registers; the guards at the bisection's left end carried along, not recomputed; the
+output taken from a guard derivative when a sliding contact sits at the output node).
+The script needs the project's git history; the tuning changes no sum's order, so the outputs
+should agree exactly. On a few of the study's records (``results/full/records``), with the
+paper's parameters and random perturbations of them, the script
+
+- checks that both kernels give the same accel and vel (largest relative difference,
+  scaled by each output's largest magnitude) and the same stats (switches, bisections);
+- times them side by side in one run, alternating old and new call by call, and prints
+  the medians and the ratio median(old) / median(new) per record.
+
+The machine is shared and noisy: read the ratios, not the absolute times.
+"""
+
+import argparse
+import dataclasses
+import importlib.util
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bayes_inerter import _kernel as new_kernel
+from bayes_inerter.device import paper_parameters
+from bayes_inerter.models import build_network
+from bayes_inerter.network import compile_network
+from bayes_inerter.records import read_record
+from bayes_inerter.simulate import MAX_EVENTS_PER_STEP, _contacts, check_record
+
+ROOT = Path(__file__).resolve().parents[1]
+RECORDS = ROOT / "results" / "full" / "records"
+DEFAULT_RECORDS = ["A0_0.5Hz", "A1_1Hz", "A3_1Hz", "B2_1.5Hz", "B1_1Hz", "A2_1.5Hz"]
+
+
+#: The last commit with the kernel as it was before it was tuned.
+BEFORE = "4e20f7c3f24f"
+
+
+def _load_old_kernel():
+    """The kernel of commit :data:`BEFORE`, imported from a copy in a temporary folder
+    (numba caches its compiled code beside it there)."""
+    import subprocess
+    import tempfile
+
+    try:
+        source = subprocess.run(["git", "show", f"{BEFORE}:bayes_inerter/_kernel.py"], cwd=ROOT, check=True,
+                                capture_output=True, text=True).stdout
+    except (OSError, subprocess.CalledProcessError) as exc:
+        raise SystemExit(f"error: cannot read the earlier kernel from git ({exc}); run from a clone of the project")
+    path = Path(tempfile.mkdtemp(prefix="kernel_before_")) / "_kernel_before.py"
+    path.write_text(source)
+    spec = importlib.util.spec_from_file_location("_kernel_before", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def kernel_args(record, params):
+    """run_kernel's arguments for a record under the given parameters (as simulate does)."""
+    compiled = compile_network(build_network("reduced", params, "coulomb"))
+    A, B = compiled.state_space(viscous=True)
+    nodes, f0, mass = _contacts(compiled)
+    n = A.shape[0]
+    B = B.reshape(n, -1)
+    n_in = B.shape[1]
+    nc = len(nodes)
+    m = n + 2 * n_in + nc
+    Abar = np.zeros((m, m))
+    Abar[:n, :n] = A
+    Abar[:n, n : n + n_in] = B
+    for q in range(n_in):
+        Abar[n + q, n + n_in + q] = 1.0
+    for i, node in enumerate(nodes):
+        Abar[node, n + 2 * n_in + i] = -1.0 / mass[i]
+    _, (force,), h = check_record(record.time, record.force)
+    inputs = np.ascontiguousarray(force, dtype=float).reshape(-1, n_in)
+    return (Abar, n, n_in, nodes, f0, mass, inputs, h, np.zeros(n), 0, False, MAX_EVENTS_PER_STEP)
+
+
+def perturbed(params, rng, scale):
+    fields = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
+    return dataclasses.replace(params, **{k: v * (1.0 + scale * rng.standard_normal()) for k, v in fields.items()})
+
+
+def rel_diff(a, b):
+    scale = max(np.max(np.abs(a)), np.max(np.abs(b)), 1e-300)
+    return float(np.max(np.abs(a - b)) / scale)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--records", nargs="*", default=DEFAULT_RECORDS)
+    ap.add_argument("--repeats", type=int, default=30, help="timed calls of each kernel per record")
+    ap.add_argument("--perturbations", type=int, default=4, help="random parameter sets per record")
+    ap.add_argument("--scale", type=float, default=0.05, help="relative size of the perturbations")
+    ap.add_argument("--seed", type=int, default=1)
+    args = ap.parse_args()
+
+    old_kernel = _load_old_kernel()
+    rng = np.random.default_rng(args.seed)
+    worst = 0.0
+    mismatches = 0
+    ratios = []
+    for name in args.records:
+        record = read_record(RECORDS / f"{name}.csv")
+        base = paper_parameters(record.metadata["setting"])
+        sets = [base] + [perturbed(base, rng, args.scale) for _ in range(args.perturbations)]
+        for params in sets:
+            a = kernel_args(record, params)
+            ra = old_kernel.run_kernel(*a)
+            rb = new_kernel.run_kernel(*a)
+            d = max(rel_diff(ra[0], rb[0]), rel_diff(ra[1], rb[1]))
+            same = ra[3] == rb[3] and np.array_equal(ra[4], rb[4])
+            worst = max(worst, d)
+            mismatches += not same
+            print(f"{name:10s} check: max rel diff {d:.2e}, status {ra[3]}/{rb[3]}, "
+                  f"stats {ra[4].tolist()}/{rb[4].tolist()}{'' if same else '  MISMATCH'}")
+
+        a = kernel_args(record, base)
+        t_old, t_new = [], []
+        for _ in range(args.repeats):
+            for fn, store in ((old_kernel.run_kernel, t_old), (new_kernel.run_kernel, t_new)):
+                t0 = time.perf_counter()
+                fn(*a)
+                store.append(time.perf_counter() - t0)
+        mo, mn = statistics.median(t_old), statistics.median(t_new)
+        ratios.append(mo / mn)
+        print(f"{name:10s} timing ({args.repeats} alternating repeats): old {mo * 1e3:.3f} ms, "
+              f"new {mn * 1e3:.3f} ms, ratio old/new {mo / mn:.3f}")
+    print(f"largest output difference: {worst:.2e}; status or stats mismatches: {mismatches}; ratios old/new: "
+          f"{', '.join(f'{r:.3f}' for r in ratios)} (median {statistics.median(ratios):.3f})")
+
+
+if __name__ == "__main__":
+    main()
