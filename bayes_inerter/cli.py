@@ -38,6 +38,9 @@ def _number_type(convert, ok, requirement: str, noun: str = "number"):
 _positive_float = _number_type(float, lambda v: 0 < v < float("inf"), "a positive number")
 _non_negative_float = _number_type(float, lambda v: 0 <= v < float("inf"), "a non-negative number")
 _positive_int = _number_type(int, lambda v: v >= 1, "at least 1", "whole number")
+#: ``inference.checkpoint.WRITE_SECONDS``, written out for the same reason as the
+#: coordinates below; a test keeps the two equal.
+CHECKPOINT_SECONDS = 0.5
 #: ``inference.coordinates.COORDINATES``, written out so that the parser does not import
 #: the inference package (emcee, arviz) before it is needed; a test keeps the two equal.
 FIT_COORDINATES = ("impedance", "unconstrained", "physical")
@@ -162,6 +165,7 @@ def cmd_fit(args) -> int:
             seed=args.seed, fresh=args.fresh, processes=processes,
             likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=progress,
             coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
+            checkpoint_seconds=args.checkpoint_seconds,
         )
     finally:
         bar.close()
@@ -313,6 +317,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="where the walkers move (%(default)s; the outputs are the same parameters either way)")
     p.add_argument("--no-adaptation", action="store_true",
                    help="emcee's ensemble moves alone, without the independence move fitted to the chain")
+    p.add_argument("--checkpoint-seconds", type=_non_negative_float, default=CHECKPOINT_SECONDS,
+                   help="write the chain's steps at most this many seconds apart (%(default)s; 0: every step): "
+                        "a kill loses at most that much sampling")
     p.set_defaults(func=cmd_fit)
 
     p = sub.add_parser("study", help="posteriors of many records, theory against identification, a report")

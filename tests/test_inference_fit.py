@@ -6,6 +6,7 @@ import sys
 import time
 import warnings
 
+import emcee
 import h5py
 import numpy as np
 import pytest
@@ -109,6 +110,10 @@ def test_same_seed_same_summary(tmp_path, record_file):
 
 
 
+#: The kill tests stop runs at a step count they watch in chain.h5: they write every step.
+EVERY_STEP = ("--checkpoint-seconds", "0")
+
+
 def _run_until_killed(cmd, chain_file, at_least: int) -> None:
     """Start ``cmd`` and SIGKILL it once its checkpoint holds ``at_least`` steps."""
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -137,11 +142,24 @@ def test_resume_after_sigkill(tmp_path, record_file):
     """Killed part-way and run again: exactly the requested steps, earlier steps kept, and
     the same chain as a run that was never interrupted."""
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
+    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
            "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
     _run_until_killed(cmd, out / "chain.h5", 8)
     before = read_chain(out / "chain.h5")
     assert 7 <= len(before) < 40
+    _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
+
+
+def test_resume_after_sigkill_with_steps_held_between_writes(tmp_path, record_file):
+    """Written every 0.02 s rather than every step and killed: the steps held since the
+    last write are lost and taken again, and the finished chain is the uninterrupted one
+    (whose run writes at the default interval)."""
+    out = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
+           "--checkpoint-seconds", "0.02", "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
+    _run_until_killed(cmd, out / "chain.h5", 8)
+    before = read_chain(out / "chain.h5")
+    assert 1 <= len(before) < 40
     _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
 
 
@@ -150,7 +168,7 @@ def test_ctrl_c_on_worker_processes_ends_the_run_with_130_and_keeps_its_steps(tm
     run must stop (it used to wait for ever for a worker that died of it), say so with
     exit status 130, and leave a checkpoint that a second run continues."""
     out = tmp_path / "interrupted"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
+    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
            "--steps", "400", "--walkers", "24", "--processes", "2", "--seed", "3"]
     # a test run in the background of a non-interactive shell (as CI may be) inherits
     # SIGINT ignored, and Python then never turns it into KeyboardInterrupt: give the
@@ -182,7 +200,7 @@ def test_resume_after_sigkill_several_times(tmp_path, record_file):
     """Killed three times in a row at random steps and run again: exactly the requested
     steps, every earlier step kept, and the same chain as a run never interrupted."""
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
+    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
            "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
     chain_file = out / "chain.h5"
     before = None
@@ -202,7 +220,7 @@ def test_resume_after_many_kills_at_random_moments(tmp_path, record_file):
     after the run wrote a new step), run again each time: every intact step is kept and
     the finished chain is the uninterrupted one."""
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
+    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
            "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
     chain_file = out / "chain.h5"
     rng = np.random.default_rng(7)
@@ -339,6 +357,51 @@ def test_intact_checkpoint_continues(tmp_path, record_file, ten_steps):
     assert _fit(record_file, out, 10) == 0
     np.testing.assert_array_equal(_chain(out / "chain.h5"), ten_steps)
     np.testing.assert_array_equal(read_chain(out / "chain.h5"), ten_steps)
+
+
+def test_steps_held_between_writes_are_counted_read_and_lost_only_to_a_kill(tmp_path):
+    from bayes_inerter.inference.checkpoint import new_checkpoint, open_checkpoint
+
+    path = tmp_path / "chain.h5"
+    backend = new_checkpoint(path, nwalkers=4, ndim=2, attrs={"bayes_inerter_digest": "d"}, write_seconds=3600.0)
+    rng = np.random.default_rng(0)
+    states = [emcee.State(rng.normal(size=(4, 2)), log_prob=rng.normal(size=4), blobs=rng.normal(size=4),
+                          random_state=np.random.RandomState(k).get_state()) for k in range(8)]
+    backend.grow(8, states[0].blobs)
+    for state in states[:5]:
+        backend.save_step(state, np.ones(4, dtype=bool))
+    assert backend.iteration == 5 and steps_written(path) == 0  # taken, held, not yet written
+    np.testing.assert_array_equal(backend.get_chain(), [s.coords for s in states[:5]])  # a read writes them first
+    assert steps_written(path) == 5
+    assert backend.get_last_sample().random_state[1].tolist() == states[4].random_state[1].tolist()
+    for state in states[5:]:
+        backend.save_step(state, np.ones(4, dtype=bool))
+    assert backend.iteration == 8 and steps_written(path) == 5
+    del backend  # killed: the three steps held are lost, the five written are intact
+    opened = open_checkpoint(path, digest="d", nwalkers=4, ndim=2)
+    assert opened.steps == 5 and not opened.recovered
+    np.testing.assert_array_equal(read_chain(path), [s.coords for s in states[:5]])
+    # written every step with 0 seconds, and the twin brought up to date by flush
+    backend = new_checkpoint(tmp_path / "every.h5", nwalkers=4, ndim=2, attrs={}, write_seconds=0.0)
+    backend.grow(3, states[0].blobs)
+    for k, state in enumerate(states[:3]):
+        backend.save_step(state, np.ones(4, dtype=bool))
+        assert steps_written(tmp_path / "every.h5") == k + 1
+    backend.flush()
+    assert steps_written(tmp_path / "every.twin.h5") == 3
+    with pytest.raises(ValueError, match="non-negative"):
+        new_checkpoint(tmp_path / "bad.h5", nwalkers=4, ndim=2, attrs={}, write_seconds=-1.0)
+
+
+def test_checkpoint_interval_option(tmp_path, record_file, capsys):
+    from bayes_inerter.cli import CHECKPOINT_SECONDS
+    from bayes_inerter.inference.checkpoint import WRITE_SECONDS
+
+    assert CHECKPOINT_SECONDS == WRITE_SECONDS  # written out in the CLI so that parsing imports no emcee
+    with pytest.raises(SystemExit) as info:
+        main(["fit", str(record_file), "--out", str(tmp_path / "x"), "--checkpoint-seconds", "-1"])
+    assert info.value.code == 2 and "non-negative" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
 
 
 def test_unwritable_output_refused(tmp_path, record_file, capsys):

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..records.record import Record
+from .checkpoint import WRITE_SECONDS
 from .coordinates import default_coordinates
 from .model import LikelihoodSettings, PosteriorModel
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
@@ -99,12 +100,14 @@ def fit_record(
     plots: bool = True,
     coordinates: str = "impedance",
     adaptation: Adaptation | None = Adaptation(),
+    checkpoint_seconds: float = WRITE_SECONDS,
 ) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
     ``coordinates``: where the walkers move (``coordinates.COORDINATES``; the outputs are
     in the model's parameters whichever is used). ``adaptation``: the fitted independence
-    move (``sampler.Adaptation``; None: the ensemble moves alone).
+    move (``sampler.Adaptation``; None: the ensemble moves alone). ``checkpoint_seconds``:
+    the steps reach chain.h5 at most this far apart (0: every step; ``run_sampler``).
 
     Everything that can be checked is checked before sampling starts (record, masses,
     options, output folder); the folder is not touched if any check fails.
@@ -119,7 +122,7 @@ def fit_record(
     t0 = time.perf_counter()
     run = run_sampler(pm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, fresh=fresh,
                       processes=processes, convergence=convergence, progress=progress, coordinates=coords,
-                      adaptation=adaptation)
+                      adaptation=adaptation, checkpoint_seconds=checkpoint_seconds)
     t_sample = time.perf_counter() - t0
     sample = posterior_sample(pm, run)
     rows = summary_rows(sample)
