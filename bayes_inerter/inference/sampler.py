@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import emcee
 import numpy as np
 
-from .checkpoint import KERNEL_ATTR, CheckpointError, new_checkpoint, open_checkpoint
+from .checkpoint import KERNEL_ATTR, WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint
 from .coordinates import Coordinates, default_coordinates
 from .marginals import KNOTS
 from .model import PosteriorModel
@@ -326,9 +326,14 @@ def transient(log_prob: np.ndarray) -> int:
     return int(np.argmax(m >= ref - spread))
 
 
-def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None):
+def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None, rhat_if=None):
     """tau, R-hat and bulk ESS of the chain in theta (the reported parameters) after its
-    :func:`transient`, and the transient's steps; of its first ``upto`` steps if given."""
+    :func:`transient`, and the transient's steps; of its first ``upto`` steps if given.
+
+    ``rhat_if(steps after the transient, tau)``: where it says no, R-hat (inf) and ESS
+    (0) are not computed. arviz takes about half a second per thousand steps of a
+    single-record chain, a tenth of the sampling between two checks of a long chain,
+    and they decide nothing while the chain is still too short for its tau."""
     from .diagnostics import rhat_ess
 
     n = sampler.iteration if upto is None else upto
@@ -336,6 +341,8 @@ def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None):
     skip = min(transient(sampler.get_log_prob()[:n]), n // 2)
     with np.errstate(invalid="ignore", divide="ignore"):  # a parameter that never moved: tau NaN, handled below
         tau = emcee.autocorr.integrated_time(chain[skip:], tol=0)
+    if rhat_if is not None and not rhat_if(n - skip, tau):
+        return tau, np.full(len(tau), np.inf), np.zeros(len(tau)), skip
     burn = skip + (int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else (n - skip) // 2)
     rhat, ess = rhat_ess(chain[min(burn, n - 2):])
     return tau, rhat, ess, skip
@@ -367,6 +374,7 @@ def run_sampler(
     start=None,
     coordinates: str | Coordinates = "impedance",
     adaptation: Adaptation | None = Adaptation(),
+    checkpoint_seconds: float = WRITE_SECONDS,
 ) -> SamplerRun:
     """Sample the posterior of ``model`` into the HDF5 file ``checkpoint``.
 
@@ -389,6 +397,8 @@ def run_sampler(
         only in the coordinates it was written in.
     adaptation : the fitted independence move (:class:`Adaptation`); None: the ensemble
         moves alone.
+    checkpoint_seconds : steps are written to the checkpoint at most this many seconds
+        apart (``checkpoint.WRITE_SECONDS``; 0: every step); a kill loses at most that.
     """
     from pathlib import Path
 
@@ -396,15 +406,19 @@ def run_sampler(
     conv = convergence or Convergence()
     checkpoint = Path(checkpoint)
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
+    if not checkpoint_seconds >= 0:
+        raise ValueError(f"checkpoint interval must be a non-negative number of seconds, got {checkpoint_seconds}")
     coords = coordinates if isinstance(coordinates, Coordinates) else default_coordinates(model, coordinates)
     digest = record_digest(model, coords)
     kernel = adaptation.describe() if adaptation is not None else NO_ADAPTATION
     opened = open_checkpoint(checkpoint, digest=digest, nwalkers=nwalkers, ndim=model.ndim, fresh=fresh,
-                             kernel=kernel)
+                             kernel=kernel, write_seconds=checkpoint_seconds)
     recovered = opened.recovered if opened else ""
     if opened is None or opened.steps == 0:
-        backend, done = new_checkpoint(checkpoint, nwalkers=nwalkers, ndim=model.ndim, attrs={
-            "bayes_inerter_digest": digest, "parameter_names": ",".join(model.names), KERNEL_ATTR: kernel}), 0
+        attrs = {"bayes_inerter_digest": digest, "parameter_names": ",".join(model.names), KERNEL_ATTR: kernel}
+        backend = new_checkpoint(checkpoint, nwalkers=nwalkers, ndim=model.ndim, attrs=attrs,
+                                 write_seconds=checkpoint_seconds)
+        done = 0
     else:
         backend, done = opened.backend, opened.steps
     _MODEL, _COORDS = model, coords
@@ -484,7 +498,7 @@ def run_sampler(
         previous = None
         last = ((done - 1) // conv.check_every) * conv.check_every if done else 0
         if last > 0:
-            previous = _diagnostics(sampler, coords, conv, upto=last)[0]
+            previous = _diagnostics(sampler, coords, conv, upto=last, rhat_if=lambda *_: False)[0]
         check_now = done > 0 and done % conv.check_every == 0
         while True:
             chunk = 0 if check_now else min(conv.check_every - sampler.iteration % conv.check_every,
@@ -492,7 +506,9 @@ def run_sampler(
             check_now = False
             if chunk > 0:
                 advance(sampler.iteration + chunk, None)
-            tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
+            last_check = sampler.iteration >= conv.max_steps  # its message names R-hat and ESS too
+            tau, rhat, ess, skip = _diagnostics(
+                sampler, coords, conv, rhat_if=lambda n, t: last_check or _tau_settled(n, t, previous, conv))
             if _is_converged(sampler.iteration - skip, tau, previous, rhat, ess, conv):
                 return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used(), coords, skip, done)
             if sampler.iteration >= conv.max_steps:
@@ -510,8 +526,9 @@ def run_sampler(
             pass
 
 
-def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> bool:
-    """``iteration``: the chain's steps after its transient."""
+def _tau_settled(iteration, tau, previous, conv: Convergence) -> bool:
+    """The autocorrelation part of the rule: ``iteration`` (the chain's steps after its
+    transient) at least ``n_tau`` tau, and tau settled since the ``previous`` check."""
     if not np.all(np.isfinite(tau)):
         return False
     if iteration < conv.n_tau * np.max(tau):
@@ -522,6 +539,13 @@ def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> boo
         # be long enough for the last check's larger estimate
         if np.max((tau - previous) / previous) > conv.tau_rtol or iteration < conv.n_tau * np.max(previous):
             return False
+    return True
+
+
+def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> bool:
+    """``iteration``: the chain's steps after its transient."""
+    if not _tau_settled(iteration, tau, previous, conv):
+        return False
     return bool(np.nanmax(rhat) < conv.max_rhat and np.nanmin(ess) >= conv.min_ess)
 
 
