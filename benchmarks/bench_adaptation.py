@@ -49,14 +49,14 @@ def _run(job):
                       convergence=Convergence(max_steps=max_steps),
                       adaptation=Adaptation(**ADAPTATIONS[variant]) if variant in ADAPTATIONS else None)
     seconds = time.perf_counter() - t0
-    burn = run.transient + int(2 * np.max(run.tau))
+    burn = run.warmup + int(2 * np.max(run.tau))
     b = np.percentile(np.exp(run.chain(discard=burn)[..., pm.names.index("b")]), [3, 50, 97])
     truth = rec.metadata["true_parameters"]["b"]
     return {
         "record": f"{setting}_{freq:g}Hz", "variant": variant, "converged": run.converged,
         "steps": int(run.iteration), "walkers": run.sampler.nwalkers,
         "evaluations": int(run.iteration * run.sampler.nwalkers), "seconds": round(seconds, 1),
-        "transient": run.transient, "max_tau": round(float(np.max(run.tau)), 1),
+        "transient": run.transient, "warmup": run.warmup, "max_tau": round(float(np.max(run.tau)), 1),
         "slowest": pm.names[int(np.argmax(run.tau))],
         "acceptance": round(float(np.mean(run.sampler.acceptance_fraction)), 3),
         "b_3%": round(float(b[0]), 1), "b_50%": round(float(b[1]), 1), "b_97%": round(float(b[2]), 1),

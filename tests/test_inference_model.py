@@ -137,6 +137,9 @@ def test_convergence_settings_checked():
         Convergence(max_steps=0)
     with pytest.raises(ValueError, match="n_tau must be positive"):
         Convergence(n_tau=-1.0)
+    for share in (-0.1, 0.6):
+        with pytest.raises(ValueError, match="warmup"):
+            Convergence(warmup=share)
 
 
 def test_start_guess_finds_the_basin(record):

@@ -1,8 +1,9 @@
 """From a finished chain to arviz's InferenceData, a summary table and predictive draws.
 
-- burn-in: the chain's transient (``sampler.transient``: the steps before its walkers
-  reach equilibrium) and 2 x the largest autocorrelation time after it (or half the
-  chain if tau is not estimable); thinning: half the smallest tau;
+- burn-in: the chain's warm-up (``SamplerRun.warmup``: its transient, the steps before
+  its walkers reach equilibrium, or the convergence rule's warm-up share of it, whichever
+  is longer) and 2 x the largest autocorrelation time after it (or half the chain if tau
+  is not estimable); thinning: half the smallest tau;
 - the posterior (values in SI units, not logs) and phi, the fit accuracy, for every kept
   draw; sample_stats holds the log posterior;
 - for at most ``max_draws`` of those draws (further thinned): the pointwise
@@ -65,7 +66,7 @@ def posterior_sample(model: PosteriorModel, run) -> PosteriorSample:
     """Kept draws of a finished :class:`.sampler.SamplerRun` (in theta, whatever
     coordinates its walkers moved in)."""
     sampler, tau = run.sampler, run.tau
-    n, skip = sampler.iteration, run.transient
+    n, skip = sampler.iteration, run.warmup
     if np.all(np.isfinite(tau)) and skip + 2 * np.max(tau) < n - 10:
         burn = skip + int(2 * np.max(tau))
         thin = max(1, int(0.5 * np.min(tau)))

@@ -17,14 +17,16 @@ convergence, summaries) is in the model's parameters theta.
 Convergence (documented defaults, :class:`Convergence`): emcee's integrated
 autocorrelation time tau (``emcee.autocorr.integrated_time(tol=0)`` on the chain in
 theta, the reported parameters) per parameter, checked every
-``check_every`` steps, on the chain after its :func:`transient` (the steps before the
-walkers reach equilibrium, none for a chain that starts there); converged when that
-chain is longer than ``n_tau`` times the largest tau (and than ``n_tau`` times the last
-check's, if that was larger), tau grew by less than ``tau_rtol`` since the last check
-(a tau that still grows with the chain is underestimated), and, after discarding 2 tau
-more, R-hat < ``max_rhat`` and bulk ESS >= ``min_ess`` (arviz,
-treating walkers as chains: they are not independent, so R-hat here is a check that no
-walker is stuck apart from the others, not a proof). Or stops at ``max_steps``.
+``check_every`` steps, on the chain after its warm-up: its :func:`transient` (the steps
+before the walkers reach equilibrium, none for a chain that starts there) or its first
+``warmup`` share, whichever is longer; converged when the chain after the warm-up is
+longer than ``n_tau`` times the largest tau (and than ``n_tau`` times the last check's,
+if that was larger), tau grew by less than ``tau_rtol`` since the last check (a tau that
+still grows with the chain is underestimated), and, after discarding 2 tau more, R-hat
+< ``max_rhat`` and bulk ESS >= ``min_ess`` (arviz, treating walkers as chains: they are
+not independent, so R-hat here is a check that no walker is stuck apart from the
+others, not a proof). Or stops at ``max_steps``. The draws kept for the posterior
+(:func:`.results.posterior_sample`) are the same: after the warm-up and 2 tau more.
 
 Adaptation (documented defaults, :class:`Adaptation`): at every multiple of ``every``
 steps, a multivariate t (or a mixture of ``components`` t's, by EM) is fitted to the
@@ -65,6 +67,10 @@ DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1)
 #: The kernel a checkpoint records when the ensemble moves run alone (``adaptation=None``).
 NO_ADAPTATION = "ensemble moves alone (no adaptation)"
 
+#: Share of a chain left out as warm-up before its convergence is judged and its draws
+#: kept (:class:`Convergence`), unless its transient is longer.
+WARMUP = 1 / 3
+
 #: Share of the steps that jump along the nut's ridge (:class:`.moves.NutRidgeMove`)
 #: in models that have one; the other moves keep their proportions in the rest.
 RIDGE_WEIGHT = 0.2
@@ -102,6 +108,17 @@ class Convergence:
     chain stops on average 125 steps nearer the point where the rule first holds: the
     full study's 27-record joint chain (``results/joint-rerun``), checked again step by
     step from its checkpoint, meets the rule at 3,250 steps where it stopped at 3,500.
+
+    ``warmup`` (default :data:`WARMUP`, a third; 0 until 2026-11-25, when only the
+    transient was left out): the share of the chain left out before tau, R-hat and ESS
+    are computed, and from the kept draws. The fitted moves learn the posterior from the
+    chain itself, so its first several hundred steps mix several times slower than the
+    rest: on A3 at 1 Hz (5,000 steps, seed 0) tau over the whole chain was 81 steps at
+    4,250 and over its last two thirds 30 at 2,500, and tau taken over everything
+    counted that early stretch against the chain for as long as it ran. The chain kept
+    must still be 50 times its own tau, so a chain whose warm-up is longer than a third
+    waits until it is not (``benchmarks/bench_warmup.py`` replays both rules on the same
+    chains).
     """
 
     n_tau: float = 50.0
@@ -110,8 +127,12 @@ class Convergence:
     min_ess: float = 400.0
     check_every: int = 250
     max_steps: int = 20_000
+    warmup: float = WARMUP
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.warmup <= 0.5:
+            raise ValueError(f"convergence setting warmup (a share of the chain) must lie in [0, 0.5], "
+                             f"got {self.warmup}")
         for name in ("n_tau", "tau_rtol", "max_rhat", "min_ess"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"convergence setting {name} must be positive, got {getattr(self, name)}")
@@ -237,10 +258,13 @@ class SamplerRun:
     moves: tuple = ()
     #: where the walkers moved (``coordinates.describe()`` names them)
     coordinates: Coordinates | None = None
-    #: steps before the walkers reached equilibrium (:func:`transient`), left out of tau
+    #: steps before the walkers reached equilibrium (:func:`transient`)
     transient: int = 0
     #: steps the checkpoint held when this run began (0 for a new chain)
     resumed_at: int = 0
+    #: steps left out of tau, R-hat, ESS and the kept draws: the transient or the
+    #: convergence rule's warm-up share of the chain, whichever is longer
+    warmup: int = 0
 
     @property
     def iteration(self) -> int:
@@ -326,11 +350,24 @@ def transient(log_prob: np.ndarray) -> int:
     return int(np.argmax(m >= ref - spread))
 
 
-def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None, rhat_if=None):
-    """tau, R-hat and bulk ESS of the chain in theta (the reported parameters) after its
-    :func:`transient`, and the transient's steps; of its first ``upto`` steps if given.
+@dataclass(frozen=True)
+class _Check:
+    """One convergence check: tau, R-hat and ESS after the warm-up (in theta), the
+    warm-up's steps and the transient's among them."""
 
-    ``rhat_if(steps after the transient, tau)``: where it says no, R-hat (inf) and ESS
+    tau: np.ndarray
+    rhat: np.ndarray
+    ess: np.ndarray
+    warmup: int
+    transient: int
+
+
+def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None, rhat_if=None) -> _Check:
+    """tau, R-hat and bulk ESS of the chain in theta (the reported parameters) after its
+    warm-up (its :func:`transient`, at most half the chain, or ``conv.warmup`` of it,
+    whichever is longer); of its first ``upto`` steps if given.
+
+    ``rhat_if(steps after the warm-up, tau)``: where it says no, R-hat (inf) and ESS
     (0) are not computed. arviz takes about half a second per thousand steps of a
     single-record chain, a tenth of the sampling between two checks of a long chain,
     and they decide nothing while the chain is still too short for its tau."""
@@ -339,13 +376,14 @@ def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None, rh
     n = sampler.iteration if upto is None else upto
     chain = _theta_chain(sampler, coords)[:n]
     skip = min(transient(sampler.get_log_prob()[:n]), n // 2)
+    warm = max(skip, int(conv.warmup * n))
     with np.errstate(invalid="ignore", divide="ignore"):  # a parameter that never moved: tau NaN, handled below
-        tau = emcee.autocorr.integrated_time(chain[skip:], tol=0)
-    if rhat_if is not None and not rhat_if(n - skip, tau):
-        return tau, np.full(len(tau), np.inf), np.zeros(len(tau)), skip
-    burn = skip + (int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else (n - skip) // 2)
+        tau = emcee.autocorr.integrated_time(chain[warm:], tol=0)
+    if rhat_if is not None and not rhat_if(n - warm, tau):
+        return _Check(tau, np.full(len(tau), np.inf), np.zeros(len(tau)), warm, skip)
+    burn = warm + (int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else (n - warm) // 2)
     rhat, ess = rhat_ess(chain[min(burn, n - 2):])
-    return tau, rhat, ess, skip
+    return _Check(tau, rhat, ess, warm, skip)
 
 
 def check_run_options(ndim: int, nwalkers: int | None, steps: int | None) -> int:
@@ -482,14 +520,16 @@ def run_sampler(
                 backend.flush()
                 state = sampler.get_last_sample()
 
-        target = steps
-        tau = np.full(model.ndim, np.nan)
+        def finish(check: _Check, ok: bool) -> SamplerRun:
+            reason = "converged" if ok else _why_not(sampler.iteration, check, conv)
+            return SamplerRun(sampler, ok, check.tau, reason, start_theta, recovered, used(), coords,
+                              check.transient, done, check.warmup)
+
         if steps is not None:
-            advance(steps, target)
-            tau, rhat, ess, skip = _diagnostics(sampler, coords, conv)
-            ok = _is_converged(sampler.iteration - skip, tau, None, rhat, ess, conv)
-            reason = "converged" if ok else _why_not(sampler.iteration, skip, tau, rhat, ess, conv)
-            return SamplerRun(sampler, ok, tau, reason, start_theta, recovered, used(), coords, skip, done)
+            advance(steps, steps)
+            check = _diagnostics(sampler, coords, conv)
+            return finish(check, _is_converged(sampler.iteration - check.warmup, check.tau, None, check.rhat,
+                                               check.ess, conv))
         # Checks fall on multiples of check_every, so that a continued chain is checked
         # (and stops) where an uninterrupted run would be; a continued chain takes the
         # tau of that run's previous check from the stored chain, and one that stands
@@ -498,7 +538,7 @@ def run_sampler(
         previous = None
         last = ((done - 1) // conv.check_every) * conv.check_every if done else 0
         if last > 0:
-            previous = _diagnostics(sampler, coords, conv, upto=last, rhat_if=lambda *_: False)[0]
+            previous = _diagnostics(sampler, coords, conv, upto=last, rhat_if=lambda *_: False).tau
         check_now = done > 0 and done % conv.check_every == 0
         while True:
             chunk = 0 if check_now else min(conv.check_every - sampler.iteration % conv.check_every,
@@ -507,14 +547,13 @@ def run_sampler(
             if chunk > 0:
                 advance(sampler.iteration + chunk, None)
             last_check = sampler.iteration >= conv.max_steps  # its message names R-hat and ESS too
-            tau, rhat, ess, skip = _diagnostics(
+            check = _diagnostics(
                 sampler, coords, conv, rhat_if=lambda n, t: last_check or _tau_settled(n, t, previous, conv))
-            if _is_converged(sampler.iteration - skip, tau, previous, rhat, ess, conv):
-                return SamplerRun(sampler, True, tau, "converged", start_theta, recovered, used(), coords, skip, done)
+            if _is_converged(sampler.iteration - check.warmup, check.tau, previous, check.rhat, check.ess, conv):
+                return finish(check, True)
             if sampler.iteration >= conv.max_steps:
-                return SamplerRun(sampler, False, tau, _why_not(sampler.iteration, skip, tau, rhat, ess, conv),
-                                  start_theta, recovered, used(), coords, skip, done)
-            previous = tau
+                return finish(check, False)
+            previous = check.tau
     finally:
         if pool is not None:  # nothing is left to compute; after Ctrl-C a task may still be running
             pool.terminate()
@@ -528,7 +567,7 @@ def run_sampler(
 
 def _tau_settled(iteration, tau, previous, conv: Convergence) -> bool:
     """The autocorrelation part of the rule: ``iteration`` (the chain's steps after its
-    transient) at least ``n_tau`` tau, and tau settled since the ``previous`` check."""
+    warm-up) at least ``n_tau`` tau, and tau settled since the ``previous`` check."""
     if not np.all(np.isfinite(tau)):
         return False
     if iteration < conv.n_tau * np.max(tau):
@@ -543,18 +582,19 @@ def _tau_settled(iteration, tau, previous, conv: Convergence) -> bool:
 
 
 def _is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> bool:
-    """``iteration``: the chain's steps after its transient."""
+    """``iteration``: the chain's steps after its warm-up."""
     if not _tau_settled(iteration, tau, previous, conv):
         return False
     return bool(np.nanmax(rhat) < conv.max_rhat and np.nanmin(ess) >= conv.min_ess)
 
 
-def _why_not(iteration, skip, tau, rhat, ess, conv: Convergence) -> str:
+def _why_not(iteration, check: _Check, conv: Convergence) -> str:
+    tau, rhat, ess, skip = check.tau, check.rhat, check.ess, check.warmup
     parts = []
     if np.all(np.isfinite(tau)):
         need = conv.n_tau * np.max(tau)
         if iteration - skip < need:
-            after = f" after a transient of {skip}" if skip else ""
+            after = f" after a warm-up of {skip}" if skip else ""
             parts.append(f"chain of {iteration - skip} steps{after} is shorter than {conv.n_tau:g} tau = {need:.0f}")
     else:
         parts.append("autocorrelation time not estimable")
