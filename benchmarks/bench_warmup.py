@@ -11,7 +11,7 @@ each). ``--joint SETTINGS`` also samples the joint model of those settings' reco
 (``results/joint-mixing/blocks/start.npy``, the optimum reached from the full study's
 fits), on two processes. On each stored chain the convergence checks of
 ``run_sampler`` are replayed (every ``check_every`` steps, the package's own
-``_diagnostics`` and ``_is_converged``) under ``Convergence(warmup=share)`` for every
+``_check_chain`` and ``_is_converged``) under ``Convergence(warmup=share)`` for every
 share: the same chain, so the rules differ only in where they stop it. For each stop the
 row gives the warm-up, the largest tau, and b's mean and 94 % interval from the draws the
 fit would keep (after the warm-up and 2 tau more), beside b from the last half of the
@@ -35,28 +35,15 @@ from _table import record_arg, write_rows  # noqa: E402
 START = ROOT / "results" / "joint-mixing" / "blocks" / "start.npy"
 
 
-class _Stored:
-    """A chain in theta as ``sampler._diagnostics`` reads an emcee sampler."""
-
-    def __init__(self, chain, log_prob):
-        self.chain, self.lp, self.iteration = chain, log_prob, len(chain)
-
-    def get_chain(self, discard=0, thin=1):
-        return self.chain[discard::thin]
-
-    def get_log_prob(self, discard=0, thin=1):
-        return self.lp[discard::thin]
-
-
 def replay(chain, log_prob, conv):
     """(step, check) where ``run_sampler``'s open-ended loop would stop ``chain``
     (steps, walkers, ndim; theta) under ``conv``: its checks at every multiple of
     ``conv.check_every``, each against the one before; (None, last check) if none holds."""
-    from bayes_inerter.inference.sampler import _diagnostics, _is_converged, _tau_settled
+    from bayes_inerter.inference.sampler import _check_chain, _is_converged, _tau_settled
 
-    stored, previous, check = _Stored(chain, log_prob), None, None
+    previous, check = None, None
     for step in range(conv.check_every, len(chain) + 1, conv.check_every):
-        check = _diagnostics(stored, None, conv, upto=step,
+        check = _check_chain(chain[:step], log_prob[:step], conv,
                              rhat_if=lambda n, t: _tau_settled(n, t, previous, conv))
         if _is_converged(step - check.warmup, check.tau, previous, check.rhat, check.ess, conv):
             return step, check

@@ -76,21 +76,8 @@ def test_transient_is_none_for_a_chain_in_equilibrium_and_the_climb_for_one_that
     assert transient(still[:3]) == 0  # too short to say
 
 
-class _StoredChain:
-    """What ``sampler._diagnostics`` reads of an emcee sampler, for a chain made here."""
-
-    def __init__(self, chain, log_prob):
-        self.chain, self.lp, self.iteration = chain, log_prob, len(chain)
-
-    def get_chain(self, discard=0, thin=1):
-        return self.chain[discard::thin]
-
-    def get_log_prob(self, discard=0, thin=1):
-        return self.lp[discard::thin]
-
-
 def test_the_warm_up_share_leaves_a_slow_start_out_of_tau():
-    from bayes_inerter.inference.sampler import _diagnostics
+    from bayes_inerter.inference.sampler import _check_chain
 
     # 24 walkers in equilibrium from the start (no transient in the log posterior), whose
     # first 600 steps are a slow AR(1) (tau about 200) and the rest nearly independent
@@ -102,17 +89,17 @@ def test_the_warm_up_share_leaves_a_slow_start_out_of_tau():
     for i in range(1, steps):
         a = 0.99 if i < slow else 0.1
         x[i] = a * x[i - 1] + np.sqrt(1 - a * a) * rng.normal(size=(24, 1))
-    chain = _StoredChain(x, rng.normal(size=(steps, 24)))
-    whole = _diagnostics(chain, None, Convergence(warmup=0.0), rhat_if=lambda *_: False)
-    third = _diagnostics(chain, None, Convergence(warmup=1 / 3), rhat_if=lambda *_: False)
+    lp = rng.normal(size=(steps, 24))
+    whole = _check_chain(x, lp, Convergence(warmup=0.0), rhat_if=lambda *_: False)
+    third = _check_chain(x, lp, Convergence(warmup=1 / 3), rhat_if=lambda *_: False)
     assert whole.warmup == whole.transient <= 2 and third.warmup == steps // 3
     # the whole chain's tau carries the slow start: 50 of it are far more than the chain;
     # after the warm-up share (600 steps) tau is the fast part's, and 1,200 steps are plenty
     assert whole.tau[0] > 20 and steps - whole.warmup < 50 * whole.tau[0]
     assert third.tau[0] < 3 and steps - third.warmup > 50 * third.tau[0]
     # a transient longer than the share is left out instead (the climb of the test above)
-    climbing = chain.lp - np.r_[np.linspace(440.0, 0.0, 900), np.zeros(steps - 900)][:, None]
-    late = _diagnostics(_StoredChain(x, climbing), None, Convergence(warmup=1 / 3), rhat_if=lambda *_: False)
+    climbing = lp - np.r_[np.linspace(440.0, 0.0, 900), np.zeros(steps - 900)][:, None]
+    late = _check_chain(x, climbing, Convergence(warmup=1 / 3), rhat_if=lambda *_: False)
     assert late.warmup == late.transient and 800 <= late.warmup <= 900
 
 

@@ -363,9 +363,16 @@ class _Check:
 
 
 def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None, rhat_if=None) -> _Check:
-    """tau, R-hat and bulk ESS of the chain in theta (the reported parameters) after its
-    warm-up (its :func:`transient`, at most half the chain, or ``conv.warmup`` of it,
-    whichever is longer); of its first ``upto`` steps if given.
+    """:func:`_check_chain` of the sampler's chain in theta (the reported parameters), of
+    its first ``upto`` steps if given."""
+    n = sampler.iteration if upto is None else upto
+    return _check_chain(_theta_chain(sampler, coords)[:n], sampler.get_log_prob()[:n], conv, rhat_if)
+
+
+def _check_chain(chain: np.ndarray, log_prob: np.ndarray, conv: Convergence, rhat_if=None) -> _Check:
+    """tau, R-hat and bulk ESS of ``chain`` (steps, walkers, ndim) after its warm-up (its
+    :func:`transient` from ``log_prob``, at most half the chain, or ``conv.warmup`` of
+    it, whichever is longer).
 
     ``rhat_if(steps after the warm-up, tau)``: where it says no, R-hat (inf) and ESS
     (0) are not computed. arviz takes about half a second per thousand steps of a
@@ -373,9 +380,8 @@ def _diagnostics(sampler, coords, conv: Convergence, upto: int | None = None, rh
     and they decide nothing while the chain is still too short for its tau."""
     from .diagnostics import rhat_ess
 
-    n = sampler.iteration if upto is None else upto
-    chain = _theta_chain(sampler, coords)[:n]
-    skip = min(transient(sampler.get_log_prob()[:n]), n // 2)
+    n = len(chain)
+    skip = min(transient(log_prob), n // 2)
     warm = max(skip, int(conv.warmup * n))
     with np.errstate(invalid="ignore", divide="ignore"):  # a parameter that never moved: tau NaN, handled below
         tau = emcee.autocorr.integrated_time(chain[warm:], tol=0)

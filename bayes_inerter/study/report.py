@@ -11,6 +11,7 @@ from pathlib import Path
 
 from scipy import stats
 
+from ..inference.sampler import Convergence
 from .analysis import is_joint
 
 __all__ = ["write_report", "design_report", "calibration_report", "calibration_comparison", "NOT_IDENTIFIED"]
@@ -256,13 +257,14 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
               f"{', '.join(f'{f:g}' for f in plan.frequencies)} Hz; noise seed {plan.seed})")
     chains = (f"each chain {plan.steps} steps" if plan.steps else "each chain run until converged")
     lines += [f"Fitted: {source}; {len(outcomes)} posteriors ({chains}).", ""]
+    conv = Convergence()
+    criteria = (f"{conv.n_tau:g} autocorrelation times after a warm-up of {100 * conv.warmup:.0f} % of the chain, "
+                f"R-hat < {conv.max_rhat:g}, ESS >= {conv.min_ess:g}")
     if n_conv < len(done):
-        lines += [f"**Convergence: {n_conv} of {len(done)} chains met the convergence criteria (50 autocorrelation "
-                  "times, R-hat < 1.05, ESS >= 400). The others are not converged: read their intervals as "
-                  "indicative only.**", ""]
+        lines += [f"**Convergence: {n_conv} of {len(done)} chains met the convergence criteria ({criteria}). The "
+                  "others are not converged: read their intervals as indicative only.**", ""]
     else:
-        lines += [f"Convergence: all {len(done)} chains met the criteria (50 autocorrelation times, R-hat < 1.05, "
-                  "ESS >= 400).", ""]
+        lines += [f"Convergence: all {len(done)} chains met the criteria ({criteria}).", ""]
     if failed:
         lines += ["**Failed fits:** " + "; ".join(f"{o['key']}: {o.get('error', '')}" for o in failed), ""]
     if inert:
