@@ -65,6 +65,30 @@ def test_names_and_each_records_parameters(records):
     assert jm.log_prob(off)[0] < lp - 10
 
 
+def test_pooled_log_prob_is_the_log_prob_bit_for_bit(records):
+    from bayes_inerter.inference.joint import pooled_log_prob
+    from bayes_inerter.inference.optimize import local_optimum
+
+    jm = JointModel(records)
+    centres = [PosteriorModel(r).values(PosteriorModel(r).to_theta(paper_parameters(r.metadata["setting"]), 1.0, 0.3))
+               for r in records]
+    theta = jm.start(centres)
+    rng = np.random.default_rng(5)
+    points = [theta, theta + 0.05 * rng.normal(size=jm.ndim), np.full(jm.ndim, 1e9)]  # the last outside the prior
+    with pooled_log_prob(jm, 2) as pooled:
+        got = [pooled(t) for t in points]
+        searched = local_optimum(jm, theta, maxiter=40, log_prob=pooled)
+    for t, (lp, phi) in zip(points, got):
+        want = jm.log_prob(t)
+        assert lp == want[0] and (phi == want[1] or (math.isnan(phi) and math.isnan(want[1])))
+    assert got[2][0] == -math.inf
+    # the search takes the same path either way
+    plain = local_optimum(jm, theta, maxiter=40)
+    assert np.array_equal(searched[0], plain[0]) and searched[1] == plain[1]
+    with pooled_log_prob(jm, 1) as plain_lp:
+        assert plain_lp == jm.log_prob
+
+
 def test_refuses_what_it_cannot_use(records):
     with pytest.raises(ValueError, match="at least two"):
         JointModel(records[:1])

@@ -188,7 +188,7 @@ def fit_joint(
     below where the chain settles on the 27 records of the full study), so the walkers
     would otherwise spend their first hundreds of steps getting there.
     """
-    from .joint import JointModel
+    from .joint import JointModel, pooled_log_prob
     from .optimize import NM_RESTARTS, find_start, local_optimum
 
     out = Path(out)
@@ -204,7 +204,9 @@ def fit_joint(
         if given is None:
             rng = np.random.default_rng(seed)
             given = [part.values(find_start(part, rng)[0]) for part in jm.parts]
-        return local_optimum(jm, jm.start(given), restarts=NM_RESTARTS)
+        # Nelder-Mead takes one point at a time: its records are shared among the processes
+        with pooled_log_prob(jm, processes) as log_prob:
+            return local_optimum(jm, jm.start(given), restarts=NM_RESTARTS, log_prob=log_prob)
 
     run = run_sampler(jm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, processes=processes,
                       convergence=convergence, progress=progress, start=start, coordinates=coords,

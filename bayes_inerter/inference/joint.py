@@ -26,6 +26,7 @@ model. ``log_prob`` returns (log posterior, mean phi over the records).
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,7 +35,7 @@ from ..device import SETTINGS, apparent_inertance
 from .model import LikelihoodSettings, PosteriorModel
 from .priors import NOISE_PRIORS
 
-__all__ = ["JointModel", "ar1_marginal"]
+__all__ = ["JointModel", "ar1_marginal", "pooled_log_prob"]
 
 
 def ar1_marginal(residual: np.ndarray, rho: float) -> float:
@@ -138,19 +139,38 @@ class JointModel:
         lp = self.log_prior(theta)
         if not math.isfinite(lp):
             return -math.inf, math.nan
-        phis = []
+        return self.combine(lp, self.terms(theta, range(len(self.parts))))
+
+    def terms(self, theta, ks) -> list:
+        """Each record ``k`` in ``ks``: (its marginal log-likelihood, its phi) at theta, or
+        None where its simulation fails (then the rest are not computed). Records are
+        independent given theta, so they can be computed anywhere (:func:`pooled_log_prob`)
+        and added by :meth:`combine`."""
+        theta = np.asarray(theta, dtype=float)
         rho_ar1 = self.likelihood.residual == "ar1"
-        for k, part in enumerate(self.parts):
+        out = []
+        for k in ks:
+            part = self.parts[k]
             t = self.part_theta(theta, k)
             _, ll, sim = part.evaluate(t)
             if ll is None:
-                return -math.inf, math.nan
+                return out + [None]
             rho = float(t[-1]) if rho_ar1 else 0.0
-            lp += ar1_marginal(sim[part.grid] - part.observed, rho)
-            phis.append(part.phi(sim))
+            out.append((ar1_marginal(sim[part.grid] - part.observed, rho), part.phi(sim)))
+        return out
+
+    @staticmethod
+    def combine(log_prior: float, terms: list):
+        """(log posterior, mean phi) from the log prior and every record's :meth:`terms`,
+        added in the records' order (the same sum wherever the terms were computed)."""
+        if any(t is None for t in terms):
+            return -math.inf, math.nan
+        lp = log_prior
+        for ll, _ in terms:
+            lp += ll
         if not math.isfinite(lp):
             return -math.inf, math.nan
-        return lp, float(np.mean(phis))
+        return lp, float(np.mean([phi for _, phi in terms]))
 
     def start(self, medians: list[dict]) -> np.ndarray:
         """A starting theta from single-record posterior medians (one dict of sampled
@@ -175,3 +195,47 @@ class JointModel:
             theta.append(scale(n, vals))
         lo, hi = self.bounds().T
         return np.clip(np.array(theta), lo, hi)
+
+
+# The joint model for worker processes: set before the pool forks, so that only theta
+# and the records' indices are pickled per call.
+_POOLED: JointModel | None = None
+
+
+def _pooled_terms(args):
+    theta, ks = args
+    return _POOLED.terms(theta, ks)
+
+
+@contextmanager
+def pooled_log_prob(model: JointModel, processes: int):
+    """``model.log_prob`` with its records' terms computed on ``processes`` forked worker
+    processes, a share of the records each, for one point at a time (Nelder-Mead's start-up
+    search, where the walkers' own parallelism has nothing to share). The same numbers as
+    ``model.log_prob``, bit for bit: the terms are added in the records' order. With one
+    process, ``model.log_prob`` itself."""
+    global _POOLED
+    if processes <= 1:
+        yield model.log_prob
+        return
+    import multiprocessing
+    import signal
+
+    chunks = [ks.tolist() for ks in np.array_split(np.arange(len(model.parts)), processes) if len(ks)]
+    _POOLED = model
+    try:
+        # workers leave Ctrl-C to the parent, which ends them (as the sampler's do)
+        with multiprocessing.get_context("fork").Pool(
+                len(chunks), initializer=signal.signal, initargs=(signal.SIGINT, signal.SIG_IGN)) as pool:
+
+            def log_prob(theta):
+                theta = np.asarray(theta, dtype=float)
+                lp = model.log_prior(theta)
+                if not math.isfinite(lp):
+                    return -math.inf, math.nan
+                parts = pool.map(_pooled_terms, [(theta, ks) for ks in chunks])
+                return model.combine(lp, [t for chunk in parts for t in chunk])
+
+            yield log_prob
+    finally:
+        _POOLED = None

@@ -170,14 +170,17 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     return local_optimum(model, np.array(theta), restarts=NM_RESTARTS)
 
 
-def local_optimum(model: PosteriorModel, theta: np.ndarray, *, maxiter: int = NM_MAXITER, restarts: int = 0):
+def local_optimum(model: PosteriorModel, theta: np.ndarray, *, maxiter: int = NM_MAXITER, restarts: int = 0,
+                  log_prob=None):
     """(theta, log posterior) of the optimum Nelder-Mead reaches from ``theta`` (or
     ``theta`` itself if it finds nothing better). With ``restarts`` > 0 it starts again
     from its result, with a fresh simplex, while a pass gains more than
-    :data:`RESTART_GAIN` nats, at most ``restarts`` more passes."""
+    :data:`RESTART_GAIN` nats, at most ``restarts`` more passes. ``log_prob``: the same
+    function as ``model.log_prob`` computed elsewhere (``joint.pooled_log_prob``)."""
+    log_prob = log_prob or model.log_prob
 
     def neg(x):
-        lp, _ = model.log_prob(x)
+        lp, _ = log_prob(x)
         return -lp if math.isfinite(lp) else _BAD
 
     best = np.asarray(theta, dtype=float)
@@ -189,7 +192,7 @@ def local_optimum(model: PosteriorModel, theta: np.ndarray, *, maxiter: int = NM
             best, f_best = res.x, float(res.fun)
         if not gain > RESTART_GAIN:
             break
-    return best, model.log_prob(best)[0]
+    return best, log_prob(best)[0]
 
 
 #: Initial walkers whose log posterior falls more than this many sd of a chi-square's
