@@ -91,11 +91,7 @@ def _record_chain(job):
 
     item, steps, seed, folder = job
     setting, freq = record_arg(item)
-    try:
-        rec = paper_record(setting, freq, seed=0)
-    except ValueError as exc:
-        sys.exit(f"error: --record {item!r} is not a record of the paper grid ({exc})")
-    pm = PosteriorModel(rec)
+    pm = PosteriorModel(paper_record(setting, freq, seed=0))  # checked in main() before any sampling
     start = find_start(pm, np.random.default_rng(seed))
     t0 = time.perf_counter()
     run = run_sampler(pm, Path(folder) / f"{setting}_{freq:g}.h5", steps=steps, seed=seed, start=start, fresh=True)
@@ -138,8 +134,13 @@ def main():
     if any(not 0 <= s <= 0.5 for s in args.shares):
         sys.exit("error: --shares must lie in [0, 0.5]")
     items = args.record or ["A0:1", "A3:1", "A6:0.5", "B2:1.5"]
-    for item in items:
-        record_arg(item)  # a bad name ends here, before any sampling
+    from bayes_inerter.records.generator import paper_record
+
+    for item in items:  # a bad name ends here, before any sampling
+        try:
+            paper_record(*record_arg(item), seed=0)
+        except ValueError as exc:
+            sys.exit(f"error: --record {item!r} is not a record of the paper grid ({exc})")
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         with get_context("fork").Pool(2) as pool:

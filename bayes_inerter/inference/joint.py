@@ -221,7 +221,10 @@ def pooled_log_prob(model: JointModel, processes: int):
     import multiprocessing
     import signal
 
-    chunks = [ks.tolist() for ks in np.array_split(np.arange(len(model.parts)), processes) if len(ks)]
+    n = len(model.parts)
+    # every processes-th record to each worker: neighbours in the records' order (one
+    # setting's records, alike in cost) go to different workers
+    chunks = [list(range(i, n, processes)) for i in range(min(processes, n))]
     _POOLED = model
     try:
         # workers leave Ctrl-C to the parent, which ends them (as the sampler's do)
@@ -234,7 +237,13 @@ def pooled_log_prob(model: JointModel, processes: int):
                 if not math.isfinite(lp):
                     return -math.inf, math.nan
                 parts = pool.map(_pooled_terms, [(theta, ks) for ks in chunks])
-                return model.combine(lp, [t for chunk in parts for t in chunk])
+                if any(len(terms) < len(ks) or terms[-1] is None for terms, ks in zip(parts, chunks)):
+                    return -math.inf, math.nan  # a record's simulation failed
+                terms = [None] * n
+                for ks, got in zip(chunks, parts):
+                    for k, t in zip(ks, got):
+                        terms[k] = t
+                return model.combine(lp, terms)
 
             yield log_prob
     finally:
