@@ -10,9 +10,10 @@ Run by hand after a study: ``python benchmarks/bench_study.py [results/full]``.
 2. Measured here, side by side on one of the study's records: one log-probability
    evaluation against one simulation (medians of 30): the simulator's share of the
    sampler's time.
-3. Projected: each chain needs 50 times its largest autocorrelation time to meet the
-   convergence criteria; the sampling time scaled to that length, summed, over the
-   study's worker processes, against the 30-minute target. A projection from tau
+3. Projected: each chain needs 50 times its largest autocorrelation time after its
+   warm-up (a third of the chain, or its transient) to meet the convergence criteria;
+   the sampling time scaled to that length, summed, over the study's worker processes,
+   against the 30-minute target. A projection from tau
    estimated on unconverged chains (which underestimates it), not a measurement.
 
 The machine is shared and noisy: read the ratios.
@@ -27,6 +28,7 @@ import numpy as np
 from _timing import median_time
 
 from bayes_inerter import simulate
+from bayes_inerter.inference import Convergence
 from bayes_inerter.inference.model import PosteriorModel
 from bayes_inerter.records import read_record
 
@@ -70,16 +72,24 @@ def main():
         print(f"2. {rec_path.name}: log_prob {1e3 * t_lp:.2f} ms, simulate {1e3 * t_sim:.2f} ms "
               f"(simulator share {t_sim / t_lp:.2f})")
 
+    conv_rule = Convergence()
+
+    def rule_steps(f, tau):
+        """Steps the convergence rule needs at this tau: ``n_tau`` tau after the warm-up,
+        which is the transient or the rule's share of the chain, whichever is longer."""
+        return max(conv_rule.n_tau * tau / (1.0 - conv_rule.warmup), f.get("transient", 0) + conv_rule.n_tau * tau)
+
     need = []
     for f in fits:
         tau = [t for t in f["tau"].values() if np.isfinite(t)]
         it = int(f["iterations"])
-        steps = max(50 * max(tau), it) if tau else float("nan")
+        steps = max(rule_steps(f, max(tau)), it) if tau else float("nan")
         need.append(sampling(f) * steps / timed_steps(f) if timed_steps(f) else float("nan"))
     proj = np.nansum(need) / procs + sec.get("analysis_and_report", 0.0)
     conv = sum(bool(f["converged"]) for f in fits)
-    print(f"3. converged chains: {conv} of {len(fits)}. Projected wall time with every chain at 50 tau "
-          f"(single-record fits only): {proj / 60:.0f} min, {proj / TARGET_S:.1f} x the 30-minute target")
+    print(f"3. converged chains: {conv} of {len(fits)}. Projected wall time with every chain as long as the rule "
+          f"needs ({conv_rule.n_tau:g} tau after a warm-up of {100 * conv_rule.warmup:.0f} %; single-record fits "
+          f"only): {proj / 60:.0f} min, {proj / TARGET_S:.1f} x the 30-minute target")
     if (out / "joint" / "fit.json").exists():
         j = json.loads((out / "joint" / "fit.json").read_text())
         tau = max(t for t in j["tau"].values() if np.isfinite(t))
@@ -89,7 +99,7 @@ def main():
                   "(its runs were stopped before writing fit.json)")
         else:
             print(f"   joint model: {j['iterations']} steps, {n} of them timed in {t:.0f} s, largest tau {tau:.0f}: "
-                  f"50 tau would take {t * 50 * tau / n / 60:.0f} min")
+                  f"the rule's {rule_steps(j, tau):.0f} steps would take {t * rule_steps(j, tau) / n / 60:.0f} min")
 
 
 if __name__ == "__main__":
