@@ -20,6 +20,26 @@ class CliError(Exception):
     """An error reported as one line on stderr with exit status 1."""
 
 
+#: Set by Ctrl-C (:func:`_on_sigint`) for the rest of the command.
+_INTERRUPTED = False
+
+
+def _on_sigint(signum, frame):
+    """Ctrl-C: remembered, then raised as KeyboardInterrupt. Python drops an exception
+    raised while it runs a weakref callback or a ``__del__`` ("Exception ignored in ..."):
+    a fit on two processes, interrupted there, once ran on to its last step and exit
+    status 0. The commands' per-step callbacks raise it again (:func:`_check_interrupt`)."""
+    global _INTERRUPTED
+    _INTERRUPTED = True
+    raise KeyboardInterrupt
+
+
+def _check_interrupt() -> None:
+    """Raise KeyboardInterrupt if Ctrl-C came, even if its first raise was dropped."""
+    if _INTERRUPTED:
+        raise KeyboardInterrupt
+
+
 def _number_type(convert, ok, requirement: str, noun: str = "number"):
     """An argparse type: ``convert`` the text, then demand ``ok(value)``."""
 
@@ -154,6 +174,7 @@ def cmd_fit(args) -> int:
     bar = tqdm(total=args.steps, desc="sampling", unit="step", file=sys.stderr, disable=None)
 
     def progress(iteration, target):
+        _check_interrupt()
         bar.total = target
         bar.n = iteration
         bar.refresh()
@@ -231,6 +252,7 @@ def cmd_study(args) -> int:
         bar.refresh()
 
     def on_done(outcome):
+        _check_interrupt()
         bar.update(1)
         if outcome["status"] == "failed":
             bar.write(f"failed: {outcome['key']}: {outcome.get('error', '')}", file=sys.stderr)
@@ -238,6 +260,7 @@ def cmd_study(args) -> int:
     joint_bar = []
 
     def on_joint_step(iteration, target):
+        _check_interrupt()
         if not joint_bar:
             bar.close()
             joint_bar.append(tqdm(total=target, desc="joint model", unit="step", file=sys.stderr, disable=None))
@@ -347,16 +370,33 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    import signal
+    import threading
+
+    global _INTERRUPTED
     parser = build_parser()
     args = parser.parse_args(argv)
+    _INTERRUPTED = False
+    # Ctrl-C's own handler, where Python's default one is in place (not where SIGINT is
+    # ignored, as in a background job, nor off the main thread); restored on the way out
+    previous = signal.getsignal(signal.SIGINT)
+    ours = previous is signal.default_int_handler and threading.current_thread() is threading.main_thread()
+    if ours:
+        signal.signal(signal.SIGINT, _on_sigint)
     try:
-        return args.func(args)
+        code = args.func(args)
+        if _INTERRUPTED:  # came where it could only be dropped, and nothing asked again
+            raise KeyboardInterrupt
+        return code
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except (CliError, ValueError, OSError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_FAIL
+    finally:
+        if ours:
+            signal.signal(signal.SIGINT, previous)
 
 
 if __name__ == "__main__":

@@ -92,3 +92,50 @@ def test_demo(tmp_path, capsys):
         assert (tmp_path / name).exists()
     rows = (tmp_path / "demo_phi.csv").read_text().splitlines()
     assert rows[0] == "network,phi" and len(rows) == 4
+
+
+def _drop_a_ctrl_c(monkeypatch):
+    """Ctrl-C's handler run where Python drops what it raises: in a weakref callback (a
+    fit on two processes was once interrupted there and ran on to exit status 0)."""
+    import gc
+    import signal
+    import weakref
+
+    from bayes_inerter import cli
+
+    class Thing:
+        pass
+
+    monkeypatch.setattr(sys, "unraisablehook", lambda unraisable: None)  # Python's report of the drop
+    thing = Thing()
+    weakref.finalize(thing, cli._on_sigint, signal.SIGINT, None)
+    del thing
+    gc.collect()
+
+
+def test_a_dropped_ctrl_c_is_raised_again_at_the_next_step(monkeypatch):
+    from bayes_inerter import cli
+
+    monkeypatch.setattr(cli, "_INTERRUPTED", False)
+    cli._check_interrupt()  # nothing came: nothing raised
+    _drop_a_ctrl_c(monkeypatch)  # no KeyboardInterrupt reaches here ...
+    with pytest.raises(KeyboardInterrupt):
+        cli._check_interrupt()  # ... but the next step's callback raises it
+
+
+def test_a_command_that_ends_after_a_dropped_ctrl_c_exits_130(monkeypatch, capsys):
+    import signal
+
+    from bayes_inerter import cli
+
+    def command(args):
+        _drop_a_ctrl_c(monkeypatch)
+        return 0
+
+    monkeypatch.setattr(cli, "cmd_inspect", command)
+    before = signal.getsignal(signal.SIGINT)
+    assert main(["inspect", "any.csv"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert signal.getsignal(signal.SIGINT) is before  # the handler is put back
+    monkeypatch.setattr(cli, "cmd_inspect", lambda args: 0)
+    assert main(["inspect", "any.csv"]) == 0  # the next command starts afresh
