@@ -391,6 +391,7 @@ def test_steps_held_between_writes_are_counted_read_and_lost_only_to_a_kill(tmp_
     assert steps_written(tmp_path / "every.twin.h5") == 3
     with pytest.raises(ValueError, match="non-negative"):
         new_checkpoint(tmp_path / "bad.h5", nwalkers=4, ndim=2, attrs={}, write_seconds=-1.0)
+    assert not (tmp_path / "bad.h5").exists()  # refused before any file is made
 
 
 def test_checkpoint_interval_option(tmp_path, record_file, capsys):

@@ -40,7 +40,7 @@ import emcee
 import numpy as np
 
 __all__ = ["CheckpointError", "Checkpoint", "open_checkpoint", "new_checkpoint", "read_chain", "steps_written",
-           "twin_path", "WRITE_SECONDS"]
+           "twin_path", "WRITE_SECONDS", "check_write_seconds"]
 
 GROUP = "mcmc"
 _SEAL = "bayes_inerter_seal"
@@ -94,6 +94,13 @@ TWIN_EVERY = 10
 WRITE_SECONDS = 0.5
 
 
+def check_write_seconds(seconds: float) -> float:
+    """``seconds`` as the interval between writes (:data:`WRITE_SECONDS`), or ValueError."""
+    if not seconds >= 0:
+        raise ValueError(f"checkpoint write interval must be a non-negative number of seconds, got {seconds}")
+    return float(seconds)
+
+
 class TwinBackend(_Backend):
     """Writes and seals the steps in its own file in one open, at most ``write_seconds``
     apart (every step where steps take longer), and the same steps in the twin file every
@@ -101,12 +108,10 @@ class TwinBackend(_Backend):
     holds."""
 
     def __init__(self, filename, twin_every: int = TWIN_EVERY, write_seconds: float = WRITE_SECONDS, **kwargs):
-        if not write_seconds >= 0:
-            raise ValueError(f"checkpoint write interval must be a non-negative number of seconds, got {write_seconds}")
+        self.write_seconds = check_write_seconds(write_seconds)
         super().__init__(str(filename), name=GROUP, **kwargs)
         self.twin = _Backend(str(twin_path(filename)), name=GROUP, **kwargs)
         self.twin_every = twin_every
-        self.write_seconds = float(write_seconds)
         self._held = []  # steps taken and not yet written to chain.h5
         self._last_write = time.monotonic()
         self._pending = []  # steps written to chain.h5 and not yet to the twin
@@ -342,7 +347,9 @@ def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool 
     one belongs to another record, model or settings, or has another shape, or (with
     ``kernel``) was sampled with another kernel than ``kernel`` (its :data:`KERNEL_ATTR`;
     a checkpoint written before the attribute was kept says nothing and is continued).
+    ``write_seconds`` is checked before any file is touched.
     """
+    check_write_seconds(write_seconds)
     path = Path(path)
     twin = twin_path(path)
     if fresh:
@@ -393,7 +400,9 @@ def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool 
 
 def new_checkpoint(path, *, nwalkers: int, ndim: int, attrs: dict,
                    write_seconds: float = WRITE_SECONDS) -> TwinBackend:
-    """Make both files of a new, empty checkpoint; each appears whole or not at all."""
+    """Make both files of a new, empty checkpoint; each appears whole or not at all (none
+    for a bad ``write_seconds``)."""
+    check_write_seconds(write_seconds)
     path = Path(path)
     tmp = path.with_name(path.name + ".new")
     tmp.unlink(missing_ok=True)

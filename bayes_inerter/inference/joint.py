@@ -236,14 +236,11 @@ def pooled_log_prob(model: JointModel, processes: int):
                 lp = model.log_prior(theta)
                 if not math.isfinite(lp):
                     return -math.inf, math.nan
-                parts = pool.map(_pooled_terms, [(theta, ks) for ks in chunks])
-                if any(len(terms) < len(ks) or terms[-1] is None for terms, ks in zip(parts, chunks)):
-                    return -math.inf, math.nan  # a record's simulation failed
-                terms = [None] * n
-                for ks, got in zip(chunks, parts):
+                terms = [None] * n  # a record whose simulation failed, or after it, stays None
+                for ks, got in zip(chunks, pool.map(_pooled_terms, [(theta, ks) for ks in chunks])):
                     for k, t in zip(ks, got):
                         terms[k] = t
-                return model.combine(lp, terms)
+                return model.combine(lp, terms)  # -inf where any is None
 
             yield log_prob
     finally:

@@ -450,8 +450,6 @@ def run_sampler(
     conv = convergence or Convergence()
     checkpoint = Path(checkpoint)
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
-    if not checkpoint_seconds >= 0:
-        raise ValueError(f"checkpoint interval must be a non-negative number of seconds, got {checkpoint_seconds}")
     coords = coordinates if isinstance(coordinates, Coordinates) else default_coordinates(model, coordinates)
     digest = record_digest(model, coords)
     kernel = adaptation.describe() if adaptation is not None else NO_ADAPTATION
