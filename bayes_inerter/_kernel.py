@@ -268,8 +268,117 @@ def _switch(z, mode, nc, node, R, f0, sgn, wcol):
 
 
 @njit(cache=True)
+def _setup(Abar, n, n_in, node, mass, h, out_node):
+    """Per mode: the tables' n state rows (see _step), the guards' derivative rows VD and
+    RD, the output row OUT; and the stuck contacts' holding-force rows R.
+    Returns (J, F, VD, RD, OUT, R)."""
+    m = Abar.shape[0]
+    nc = node.shape[0]
+    wcol = n + 2 * n_in
+    n_modes = 1 << nc
+    J = _levels(Abar, h)
+    F = np.zeros((n_modes, J + 1, n, m))
+    VD = np.zeros((n_modes, max(nc, 1), m))
+    RD = np.zeros((n_modes, max(nc, 1), m))
+    OUT = np.zeros((n_modes, m))
+    R = np.zeros((max(nc, 1), m))
+    for i in range(nc):
+        R[i] = mass[i] * Abar[node[i]]
+        for q in range(nc):
+            R[i, wcol + q] = 0.0
+    for mode in range(n_modes):
+        As = Abar.copy()
+        for i in range(nc):
+            if (mode >> i) & 1:
+                As[node[i], :] = 0.0
+        T = _tables(As, h, J)
+        for lev in range(J + 1):
+            F[mode, lev] = T[lev][:n]
+        for i in range(nc):
+            VD[mode, i] = As[node[i]]
+            RD[mode, i] = R[i] @ As
+        OUT[mode] = As[out_node]
+    return J, F, VD, RD, OUT, R
+
+
+@njit(cache=True)
+def _start(z_init, inputs, n, n_in, m, node, R, f0):
+    """The augmented state at the first sample, the sliding contacts' signs and the mode:
+    contacts at rest stick if they can. Returns (z, sgn, mode)."""
+    nc = node.shape[0]
+    wcol = n + 2 * n_in
+    z = np.zeros(m)
+    z[:n] = z_init
+    for q in range(n_in):
+        z[n + q] = inputs[0, q]
+    sgn = np.ones(max(nc, 1))
+    mode = 0
+    for i in range(nc):
+        v = z[node[i]]
+        if v == 0.0:
+            mode |= 1 << i
+        else:
+            sgn[i] = 1.0 if v > 0 else -1.0
+            z[wcol + i] = sgn[i] * f0[i]
+    mode = _switch(z, mode, nc, node, R, f0, sgn, wcol)
+    return z, sgn, mode
+
+
+@njit(cache=True)
+def _events(F, mode, J, h, z, zn, zc, zm, n, n_in, node, R, VD, RD, va, da, vb, db, sgn, f0, stats, max_events):
+    """One sample interval from z (guards va, da at z) the general way: dyadic steps, each
+    checked by the exact Hermite test, a bisection where a guard is crossed, the contact
+    switched, and on in the new mode. z, va, da, sgn end at the interval's end.
+    Returns (mode, ok); not ok after more than max_events switches."""
+    nc = node.shape[0]
+    wcol = n + 2 * n_in
+    FULL = np.int64(1) << J
+    pos = np.int64(0)
+    events = 0
+    while pos < FULL:
+        if pos == 0:
+            tz = J
+        else:
+            tz = 0
+            while (pos >> tz) & 1 == 0:
+                tz += 1
+        size = np.int64(1) << tz
+        level = J - tz
+        _step(F, mode, level, z, zn, n, n_in, h * size / FULL)
+        _guards(zn, mode, nc, node, R, VD, RD, vb, db)
+        if not _crossed(va, da, vb, db, h * size / FULL, mode, nc, sgn, f0):
+            # copy, not swap: rebinding arrays costs atomic reference counting in numba
+            for j in range(z.shape[0]):
+                z[j] = zn[j]
+            for i in range(nc):
+                va[i] = vb[i]
+                da[i] = db[i]
+            pos += size
+            continue
+        # Bisect for the first crossing inside [pos, pos + size] (out of line: the
+        # rare path, kept out of the hot loop's code).
+        stats[1] += 1
+        pos += _bisect(F, mode, level, size, z, zc, zm, zn, n, n_in, h / FULL, nc, node, R, VD, RD,
+                       va, da, vb, db, sgn, f0)
+        pos += 1
+        z[:] = zn
+        new_mode = _switch(z, mode, nc, node, R, f0, sgn, wcol)
+        if new_mode != mode:
+            stats[0] += 1
+            mode = new_mode
+        # a switch, or none due: a false alarm of the Hermite test, or a switch that left
+        # the mode unchanged (a reversal); count all to bound the work
+        events += 1
+        if events > max_events:
+            return mode, False
+        _guards(z, mode, nc, node, R, VD, RD, va, da)
+    return mode, True
+
+
+@njit(cache=True)
 def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store, max_events):
-    """Simulate; see module docstring.
+    """Simulate; see module docstring. The general kernel, for any sizes; ``kernel_for``
+    gives one specialised to a network's sizes, with the same numbers.
 
     Parameters
     ----------
@@ -295,53 +404,13 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
     m = Abar.shape[0]
     nc = node.shape[0]
     K = inputs.shape[0]
-    wcol = n + 2 * n_in
-    n_modes = 1 << nc
-    J = _levels(Abar, h)
-    FULL = np.int64(1) << J
-
-    # Per mode: tables (their n state rows, see _step), derivative rows, output row.
-    F = np.zeros((n_modes, J + 1, n, m))
-    VD = np.zeros((n_modes, max(nc, 1), m))
-    RD = np.zeros((n_modes, max(nc, 1), m))
-    OUT = np.zeros((n_modes, m))
-    R = np.zeros((max(nc, 1), m))
-    for i in range(nc):
-        R[i] = mass[i] * Abar[node[i]]
-        for q in range(nc):
-            R[i, wcol + q] = 0.0
-    for mode in range(n_modes):
-        As = Abar.copy()
-        for i in range(nc):
-            if (mode >> i) & 1:
-                As[node[i], :] = 0.0
-        T = _tables(As, h, J)
-        for lev in range(J + 1):
-            F[mode, lev] = T[lev][:n]
-        for i in range(nc):
-            VD[mode, i] = As[node[i]]
-            RD[mode, i] = R[i] @ As
-        OUT[mode] = As[out_node]
+    J, F, VD, RD, OUT, R = _setup(Abar, n, n_in, node, mass, h, out_node)
 
     accel = np.full(K, np.nan)
     vel = np.full(K, np.nan)
     stats = np.zeros(2, dtype=np.int64)  # mode switches, bisections
     states = np.zeros((K if store else 0, n))
-    z = np.zeros(m)
-    z[:n] = z_init
-    for q in range(n_in):
-        z[n + q] = inputs[0, q]
-    sgn = np.ones(max(nc, 1))
-    # Initial mode: contacts at rest stick if they can.
-    mode = 0
-    for i in range(nc):
-        v = z[node[i]]
-        if v == 0.0:
-            mode |= 1 << i
-        else:
-            sgn[i] = 1.0 if v > 0 else -1.0
-            z[wcol + i] = sgn[i] * f0[i]
-    mode = _switch(z, mode, nc, node, R, f0, sgn, wcol)
+    z, sgn, mode = _start(z_init, inputs, n, n_in, m, node, R, f0)
     accel[0] = _dot2(OUT, mode, z)
     vel[0] = z[out_node]
     if store:
@@ -384,11 +453,9 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             for i in range(nc):
                 if (mode >> i) & 1:
                     da[i] = _dot3(RD, mode, i, z)
-        pos = np.int64(0)
-        events = 0
         # Fast path, written out in the loop: the whole interval in one step, its guards,
-        # and the cheap Hermite bound; the general loop below takes over only where the
-        # bound fails (near the contacts' switches).
+        # and the cheap Hermite bound; _events takes over only where the bound fails (near
+        # the contacts' switches).
         i = 0
         while i + 5 <= n:
             s0 = z[i]
@@ -445,46 +512,11 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
             for i in range(nc):
                 va[i] = vb[i]
                 da[i] = db[i]
-            pos = FULL
-        while pos < FULL:
-            if pos == 0:
-                tz = J
-            else:
-                tz = 0
-                while (pos >> tz) & 1 == 0:
-                    tz += 1
-            size = np.int64(1) << tz
-            level = J - tz
-            _step(F, mode, level, z, zn, n, n_in, h * size / FULL)
-            _guards(zn, mode, nc, node, R, VD, RD, vb, db)
-            if not _crossed(va, da, vb, db, h * size / FULL, mode, nc, sgn, f0):
-                # copy, not swap: rebinding arrays costs atomic reference counting in numba
-                for j in range(m):
-                    z[j] = zn[j]
-                for i in range(nc):
-                    va[i] = vb[i]
-                    da[i] = db[i]
-                pos += size
-                continue
-            # Bisect for the first crossing inside [pos, pos + size] (out of line: the
-            # rare path, kept out of the hot loop's code).
-            stats[1] += 1
-            pos += _bisect(F, mode, level, size, z, zc, zm, zn, n, n_in, h / FULL, nc, node, R, VD, RD,
-                           va, da, vb, db, sgn, f0)
-            pos += 1
-            z[:] = zn
-            new_mode = _switch(z, mode, nc, node, R, f0, sgn, wcol)
-            if new_mode != mode:
-                events += 1
-                stats[0] += 1
-                mode = new_mode
-            else:
-                # no switch due: a false alarm of the Hermite test, or a switch that left
-                # the mode unchanged (a reversal); count both to bound the work
-                events += 1
-            if events > max_events:
+        else:
+            mode, ok = _events(F, mode, J, h, z, zn, zc, zm, n, n_in, node, R, VD, RD, va, da, vb, db, sgn, f0,
+                               stats, max_events)
+            if not ok:
                 return accel, vel, states, STATUS_TOO_MANY_EVENTS, stats
-            _guards(z, mode, nc, node, R, VD, RD, va, da)
         if acon >= 0 and mode == cur:
             accel[k + 1] = da[acon]
         else:
@@ -493,3 +525,240 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
         if store:
             states[k + 1] = z[:n]
     return accel, vel, states, STATUS_OK, stats
+
+
+# -- kernels specialised to a network's sizes ------------------------------------------
+#
+# run_kernel keeps the state in arrays whose sizes it learns at run time, so the compiler
+# must assume any store may change any array: every sample reloads the state, the tables
+# and the guards from memory (about 20 ns a sample of pure bookkeeping, measured with the
+# products taken out). The specialised kernel is the same loop written out for fixed
+# sizes, contact nodes and output node, with the state, the current mode's table rows and
+# the guards in local variables; every sum is formed in run_kernel's order, so the
+# numbers are the same bit for bit. The rare path (an interval where the cheap bound
+# fails) stores the locals into the arrays and runs _events, as run_kernel does.
+
+_SPECIALISED: dict = {}
+
+
+def _specialised_source(n: int, n_in: int, node: tuple, out_node: int) -> str:
+    """The source of run_kernel specialised to these sizes and nodes (see above)."""
+    nc = len(node)
+    m = n + 2 * n_in + nc
+    zs = [f"z{j}" for j in range(m)]
+    lines = []
+    add = lines.append
+
+    def dot(coef, vec):  # s = 0.0; s += c[j] * v[j] in order, as _dot2 / _dot3 sum
+        expr = "0.0"
+        for j in range(m):
+            expr = f"({expr} + {coef(j)} * {vec[j]})"
+        return expr
+
+    def load_z(indent):
+        for j in range(m):
+            add(f"{indent}{zs[j]} = z[{j}]")
+
+    def store_z(indent):
+        for j in range(m):
+            add(f"{indent}z[{j}] = {zs[j]}")
+
+    add("def kernel(Abar, n_, n_in_, node, f0, mass, inputs, h, z_init, out_node_, store, max_events):")
+    add(f"    n = {n}")
+    add(f"    n_in = {n_in}")
+    add(f"    m = {m}")
+    add("    K = inputs.shape[0]")
+    add("    J, F, VD, RD, OUT, R = _setup(Abar, n, n_in, node, mass, h, out_node_)")
+    add("    accel = np.full(K, np.nan)")
+    add("    vel = np.full(K, np.nan)")
+    add("    stats = np.zeros(2, dtype=np.int64)")
+    add("    states = np.zeros((K if store else 0, n))")
+    add("    z, sgn, mode = _start(z_init, inputs, n, n_in, m, node, R, f0)")
+    add("    accel[0] = _dot2(OUT, mode, z)")
+    add(f"    vel[0] = z[{out_node}]")
+    add("    if store:")
+    add("        states[0] = z[:n]")
+    add("    zn = np.empty(m)")
+    add("    zc = np.empty(m)")
+    add("    zm = np.empty(m)")
+    w = max(nc, 1)
+    for a in ("va", "da", "vb", "db"):
+        add(f"    {a} = np.empty({w})")
+    load_z("    ")
+    for i in range(nc):
+        add(f"    f0_{i} = f0[{i}]")
+        add(f"    sg{i} = sgn[{i}]")
+        add(f"    va{i} = 0.0")
+        add(f"    da{i} = 0.0")
+        for j in range(m):
+            add(f"    r{i}_{j} = R[{i}, {j}]")
+            add(f"    vd{i}_{j} = 0.0")
+            add(f"    rd{i}_{j} = 0.0")
+    for i in range(n):
+        for j in range(m):
+            add(f"    f{i}_{j} = 0.0")
+    add("    cur = -1")
+    add("    acon = -1")
+    add("    for k in range(K - 1):")
+    add("        if mode != cur:")
+    add("            cur = mode")
+    add("            acon = -1")
+    for i in range(nc):
+        if node[i] == out_node:
+            add(f"            if not (mode >> {i}) & 1:")
+            add(f"                acon = {i}")
+    for i in range(n):
+        for j in range(m):
+            add(f"            f{i}_{j} = F[mode, 0, {i}, {j}]")
+    for i in range(nc):
+        for j in range(m):
+            add(f"            vd{i}_{j} = VD[mode, {i}, {j}]")
+            add(f"            rd{i}_{j} = RD[mode, {i}, {j}]")
+    for q in range(n_in):
+        add(f"        z{n + q} = inputs[k, {q}]")
+        add(f"        z{n + n_in + q} = (inputs[k + 1, {q}] - inputs[k, {q}]) / h")
+    add("        if k == 0:")
+    store_z("            ")
+    add("            _guards(z, mode, {nc}, node, R, VD, RD, va, da)".format(nc=nc))
+    for i in range(nc):
+        add(f"            va{i} = va[{i}]")
+        add(f"            da{i} = da[{i}]")
+    if nc:
+        add("        else:")
+        for i in range(nc):
+            add(f"            if (mode >> {i}) & 1:")
+            add(f"                da{i} = {dot(lambda j, i=i: f'rd{i}_{j}', zs)}")
+    else:
+        add("        pass")
+    # the whole interval in one step
+    zn = [f"y{j}" for j in range(m)]
+    for i in range(n):
+        expr = zs[i]
+        for j in range(m):
+            expr = f"({expr} + f{i}_{j} * {zs[j]})"
+        add(f"        {zn[i]} = {expr}")
+    for j in range(n, m):
+        add(f"        {zn[j]} = {zs[j]}")
+    for q in range(n_in):
+        add(f"        {zn[n + q]} = {zs[n + q]} + h * {zs[n + n_in + q]}")
+    add("        clear = True")
+    for i in range(nc):
+        add(f"        if (mode >> {i}) & 1:")
+        add(f"            vb{i} = {dot(lambda j, i=i: f'r{i}_{j}', zn)}")
+        add(f"            db{i} = {dot(lambda j, i=i: f'rd{i}_{j}', zn)}")
+        add(f"            slack = HERMITE_SLACK * h * (abs(da{i}) + abs(db{i}))")
+        add(f"            if max(abs(va{i}), abs(vb{i})) + slack > f0_{i}:")
+        add("                clear = False")
+        add("        else:")
+        add(f"            vb{i} = {zn[node[i]]}")
+        add(f"            db{i} = {dot(lambda j, i=i: f'vd{i}_{j}', zn)}")
+        add(f"            slack = HERMITE_SLACK * h * (abs(da{i}) + abs(db{i}))")
+        add(f"            if min(sg{i} * va{i}, sg{i} * vb{i}) - slack <= 0.0:")
+        add("                clear = False")
+    add("        if clear:")
+    for j in range(m):
+        add(f"            {zs[j]} = {zn[j]}")
+    for i in range(nc):
+        add(f"            va{i} = vb{i}")
+        add(f"            da{i} = db{i}")
+    add("        else:")
+    store_z("            ")
+    for i in range(nc):
+        add(f"            va[{i}] = va{i}")
+        add(f"            da[{i}] = da{i}")
+    add("            mode, ok = _events(F, mode, J, h, z, zn, zc, zm, n, n_in, node, R, VD, RD, va, da, vb, db, "
+        "sgn, f0, stats, max_events)")
+    add("            if not ok:")
+    add("                return accel, vel, states, STATUS_TOO_MANY_EVENTS, stats")
+    load_z("            ")
+    for i in range(nc):
+        add(f"            va{i} = va[{i}]")
+        add(f"            da{i} = da[{i}]")
+        add(f"            sg{i} = sgn[{i}]")
+    at_out = [i for i in range(nc) if node[i] == out_node]
+    cond = "if"
+    for i in at_out:
+        add(f"        {cond} acon == {i} and mode == cur:")
+        add(f"            accel[k + 1] = da{i}")
+        cond = "elif"
+    if at_out:
+        add("        else:")
+        add(f"            accel[k + 1] = {dot(lambda j: f'OUT[mode, {j}]', zs)}")
+    else:
+        add(f"        accel[k + 1] = {dot(lambda j: f'OUT[mode, {j}]', zs)}")
+    add(f"        vel[k + 1] = {zs[out_node]}")
+    add("        if store:")
+    for i in range(n):
+        add(f"            states[k + 1, {i}] = {zs[i]}")
+    add("    return accel, vel, states, STATUS_OK, stats")
+    return "\n".join(lines) + "\n"
+
+
+#: Where the specialised kernels' generated modules are written, so that numba's cache
+#: keeps their machine code between processes: ``$BAYES_INERTER_KERNEL_DIR``, else
+#: ``~/.cache/bayes-inerter/kernels``, else a folder in the temporary directory. Files
+#: are named by a hash of their source and of this module's, so a changed kernel never
+#: meets an old cache. Where no folder can be written they are compiled in memory.
+KERNEL_DIR_ENV = "BAYES_INERTER_KERNEL_DIR"
+
+
+def _kernel_dirs():
+    import os
+    import tempfile
+    from pathlib import Path
+
+    if os.environ.get(KERNEL_DIR_ENV):
+        yield Path(os.environ[KERNEL_DIR_ENV])
+    yield Path.home() / ".cache" / "bayes-inerter" / "kernels"
+    yield Path(tempfile.gettempdir()) / f"bayes-inerter-kernels-{os.getuid() if hasattr(os, 'getuid') else 0}"
+
+
+_HEADER = (
+    "import numpy as np\n"
+    "from numba import njit\n"
+    "from bayes_inerter._kernel import (HERMITE_SLACK, STATUS_OK, STATUS_TOO_MANY_EVENTS, _dot2, _events,\n"
+    "                                   _guards, _setup, _start)\n\n\n"
+)
+
+
+def _load_specialised(source: str):
+    import hashlib
+    import importlib.util
+    import os
+    import sys
+    from pathlib import Path
+
+    own = Path(__file__).read_bytes()
+    digest = hashlib.sha256(own + source.encode()).hexdigest()[:20]
+    name = f"bayes_inerter_kernel_{digest}"
+    text = _HEADER + "@njit(cache=True)\n" + source
+    for folder in _kernel_dirs():
+        path = folder / f"{name}.py"
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            if not path.exists() or path.read_text() != text:
+                tmp = folder / f".{name}.{os.getpid()}.tmp"
+                tmp.write_text(text)
+                os.replace(tmp, path)
+        except OSError:
+            continue
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module  # numba's cache finds the function's module by name
+        spec.loader.exec_module(module)
+        return module.kernel
+    namespace: dict = {}
+    exec(compile(_HEADER.replace("@njit(cache=True)", "") + "@njit\n" + source, name, "exec"), namespace)
+    return namespace["kernel"]
+
+
+def kernel_for(n: int, n_in: int, node, out_node: int):
+    """run_kernel specialised to a network: state size ``n``, ``n_in`` inputs, contacts at
+    ``node`` (a sequence of node indices) and the output node. Takes run_kernel's arguments
+    and gives its results, bit for bit; compiled once per process (numba's cache keeps it
+    between processes where a folder can be written, see ``KERNEL_DIR_ENV``)."""
+    key = (int(n), int(n_in), tuple(int(x) for x in node), int(out_node))
+    fn = _SPECIALISED.get(key)
+    if fn is None:
+        fn = _SPECIALISED[key] = _load_specialised(_specialised_source(*key))
+    return fn

@@ -197,7 +197,8 @@ def run_piecewise_linear(
     z0 = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float)
     if z0.shape != (n,):
         raise ValueError(f"initial state must have shape ({n},), got {z0.shape}")
-    accel, vel, states, status, _ = _kernel.run_kernel(
+    kernel = _kernel.kernel_for(n, n_in, nodes, 0)
+    accel, vel, states, status, _ = kernel(
         Abar, n, n_in, nodes, f0, mass, np.ascontiguousarray(inputs, dtype=float).reshape(-1, n_in),
         float(h), z0, 0, store, int(max_events),
     )
