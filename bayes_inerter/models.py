@@ -14,14 +14,22 @@ arrangement needs only a new builder: compilation and simulation are generic.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
+from dataclasses import dataclass
 from typing import Callable
 
-from .device import DEFAULT_GEOMETRY, InerterParameters
-from .friction import FrictionLaw, make_law
-from .network import Deformation, Friction, Inerter, Mass, Network, cascade
+import numpy as np
 
-__all__ = ["NETWORKS", "build_network", "lead_angle", "NUT_SHARE"]
+from .device import DEFAULT_GEOMETRY, InerterParameters, paper_parameters
+from .friction import FrictionLaw, make_law
+from .network import Deformation, Friction, Inerter, Mass, Network, cascade, compile_network
+
+__all__ = ["NETWORKS", "build_network", "lead_angle", "NUT_SHARE", "FIELDS", "LinearChain", "linear_chain"]
+
+#: The parameters in :class:`InerterParameters`' order (the vectors of :class:`LinearChain`).
+FIELDS = tuple(f.name for f in dataclasses.fields(InerterParameters))
 
 LawFactory = Callable[[float, float], FrictionLaw]
 
@@ -131,3 +139,52 @@ def build_network(name: str, params: InerterParameters, friction="coulomb", **op
             f"unknown network {name!r}; choose one of {', '.join(NETWORKS)}"
         ) from None
     return builder(params, friction, **options)
+
+
+@dataclass(frozen=True)
+class LinearChain:
+    """One of the paper's networks with Coulomb friction, as the linear map it is from the
+    parameters (a vector in :data:`FIELDS` order) to its compiled arrays: each node's mass
+    plus inertance, each link's damping and stiffness, each node's viscous coefficient and
+    Coulomb bound is a sum of parameters. The likelihood forms the arrays from it at every
+    evaluation instead of building and compiling the network (the same arrays; see
+    :func:`linear_chain`)."""
+
+    name: str
+    coef: np.ndarray  # (rows, len(FIELDS)), entries 0 or 1
+    sizes: tuple[int, ...]  # masses, link_c, link_k, viscous, bounds
+
+    def arrays(self, values: np.ndarray) -> tuple[np.ndarray, ...]:
+        """(masses, link_c, link_k, viscous, bounds) at ``values`` (FIELDS order)."""
+        return tuple(np.split(self.coef @ values, np.cumsum(self.sizes)[:-1]))
+
+
+def _compiled_arrays(name: str, values) -> tuple[np.ndarray, tuple[int, ...]]:
+    compiled = compile_network(build_network(name, InerterParameters(**dict(zip(FIELDS, map(float, values))))))
+    parts = (compiled.masses, compiled.link_c, compiled.link_k, compiled.viscous, compiled.coulomb_bounds)
+    return np.concatenate(parts), tuple(len(p) for p in parts)
+
+
+@functools.lru_cache(maxsize=None)
+def linear_chain(name: str) -> LinearChain | None:
+    """The :class:`LinearChain` of network ``name`` (Coulomb friction), found by compiling
+    it at the paper's A3 parameters and at each parameter raised by one, and checked at
+    another point; None where the arrays are not sums of parameters (the full network's
+    tan(theta) shares) or the network needs more than the exact kernel."""
+    base = np.array([getattr(paper_parameters("A3"), f) for f in FIELDS])
+    flat0, sizes = _compiled_arrays(name, base)
+    coef = np.empty((len(flat0), len(FIELDS)))
+    for k in range(len(FIELDS)):
+        v = base.copy()
+        v[k] += 1.0
+        coef[:, k] = _compiled_arrays(name, v)[0] - flat0
+    rounded = np.round(coef)
+    if not (np.allclose(coef, rounded, rtol=0, atol=1e-6) and set(np.unique(rounded)) <= {0.0, 1.0}):
+        return None
+    check = base * np.linspace(0.5, 2.0, len(FIELDS))
+    if not np.allclose(rounded @ check, _compiled_arrays(name, check)[0], rtol=1e-14, atol=0):
+        return None
+    compiled = compile_network(build_network(name, paper_parameters("A3")))
+    if not compiled.all_coulomb:
+        return None
+    return LinearChain(name, rounded, sizes)

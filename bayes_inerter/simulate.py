@@ -182,6 +182,15 @@ def run_piecewise_linear(
     if not compiled.all_coulomb:
         raise ValueError("the exact kernel needs Coulomb laws only and no backlash")
     nodes, f0, mass = _contacts(compiled)
+    return run_exact(A, B, nodes, f0, mass, inputs, h, x0=x0, store=store, max_events=max_events,
+                     sampling=sampling)
+
+
+def run_exact(A, B, nodes, f0, mass, inputs, h, *, x0=None, store=False, max_events=MAX_EVENTS_PER_STEP,
+              sampling="instant"):
+    """:func:`run_piecewise_linear` given the contacts as arrays: their ``nodes`` (int),
+    Coulomb bounds ``f0`` (N, > 0) and node masses (kg). The likelihood's entry point,
+    which forms these without building a network (``models.linear_chain``)."""
     n = A.shape[0]
     B = B.reshape(n, -1)
     n_in = B.shape[1]

@@ -194,3 +194,35 @@ def test_derived_quantities(record):
     assert PosteriorModel(record, split=False).derived_names == ["b_app"]
     assert PosteriorModel(record, "linear").derived_names == ["b_app"]
     assert PosteriorModel(record, "rigid").derived_names == []  # no nut
+
+
+@pytest.mark.parametrize("model", ["two-port", "rigid", "linear"])
+def test_short_way_simulates_as_simulate_does(record, model):
+    """The likelihood's arrays-only simulation equals simulate() on the dataclass, bit for
+    bit, and refuses what InerterParameters refuses."""
+    from bayes_inerter.simulate import simulate
+
+    m = PosteriorModel(record, model)
+    assert m._chain is not None
+    rng = np.random.default_rng(7)
+    p0 = paper_parameters("A2")
+    for _ in range(5):
+        p = dataclasses.replace(p0, **{f: getattr(p0, f) * rng.uniform(0.5, 2.0)
+                                       for f in ("b", "c_n", "k_n", "c_B", "k_B", "f1_0", "c_f1", "f2_0", "c_f2")})
+        theta = m.to_theta(p, 0.01, 0.2)
+        want = simulate(m.parameters(theta), record.time, record.force, network=m.network, sampling="mean")
+        np.testing.assert_array_equal(m.simulate_raw(theta), want)
+        fields = m.field_vector(theta)
+        assert fields.tolist() == [getattr(m.parameters(theta), f.name) for f in dataclasses.fields(p0)]
+    if m.split:
+        bad = m.to_theta(p0, 0.01, 0.2)
+        bad[m.names.index("f_share")] = 1.5  # a negative f2_0
+        with pytest.raises(ValueError, match="out of range"):
+            m.field_vector(bad)
+        assert m.log_prob(bad)[0] == -math.inf
+
+
+def test_upsampled_likelihood_takes_the_long_way(record):
+    m = PosteriorModel(record, likelihood=LikelihoodSettings(upsample=2))
+    assert m._chain is None
+    assert np.isfinite(m.log_prob(m.to_theta(paper_parameters("A2"), 0.01, 0.2))[0])

@@ -166,3 +166,26 @@ def test_bad_network_input():
         build_network("full", paper_parameters("A0"), nut_share=2.0)
     with pytest.raises(ValueError, match="a network holds blocks"):
         cascade(Mass(1.0), "spring")
+
+
+@pytest.mark.parametrize("name", ["reduced", "rigid", "linear"])
+def test_linear_chain_gives_the_compiled_arrays(name):
+    from bayes_inerter.models import FIELDS, linear_chain
+
+    chain = linear_chain(name)
+    rng = np.random.default_rng(4)
+    for setting in ("A0", "A6", "B2"):
+        p = dataclasses.replace(paper_parameters(setting), **{
+            f: getattr(paper_parameters(setting), f) * rng.uniform(0.2, 5.0) for f in FIELDS})
+        compiled = compile_network(build_network(name, p))
+        got = chain.arrays(np.array([getattr(p, f) for f in FIELDS]))
+        want = (compiled.masses, compiled.link_c, compiled.link_k, compiled.viscous, compiled.coulomb_bounds)
+        for g, w in zip(got, want):
+            np.testing.assert_allclose(g, w, rtol=1e-15, atol=0)
+
+
+def test_linear_chain_refuses_a_network_that_is_not_a_sum_of_parameters():
+    from bayes_inerter.models import linear_chain
+
+    assert linear_chain("full") is None  # its tan(theta) shares of f2
+

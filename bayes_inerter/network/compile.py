@@ -22,7 +22,7 @@ from ..friction import FrictionLaw
 from .blocks import Deformation, Friction, Inerter, Mass
 from .twoport import Network
 
-__all__ = ["CompiledNetwork", "compile_network"]
+__all__ = ["CompiledNetwork", "compile_network", "chain_state_space"]
 
 
 @dataclass(frozen=True)
@@ -73,25 +73,32 @@ class CompiledNetwork:
         Links are taken closed (no dead zone). With ``viscous`` the friction laws'
         linear parts are in A; without, all friction is left to the caller.
         """
-        N = self.n_nodes
-        n = self.n_states(position)
-        A = np.zeros((n, n))
-        B = np.zeros(n)
-        inv_m = 1.0 / self.masses
-        if viscous:
-            A[np.arange(N), np.arange(N)] -= self.viscous * inv_m
-        for j in range(N - 1):
-            c, k, d = self.link_c[j], self.link_k[j], N + j
-            # T_j = c (v_j - v_{j+1}) + k d_j pulls node j back and node j+1 forward
-            for node, sign in ((j, -1.0), (j + 1, 1.0)):
-                A[node, j] += sign * c * inv_m[node]
-                A[node, j + 1] -= sign * c * inv_m[node]
-                A[node, d] += sign * k * inv_m[node]
-            A[d, j], A[d, j + 1] = 1.0, -1.0
-        if position:
-            A[n - 1, 0] = 1.0
-        B[0] = inv_m[0]
-        return A, B
+        return chain_state_space(self.masses, self.link_c, self.link_k, self.viscous if viscous else None,
+                                 position=position)
+
+
+def chain_state_space(masses, link_c, link_k, viscous=None, *, position: bool = False):
+    """:meth:`CompiledNetwork.state_space` from the arrays alone (``viscous``: the
+    per-node viscous coefficients, or None to leave friction out)."""
+    N = len(masses)
+    n = 2 * N - 1 + int(position)
+    A = np.zeros((n, n))
+    B = np.zeros(n)
+    inv_m = 1.0 / masses
+    if viscous is not None:
+        A[np.arange(N), np.arange(N)] -= viscous * inv_m
+    for j in range(N - 1):
+        c, k, d = link_c[j], link_k[j], N + j
+        # T_j = c (v_j - v_{j+1}) + k d_j pulls node j back and node j+1 forward
+        for node, sign in ((j, -1.0), (j + 1, 1.0)):
+            A[node, j] += sign * c * inv_m[node]
+            A[node, j + 1] -= sign * c * inv_m[node]
+            A[node, d] += sign * k * inv_m[node]
+        A[d, j], A[d, j + 1] = 1.0, -1.0
+    if position:
+        A[n - 1, 0] = 1.0
+    B[0] = inv_m[0]
+    return A, B
 
 
 def compile_network(network: Network) -> CompiledNetwork:
