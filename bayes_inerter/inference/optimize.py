@@ -57,10 +57,10 @@ def _with_noise(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
 def sse(model: PosteriorModel, phys: np.ndarray) -> float:
     """Sum of squared kept residuals at the physical part of theta (stage 1's objective)."""
     theta = _with_noise(model, phys)
-    _, ll, sim = model.evaluate(theta)
-    if sim is None:
+    got = model.misfit(theta) if math.isfinite(model.log_prior(theta)) else None
+    if got is None:
         return _BAD
-    r = sim[model.grid] - model.observed
+    r = got[0]
     return float(r @ r)
 
 
