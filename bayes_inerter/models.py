@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from numba import njit
 
 from .device import DEFAULT_GEOMETRY, InerterParameters, paper_parameters
 from .friction import FrictionLaw, make_law
@@ -156,7 +157,24 @@ class LinearChain:
 
     def arrays(self, values: np.ndarray) -> tuple[np.ndarray, ...]:
         """(masses, link_c, link_k, viscous, bounds) at ``values`` (FIELDS order)."""
-        return tuple(np.split(self.coef @ values, np.cumsum(self.sizes)[:-1]))
+        flat = _sums(self.coef, np.asarray(values, dtype=float))
+        out, at = [], 0
+        for size in self.sizes:
+            out.append(flat[at : at + size])
+            at += size
+        return tuple(out)
+
+
+@njit(cache=True)
+def _sums(coef, values):
+    """coef @ values, each row summed in the parameters' order."""
+    out = np.zeros(coef.shape[0])
+    for r in range(coef.shape[0]):
+        s = 0.0
+        for k in range(coef.shape[1]):
+            s += coef[r, k] * values[k]
+        out[r] = s
+    return out
 
 
 def _compiled_arrays(name: str, values) -> tuple[np.ndarray, tuple[int, ...]]:

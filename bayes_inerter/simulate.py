@@ -35,6 +35,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from . import _kernel, _stiff
 from .device import InerterParameters, validate_parameters
@@ -145,10 +146,17 @@ def mean_acceleration(vel: np.ndarray, h: float) -> np.ndarray:
     differences; one-sided over one interval at the ends): ``np.gradient(vel, h)``'s
     arithmetic, without its general-purpose overhead."""
     v = np.asarray(vel, dtype=float)
-    if v.size < 2:
-        return np.gradient(v, h)  # its error for too short an array
+    if v.ndim != 1 or v.size < 2:
+        return np.gradient(v, h)  # its result or its error for what is not a 1-D series
+    return _mean_acceleration(np.ascontiguousarray(v), float(h))
+
+
+@njit(cache=True)
+def _mean_acceleration(v, h):
     out = np.empty_like(v)
-    out[1:-1] = (v[2:] - v[:-2]) / (2.0 * h)
+    two_h = 2.0 * h
+    for k in range(1, v.shape[0] - 1):
+        out[k] = (v[k + 1] - v[k - 1]) / two_h
     out[0] = (v[1] - v[0]) / h
     out[-1] = (v[-1] - v[-2]) / h
     return out
@@ -192,17 +200,10 @@ def run_exact(A, B, nodes, f0, mass, inputs, h, *, x0=None, store=False, max_eve
     Coulomb bounds ``f0`` (N, > 0) and node masses (kg). The likelihood's entry point,
     which forms these without building a network (``models.linear_chain``)."""
     n = A.shape[0]
-    B = B.reshape(n, -1)
+    B = np.ascontiguousarray(B, dtype=float).reshape(n, -1)
     n_in = B.shape[1]
-    nc = len(nodes)
-    m = n + 2 * n_in + nc
-    Abar = np.zeros((m, m))
-    Abar[:n, :n] = A
-    Abar[:n, n : n + n_in] = B
-    for q in range(n_in):
-        Abar[n + q, n + n_in + q] = 1.0
-    for i, node in enumerate(nodes):
-        Abar[node, n + 2 * n_in + i] = -1.0 / mass[i]
+    nodes = np.asarray(nodes, dtype=np.int64)
+    Abar = _augmented(np.ascontiguousarray(A, dtype=float), B, nodes, np.asarray(mass, dtype=float))
     z0 = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float)
     if z0.shape != (n,):
         raise ValueError(f"initial state must have shape ({n},), got {z0.shape}")
@@ -219,6 +220,24 @@ def run_exact(A, B, nodes, f0, mass, inputs, h, *, x0=None, store=False, max_eve
     if sampling == "mean":
         accel = mean_acceleration(vel, h)
     return accel, states
+
+
+@njit(cache=True)
+def _augmented(A, B, nodes, mass):
+    """The kernel's augmented matrix: z = [x, u, du, w] (see ``_kernel``), w the contacts'
+    Coulomb forces acting on their nodes."""
+    n = A.shape[0]
+    n_in = B.shape[1]
+    nc = nodes.shape[0]
+    m = n + 2 * n_in + nc
+    Abar = np.zeros((m, m))
+    Abar[:n, :n] = A
+    Abar[:n, n : n + n_in] = B
+    for q in range(n_in):
+        Abar[n + q, n + n_in + q] = 1.0
+    for i in range(nc):
+        Abar[nodes[i], n + 2 * n_in + i] = -1.0 / mass[i]
+    return Abar
 
 
 def simulate_network(

@@ -56,7 +56,7 @@ def main():
     sampler._MODEL, sampler._COORDS = jm, default_coordinates(jm)
     with h5py.File(chain_file, "r") as f:
         chain, log_p = f["mcmc/chain"][:], f["mcmc/log_prob"][:]
-    if not sampler._log_prob(chain[-1, 0])[0] == log_p[-1, 0]:
+    if not np.isclose(sampler._log_prob(chain[-1, 0])[0], log_p[-1, 0], rtol=1e-12, atol=0):
         sys.exit(f"error: {chain_file} was not sampled from {study}/records with this model")
     d = chain.shape[-1]
     fit_to = len(chain) if args.fit_to is None else args.fit_to

@@ -215,6 +215,7 @@ class PosteriorModel:
         else:
             self._sim_force, self._sim_time = rec.force, rec.time
         self._drive = Drive.of(self._sim_time, self._sim_force)  # checked once, not at every evaluation
+        self._force = np.ascontiguousarray(self._drive.force, dtype=float).reshape(-1, 1)
         fixed = dict(TABLE_I, m_s=self.m_s, m_B=self.m_B, b=1.0)
         if self.model == "rigid":
             fixed.update(f2_0=0.0, c_f2=0.0)
@@ -326,7 +327,7 @@ class PosteriorModel:
         masses, link_c, link_k, viscous, bounds = self._chain.arrays(self.field_vector(theta))
         A, B = chain_state_space(masses, link_c, link_k, viscous)
         nodes = np.flatnonzero(bounds > 0)
-        a, _ = run_exact(A, B, nodes, bounds[nodes], masses[nodes], self._drive.force, self._drive.h,
+        a, _ = run_exact(A, B, nodes, bounds[nodes], masses[nodes], self._force, self._drive.h,
                          sampling=lk.sampling)
         return a
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..friction import FrictionLaw
 from .blocks import Deformation, Friction, Inerter, Mass
@@ -80,13 +81,24 @@ class CompiledNetwork:
 def chain_state_space(masses, link_c, link_k, viscous=None, *, position: bool = False):
     """:meth:`CompiledNetwork.state_space` from the arrays alone (``viscous``: the
     per-node viscous coefficients, or None to leave friction out)."""
-    N = len(masses)
-    n = 2 * N - 1 + int(position)
+    masses = np.ascontiguousarray(masses, dtype=float)
+    use = viscous is not None
+    visc = np.ascontiguousarray(viscous, dtype=float) if use else np.zeros(len(masses))
+    return _state_space(masses, np.ascontiguousarray(link_c, dtype=float), np.ascontiguousarray(link_k, dtype=float),
+                        visc, use, bool(position))
+
+
+@njit(cache=True)
+def _state_space(masses, link_c, link_k, viscous, use_viscous, position):
+    """The state space's arithmetic (compiled: the likelihood forms it at every evaluation)."""
+    N = masses.shape[0]
+    n = 2 * N - 1 + (1 if position else 0)
     A = np.zeros((n, n))
     B = np.zeros(n)
     inv_m = 1.0 / masses
-    if viscous is not None:
-        A[np.arange(N), np.arange(N)] -= viscous * inv_m
+    if use_viscous:
+        for i in range(N):
+            A[i, i] -= viscous[i] * inv_m[i]
     for j in range(N - 1):
         c, k, d = link_c[j], link_k[j], N + j
         # T_j = c (v_j - v_{j+1}) + k d_j pulls node j back and node j+1 forward
@@ -94,7 +106,8 @@ def chain_state_space(masses, link_c, link_k, viscous=None, *, position: bool = 
             A[node, j] += sign * c * inv_m[node]
             A[node, j + 1] -= sign * c * inv_m[node]
             A[node, d] += sign * k * inv_m[node]
-        A[d, j], A[d, j + 1] = 1.0, -1.0
+        A[d, j] = 1.0
+        A[d, j + 1] = -1.0
     if position:
         A[n - 1, 0] = 1.0
     B[0] = inv_m[0]

@@ -30,10 +30,36 @@ def _butter_sos(order: int, cutoff: float, fs: float) -> tuple[np.ndarray, np.nd
 
 
 @njit(cache=True)
+def _sosfilt2_inplace(sos, zi, x0, y):
+    """:func:`_sosfilt_inplace` for two sections with the filter's state and coefficients
+    in local variables: the compiler must otherwise assume that each store to y may
+    change them and reload them at every sample (the same numbers, bit for bit)."""
+    a0, a1, a2, a4, a5 = sos[0, 0], sos[0, 1], sos[0, 2], sos[0, 4], sos[0, 5]
+    b0, b1, b2, b4, b5 = sos[1, 0], sos[1, 1], sos[1, 2], sos[1, 4], sos[1, 5]
+    p0 = zi[0, 0] * x0
+    p1 = zi[0, 1] * x0
+    q0 = zi[1, 0] * x0
+    q1 = zi[1, 1] * x0
+    for k in range(y.shape[0]):
+        v = y[k]
+        out = a0 * v + p0
+        p0 = a1 * v - a4 * out + p1
+        p1 = a2 * v - a5 * out
+        v = out
+        out = b0 * v + q0
+        q0 = b1 * v - b4 * out + q1
+        q1 = b2 * v - b5 * out
+        y[k] = out
+
+
+@njit(cache=True)
 def _sosfilt_inplace(sos, zi, x0, y):
     """Filter y in place through the second-order sections (transposed direct form II),
     starting from the state zi * x0: what scipy.signal.sosfilt does."""
     ns = sos.shape[0]
+    if ns == 2:  # the default order 4: the same sums, the state in local variables
+        _sosfilt2_inplace(sos, zi, x0, y)
+        return
     z = np.empty((ns, 2))
     for s in range(ns):
         z[s, 0] = zi[s, 0] * x0
