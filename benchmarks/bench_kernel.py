@@ -8,13 +8,15 @@ into a contiguous array at each mode change; the products summed five rows at a 
 registers; the guards at the bisection's left end carried along, not recomputed; the
 output taken from a guard derivative when a sliding contact sits at the output node).
 The script needs the project's git history; the tuning changes no sum's order, so the outputs
-should agree exactly. On a few of the study's records (``results/full/records``), with the
+should agree exactly. On a few of the study's records (generated as the study generates them, seed 0), with the
 paper's parameters and random perturbations of them, the script
 
 - checks that both kernels give the same accel and vel (largest relative difference,
   scaled by each output's largest magnitude) and the same stats (switches, bisections);
 - times them side by side in one run, alternating old and new call by call, and prints
-  the medians and the ratio median(old) / median(new) per record.
+  the medians and the ratio median(old) / median(new) per record;
+- does both for the kernel specialised to the network (``_kernel.kernel_for``), which
+  must give run_kernel's numbers bit for bit.
 
 The machine is shared and noisy: read the ratios, not the absolute times.
 """
@@ -32,11 +34,10 @@ from bayes_inerter import _kernel as new_kernel
 from bayes_inerter.device import paper_parameters
 from bayes_inerter.models import build_network
 from bayes_inerter.network import compile_network
-from bayes_inerter.records import read_record
+from bayes_inerter.records.generator import paper_record
 from bayes_inerter.simulate import MAX_EVENTS_PER_STEP, _contacts, check_record
 
 ROOT = Path(__file__).resolve().parents[1]
-RECORDS = ROOT / "results" / "full" / "records"
 DEFAULT_RECORDS = ["A0_0.5Hz", "A1_1Hz", "A3_1Hz", "B2_1.5Hz", "B1_1Hz", "A2_1.5Hz"]
 
 
@@ -110,13 +111,19 @@ def main():
     mismatches = 0
     ratios = []
     for name in args.records:
-        record = read_record(RECORDS / f"{name}.csv")
+        setting, freq = name.split("_")
+        record = paper_record(setting, float(freq.removesuffix("Hz")), seed=0)  # the full study's record
         base = paper_parameters(record.metadata["setting"])
         sets = [base] + [perturbed(base, rng, args.scale) for _ in range(args.perturbations)]
         for params in sets:
             a = kernel_args(record, params)
             ra = old_kernel.run_kernel(*a)
             rb = new_kernel.run_kernel(*a)
+            rs = special(a)(*a)
+            if not (all(np.array_equal(x, y, equal_nan=True) for x, y in zip(rb[:3], rs[:3]))
+                    and rb[3] == rs[3] and np.array_equal(rb[4], rs[4])):
+                print(f"{name:10s} the specialised kernel differs from run_kernel  MISMATCH")
+                mismatches += 1
             d = max(rel_diff(ra[0], rb[0]), rel_diff(ra[1], rb[1]))
             same = ra[3] == rb[3] and np.array_equal(ra[4], rb[4])
             worst = max(worst, d)
@@ -125,18 +132,26 @@ def main():
                   f"stats {ra[4].tolist()}/{rb[4].tolist()}{'' if same else '  MISMATCH'}")
 
         a = kernel_args(record, base)
-        t_old, t_new = [], []
+        t_old, t_new, t_spec = [], [], []
         for _ in range(args.repeats):
-            for fn, store in ((old_kernel.run_kernel, t_old), (new_kernel.run_kernel, t_new)):
+            for fn, store in ((old_kernel.run_kernel, t_old), (new_kernel.run_kernel, t_new),
+                              (special(a), t_spec)):
                 t0 = time.perf_counter()
                 fn(*a)
                 store.append(time.perf_counter() - t0)
-        mo, mn = statistics.median(t_old), statistics.median(t_new)
-        ratios.append(mo / mn)
+        mo, mn, ms = statistics.median(t_old), statistics.median(t_new), statistics.median(t_spec)
+        ratios.append((mo / mn, mo / ms))
         print(f"{name:10s} timing ({args.repeats} alternating repeats): old {mo * 1e3:.3f} ms, "
-              f"new {mn * 1e3:.3f} ms, ratio old/new {mo / mn:.3f}")
-    print(f"largest output difference: {worst:.2e}; status or stats mismatches: {mismatches}; ratios old/new: "
-          f"{', '.join(f'{r:.3f}' for r in ratios)} (median {statistics.median(ratios):.3f})")
+              f"run_kernel {mn * 1e3:.3f} ms, specialised {ms * 1e3:.3f} ms; ratios old/run_kernel "
+              f"{mo / mn:.3f}, old/specialised {mo / ms:.3f}")
+    print(f"largest output difference: {worst:.2e}; status or stats mismatches: {mismatches}; "
+          f"median ratio old/run_kernel {statistics.median(r[0] for r in ratios):.3f}, "
+          f"old/specialised {statistics.median(r[1] for r in ratios):.3f}")
+
+
+def special(a):
+    """The kernel specialised to these arguments' network (``_kernel.kernel_for``)."""
+    return new_kernel.kernel_for(a[1], a[2], a[3], a[9])
 
 
 if __name__ == "__main__":
