@@ -217,6 +217,17 @@ def _crossed(va, da, vb, db, T, mode, nc, sgn, f0):
 
 
 @njit(cache=True)
+def _advance(z, zn, va, da, vb, db, nc):
+    """Move to the end of a step: z = zn and the end's guards become the start's (copies,
+    not swaps: rebinding arrays costs atomic reference counting in numba)."""
+    for j in range(z.shape[0]):
+        z[j] = zn[j]
+    for i in range(nc):
+        va[i] = vb[i]
+        da[i] = db[i]
+
+
+@njit(cache=True)
 def _bisect(F, mode, level, size, z, zc, zm, zn, n, n_in, tick, nc, node, R, VD, RD, va, da, vb, db, sgn, f0):
     """Bisect [0, size] ticks from state z for the first guard crossing, on the dyadic
     grid; returns the ticks advanced before the last halving step, with the state at
@@ -236,11 +247,7 @@ def _bisect(F, mode, level, size, z, zc, zm, zn, n, n_in, tick, nc, node, R, VD,
             for j in range(z.shape[0]):
                 zn[j] = zm[j]
         else:
-            for j in range(z.shape[0]):
-                zc[j] = zm[j]
-            for i in range(nc):
-                va[i] = vb[i]
-                da[i] = db[i]
+            _advance(zc, zm, va, da, vb, db, nc)
             advanced += size
     return advanced
 
@@ -347,12 +354,7 @@ def _events(F, mode, J, h, z, zn, zc, zm, n, n_in, node, R, VD, RD, va, da, vb, 
         _step(F, mode, level, z, zn, n, n_in, h * size / FULL)
         _guards(zn, mode, nc, node, R, VD, RD, vb, db)
         if not _crossed(va, da, vb, db, h * size / FULL, mode, nc, sgn, f0):
-            # copy, not swap: rebinding arrays costs atomic reference counting in numba
-            for j in range(z.shape[0]):
-                z[j] = zn[j]
-            for i in range(nc):
-                va[i] = vb[i]
-                da[i] = db[i]
+            _advance(z, zn, va, da, vb, db, nc)
             pos += size
             continue
         # Bisect for the first crossing inside [pos, pos + size] (out of line: the

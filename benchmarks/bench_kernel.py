@@ -35,7 +35,7 @@ from bayes_inerter.device import paper_parameters
 from bayes_inerter.models import build_network
 from bayes_inerter.network import compile_network
 from bayes_inerter.records.generator import paper_record
-from bayes_inerter.simulate import MAX_EVENTS_PER_STEP, _contacts, check_record
+from bayes_inerter.simulate import MAX_EVENTS_PER_STEP, _augmented, _contacts, check_record
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_RECORDS = ["A0_0.5Hz", "A1_1Hz", "A3_1Hz", "B2_1.5Hz", "B1_1Hz", "A2_1.5Hz"]
@@ -72,15 +72,7 @@ def kernel_args(record, params):
     n = A.shape[0]
     B = B.reshape(n, -1)
     n_in = B.shape[1]
-    nc = len(nodes)
-    m = n + 2 * n_in + nc
-    Abar = np.zeros((m, m))
-    Abar[:n, :n] = A
-    Abar[:n, n : n + n_in] = B
-    for q in range(n_in):
-        Abar[n + q, n + n_in + q] = 1.0
-    for i, node in enumerate(nodes):
-        Abar[node, n + 2 * n_in + i] = -1.0 / mass[i]
+    Abar = _augmented(A, B, nodes, mass)
     _, (force,), h = check_record(record.time, record.force)
     inputs = np.ascontiguousarray(force, dtype=float).reshape(-1, n_in)
     return (Abar, n, n_in, nodes, f0, mass, inputs, h, np.zeros(n), 0, False, MAX_EVENTS_PER_STEP)

@@ -7,7 +7,7 @@ from conftest import inverse_dynamics_force
 from bayes_inerter import _kernel, paper_parameters
 from bayes_inerter.models import build_network
 from bayes_inerter.network import compile_network
-from bayes_inerter.simulate import _contacts
+from bayes_inerter.simulate import _augmented, _contacts
 
 
 def kernel_arguments(network, setting, freq, *, scale=1.0, store=False, max_events=200):
@@ -17,14 +17,8 @@ def kernel_arguments(network, setting, freq, *, scale=1.0, store=False, max_even
     compiled = compile_network(build_network(network, p))
     A, B = compiled.state_space(viscous=True)
     nodes, f0, mass = _contacts(compiled)
-    n, nc = A.shape[0], len(nodes)
-    m = n + 2 + nc
-    Abar = np.zeros((m, m))
-    Abar[:n, :n] = A
-    Abar[:n, n] = B
-    Abar[n, n + 1] = 1.0
-    for i, node in enumerate(nodes):
-        Abar[node, n + 2 + i] = -1.0 / mass[i]
+    n = A.shape[0]
+    Abar = _augmented(A, B.reshape(n, 1), nodes, mass)
     return (Abar, n, 1, nodes, f0, mass, (scale * f).reshape(-1, 1), float(t[1] - t[0]), np.zeros(n), 0,
             store, max_events)
 
