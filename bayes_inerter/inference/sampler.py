@@ -326,9 +326,13 @@ def _log_prob_many(us):
     thetas, logj = _COORDS.transform(us)
     logj = np.broadcast_to(logj, us.shape[:1])
     good = np.flatnonzero(np.all(np.isfinite(thetas), axis=1) & np.isfinite(logj))
-    mapper = _POOL.map if _POOL is not None else map
+    points = [thetas[i] for i in good]
+    # one walker per task: the pool's default chunks (a quarter of a worker's share each)
+    # left one worker a chunk behind at the end of every batch (21 walkers on 2 workers:
+    # 12 against 9)
+    got = _POOL.map(_model_log_prob, points, chunksize=1) if _POOL is not None else map(_model_log_prob, points)
     out = [(-np.inf, np.nan)] * len(us)
-    for i, (lp, phi) in zip(good, mapper(_model_log_prob, [thetas[i] for i in good])):
+    for i, (lp, phi) in zip(good, got):
         if np.isfinite(lp):
             out[i] = (lp + float(logj[i]), phi)
     return out

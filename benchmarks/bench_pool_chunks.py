@@ -1,0 +1,85 @@
+"""Benchmark: how the sampler deals a batch of walkers to its worker processes.
+
+Run by hand from the project root: ``python benchmarks/bench_pool_chunks.py [--processes 2]
+[--repeats 7]``.
+
+The joint model's walkers are evaluated on a process pool (``sampler._log_prob_many``),
+one batch per move: 21 walkers for the ensemble moves (half of 42), all 42 for the fitted
+independence move. ``Pool.map`` deals its items in chunks of about a quarter of a worker's
+share by default, so at the end of a batch one worker may still have a chunk to go while
+the other waits; one walker per task deals them evenly. On the 27-record joint model of the
+paper's grid (generated records, seed 0), at points drawn around its start from the
+paper's parameters, the script times one batch of 21 and one of 42 both ways, alternating,
+and prints the medians and the ratios. The machine is shared and noisy: read the ratios.
+"""
+
+import argparse
+import multiprocessing
+import statistics
+import time
+
+import numpy as np
+
+from bayes_inerter.device import paper_parameters
+from bayes_inerter.inference import sampler as S
+from bayes_inerter.inference.coordinates import default_coordinates
+from bayes_inerter.inference.joint import JointModel
+from bayes_inerter.inference.model import PosteriorModel
+from bayes_inerter.records.generator import paper_grid
+
+
+class _Pool:
+    """A pool whose map uses the given chunk size (None: Pool.map's default)."""
+
+    def __init__(self, pool, chunksize):
+        self.pool, self.chunksize = pool, chunksize
+
+    def map(self, fn, items, chunksize=None):
+        items = list(items)
+        if self.chunksize is None:
+            return self.pool.map(fn, items)
+        return self.pool.map(fn, items, chunksize=self.chunksize)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--processes", type=int, default=2)
+    ap.add_argument("--repeats", type=int, default=7)
+    args = ap.parse_args()
+
+    records = [r for _, _, r in paper_grid(seed=0)]
+    jm = JointModel(tuple(records))
+    medians = []
+    for r in records:
+        pm = PosteriorModel(r)
+        t = pm.to_theta(paper_parameters(r.metadata["setting"]), 0.003, 0.3)
+        medians.append(dict(zip(pm.names, pm.to_values(t))))
+    theta = jm.start(medians)
+    coords = default_coordinates(jm)
+    u0 = coords.to_u(theta)
+    rng = np.random.default_rng(0)
+    batches = {n: u0 + 1e-3 * rng.standard_normal((n, len(u0))) for n in (21, 42)}
+    S._MODEL, S._COORDS = jm, coords
+    times = {(n, c): [] for n in batches for c in ("default", "one")}
+    with multiprocessing.get_context("fork").Pool(args.processes) as pool:
+        for n, us in batches.items():
+            for label, chunks in (("default", None), ("one", 1)):
+                S._POOL = _Pool(pool, chunks)
+                S._log_prob_many(us)  # warm-up
+        for _ in range(args.repeats):
+            for n, us in batches.items():
+                for label, chunks in (("default", None), ("one", 1)):
+                    S._POOL = _Pool(pool, chunks)
+                    t0 = time.perf_counter()
+                    S._log_prob_many(us)
+                    times[(n, label)].append(time.perf_counter() - t0)
+    S._MODEL, S._COORDS, S._POOL = None, None, None
+    for n in batches:
+        d = statistics.median(times[(n, "default")])
+        o = statistics.median(times[(n, "one")])
+        print(f"batch of {n} walkers on {args.processes} processes: default chunks {d * 1e3:.1f} ms, "
+              f"one walker per task {o * 1e3:.1f} ms, ratio {d / o:.2f} (medians of {args.repeats})")
+
+
+if __name__ == "__main__":
+    main()
