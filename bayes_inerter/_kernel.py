@@ -543,17 +543,35 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
 _SPECIALISED: dict = {}
 
 
-def _specialised_source(n: int, n_in: int, node: tuple, out_node: int) -> str:
-    """The source of run_kernel specialised to these sizes and nodes (see above)."""
+def _specialised_source(n: int, n_in: int, node: tuple, out_node: int, nonzero: bytes | None = None) -> str:
+    """The source of run_kernel specialised to these sizes and nodes (see above).
+
+    ``nonzero``: the augmented matrix's nonzero pattern (``(Abar != 0).tobytes()``), or
+    None for a dense one. The guards' rows and the output row are rows of Abar (of R @
+    Abar for a stuck contact's holding-force rate), so their terms where the pattern says
+    zero are left out: a term 0 * z adds nothing to the sum (but the sign of a zero
+    result), and with both contacts sliding this leaves about half of the guards'
+    products. The tables' rows (exponentials) are taken as dense."""
     nc = len(node)
     m = n + 2 * n_in + nc
+    wcol = n + 2 * n_in
+    P = np.ones((m, m), dtype=bool) if nonzero is None else np.frombuffer(nonzero, dtype=bool).reshape(m, m)
+    r_cols, vd_cols, rd_cols = [], [], []
+    for i in range(nc):
+        r = P[node[i]].copy()
+        r[wcol:] = False
+        r_cols.append([j for j in range(m) if r[j]])
+        vd_cols.append([j for j in range(m) if P[node[i], j]])
+        rd = (r[:, None] & P).any(axis=0)
+        rd_cols.append([j for j in range(m) if rd[j]])
+    out_cols = [j for j in range(m) if P[out_node, j]]
     zs = [f"z{j}" for j in range(m)]
     lines = []
     add = lines.append
 
-    def dot(coef, vec):  # s = 0.0; s += c[j] * v[j] in order, as _dot2 / _dot3 sum
+    def dot(coef, vec, cols=range(m)):  # s = 0.0; s += c[j] * v[j] in order, as _dot2 / _dot3 sum
         expr = "0.0"
-        for j in range(m):
+        for j in cols:
             expr = f"({expr} + {coef(j)} * {vec[j]})"
         return expr
 
@@ -592,9 +610,11 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int) -> str:
         add(f"    sg{i} = sgn[{i}]")
         add(f"    va{i} = 0.0")
         add(f"    da{i} = 0.0")
-        for j in range(m):
+        for j in r_cols[i]:
             add(f"    r{i}_{j} = R[{i}, {j}]")
+        for j in vd_cols[i]:
             add(f"    vd{i}_{j} = 0.0")
+        for j in rd_cols[i]:
             add(f"    rd{i}_{j} = 0.0")
     for i in range(n):
         for j in range(m):
@@ -613,8 +633,9 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int) -> str:
         for j in range(m):
             add(f"            f{i}_{j} = F[mode, 0, {i}, {j}]")
     for i in range(nc):
-        for j in range(m):
+        for j in vd_cols[i]:
             add(f"            vd{i}_{j} = VD[mode, {i}, {j}]")
+        for j in rd_cols[i]:
             add(f"            rd{i}_{j} = RD[mode, {i}, {j}]")
     for q in range(n_in):
         add(f"        z{n + q} = inputs[k, {q}]")
@@ -629,7 +650,7 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int) -> str:
         add("        else:")
         for i in range(nc):
             add(f"            if (mode >> {i}) & 1:")
-            add(f"                da{i} = {dot(lambda j, i=i: f'rd{i}_{j}', zs)}")
+            add(f"                da{i} = {dot(lambda j, i=i: f'rd{i}_{j}', zs, rd_cols[i])}")
     else:
         add("        pass")
     # the whole interval in one step
@@ -646,14 +667,14 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int) -> str:
     add("        clear = True")
     for i in range(nc):
         add(f"        if (mode >> {i}) & 1:")
-        add(f"            vb{i} = {dot(lambda j, i=i: f'r{i}_{j}', zn)}")
-        add(f"            db{i} = {dot(lambda j, i=i: f'rd{i}_{j}', zn)}")
+        add(f"            vb{i} = {dot(lambda j, i=i: f'r{i}_{j}', zn, r_cols[i])}")
+        add(f"            db{i} = {dot(lambda j, i=i: f'rd{i}_{j}', zn, rd_cols[i])}")
         add(f"            slack = HERMITE_SLACK * h * (abs(da{i}) + abs(db{i}))")
         add(f"            if max(abs(va{i}), abs(vb{i})) + slack > f0_{i}:")
         add("                clear = False")
         add("        else:")
         add(f"            vb{i} = {zn[node[i]]}")
-        add(f"            db{i} = {dot(lambda j, i=i: f'vd{i}_{j}', zn)}")
+        add(f"            db{i} = {dot(lambda j, i=i: f'vd{i}_{j}', zn, vd_cols[i])}")
         add(f"            slack = HERMITE_SLACK * h * (abs(da{i}) + abs(db{i}))")
         add(f"            if min(sg{i} * va{i}, sg{i} * vb{i}) - slack <= 0.0:")
         add("                clear = False")
@@ -685,9 +706,9 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int) -> str:
         cond = "elif"
     if at_out:
         add("        else:")
-        add(f"            accel[k + 1] = {dot(lambda j: f'OUT[mode, {j}]', zs)}")
+        add(f"            accel[k + 1] = {dot(lambda j: f'OUT[mode, {j}]', zs, out_cols)}")
     else:
-        add(f"        accel[k + 1] = {dot(lambda j: f'OUT[mode, {j}]', zs)}")
+        add(f"        accel[k + 1] = {dot(lambda j: f'OUT[mode, {j}]', zs, out_cols)}")
     add(f"        vel[k + 1] = {zs[out_node]}")
     add("        if store:")
     for i in range(n):
@@ -754,12 +775,15 @@ def _load_specialised(source: str):
     return namespace["kernel"]
 
 
-def kernel_for(n: int, n_in: int, node, out_node: int):
+def kernel_for(n: int, n_in: int, node, out_node: int, nonzero: bytes | None = None):
     """run_kernel specialised to a network: state size ``n``, ``n_in`` inputs, contacts at
-    ``node`` (a sequence of node indices) and the output node. Takes run_kernel's arguments
-    and gives its results, bit for bit; compiled once per process (numba's cache keeps it
-    between processes where a folder can be written, see ``KERNEL_DIR_ENV``)."""
-    key = (int(n), int(n_in), tuple(int(x) for x in node), int(out_node))
+    ``node`` (a sequence of node indices), the output node, and optionally the augmented
+    matrix's nonzero pattern ``(Abar != 0).tobytes()`` (see ``_specialised_source``; the
+    kernel is then for matrices with zeros at least there). Takes run_kernel's arguments
+    and gives its results, bit for bit but for the sign of a zero; compiled once per
+    process (numba's cache keeps it between processes where a folder can be written, see
+    ``KERNEL_DIR_ENV``)."""
+    key = (int(n), int(n_in), tuple(int(x) for x in node), int(out_node), nonzero)
     fn = _SPECIALISED.get(key)
     if fn is None:
         fn = _SPECIALISED[key] = _load_specialised(_specialised_source(*key))

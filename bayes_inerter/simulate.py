@@ -207,7 +207,7 @@ def run_exact(A, B, nodes, f0, mass, inputs, h, *, x0=None, store=False, max_eve
     z0 = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float)
     if z0.shape != (n,):
         raise ValueError(f"initial state must have shape ({n},), got {z0.shape}")
-    kernel = _kernel.kernel_for(n, n_in, nodes, 0)
+    kernel = _kernel.kernel_for(n, n_in, nodes, 0, (Abar != 0).tobytes())
     accel, vel, states, status, _ = kernel(
         Abar, n, n_in, nodes, f0, mass, np.ascontiguousarray(inputs, dtype=float).reshape(-1, n_in),
         float(h), z0, 0, store, int(max_events),

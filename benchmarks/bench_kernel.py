@@ -143,7 +143,7 @@ def main():
 
 def special(a):
     """The kernel specialised to these arguments' network (``_kernel.kernel_for``)."""
-    return new_kernel.kernel_for(a[1], a[2], a[3], a[9])
+    return new_kernel.kernel_for(a[1], a[2], a[3], a[9], (a[0] != 0).tobytes())
 
 
 if __name__ == "__main__":

@@ -32,11 +32,12 @@ def kernel_arguments(network, setting, freq, *, scale=1.0, store=False, max_even
 def test_specialised_kernel_equals_general_bit_for_bit(network, setting, freq, scale, store):
     args = kernel_arguments(network, setting, freq, scale=scale, store=store)
     general = _kernel.run_kernel(*args)
-    special = _kernel.kernel_for(args[1], args[2], args[3], args[9])(*args)
-    for a, b in zip(general[:3], special[:3]):
-        np.testing.assert_array_equal(a, b)
-    assert general[3] == special[3] == _kernel.STATUS_OK
-    np.testing.assert_array_equal(general[4], special[4])
+    for pattern in (None, (args[0] != 0).tobytes()):  # dense, and the matrix's zeros left out
+        special = _kernel.kernel_for(args[1], args[2], args[3], args[9], pattern)(*args)
+        for a, b in zip(general[:3], special[:3]):
+            np.testing.assert_array_equal(a, b)
+        assert general[3] == special[3] == _kernel.STATUS_OK
+        np.testing.assert_array_equal(general[4], special[4])
     if network != "linear":
         assert general[4][0] > 0  # the contacts switched: the rare path ran too
 
@@ -55,6 +56,20 @@ def test_specialised_kernels_are_kept_per_shape():
     fn = _kernel.kernel_for(args[1], args[2], args[3], args[9])
     assert _kernel.kernel_for(args[1], args[2], list(args[3]), args[9]) is fn
     assert _kernel.kernel_for(args[1], args[2], args[3][:1], args[9]) is not fn
+    assert _kernel.kernel_for(args[1], args[2], args[3], args[9], (args[0] != 0).tobytes()) is not fn
+
+
+def test_sparse_kernel_leaves_out_only_zero_terms():
+    args = kernel_arguments("reduced", "A3", 1.0)
+    src = _kernel._specialised_source(args[1], args[2], tuple(args[3]), args[9], (args[0] != 0).tobytes())
+    dense = _kernel._specialised_source(args[1], args[2], tuple(args[3]), args[9])
+    assert src.count(" * ") < dense.count(" * ")
+    # every guard coefficient it reads is one the matrix can make nonzero
+    nz = args[0] != 0
+    for i, node in enumerate(args[3]):
+        for j in range(nz.shape[1]):
+            if f"vd{i}_{j} = VD" in src:
+                assert nz[node, j]
 
 
 def test_kernel_compiled_in_memory_where_no_folder_can_be_written(monkeypatch, tmp_path):
