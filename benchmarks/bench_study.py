@@ -41,10 +41,16 @@ def main():
     fits = [json.loads(p.read_text()) | {"_dir": p.parent} for p in sorted(out.glob("fits/*/*/fit.json"))]
     if not fits:
         sys.exit(f"{out}: no fits")
-    sec = study["seconds"]
-    procs = study.get("processes") or 1
+    # the last run into the folder that sampled fits (a later one that only reused them
+    # took seconds); study.json files older than the list have one run, "seconds"
+    sampled = [r for r in study.get("runs", []) if r.get("sampled")]
+    run = sampled[-1] if sampled else {"seconds": study["seconds"], "processes": study.get("processes"),
+                                       "finished": None}
+    sec = run["seconds"]
+    procs = run.get("processes") or 1
     print(f"study {out}: {len(fits)} fits on {procs} processes")
-    print("1. measured wall time (s): " + ", ".join(f"{k} {v:.0f}" for k, v in sec.items()))
+    print(f"1. measured wall time (s) of the run that sampled{' (finished ' + run['finished'] + ')' if run.get('finished') else ''}: "
+          + ", ".join(f"{k} {v:.0f}" for k, v in sec.items()))
     def sampling(f):  # over every run that built the chain (a resumed chain's runs add up)
         return f["timings_s"].get("sampling_all_runs", f["timings_s"]["sampling"])
 

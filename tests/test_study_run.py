@@ -73,9 +73,28 @@ def test_the_two_port_fits_come_first_with_each_records_seed(tmp_path):
 
 
 def test_running_again_reuses_finished_fits(study):
+    first = json.loads((study.out / "study.json").read_text())
     again = run_study(tiny_plan(), study.out, processes=1)
     assert [o["status"] for o in again.outcomes] == ["skipped"] * 4
     assert again.tables["inertance"] == study.tables["inertance"]
+    # the sampling run's time is kept beside the reuse's
+    runs = json.loads((study.out / "study.json").read_text())["runs"]
+    assert runs[:-1] == first["runs"]
+    assert runs[-1]["reused"] == 4 and runs[-1]["sampled"] == 0
+    assert first["runs"][-1]["sampled"] == 4 and first["runs"][-1]["seconds"] == first["seconds"]
+
+
+def test_earlier_runs_of_a_study_json_without_them(tmp_path):
+    from bayes_inerter.study.run import _earlier_runs
+
+    path = tmp_path / "study.json"
+    assert _earlier_runs(path) == []
+    path.write_text("{not json")
+    assert _earlier_runs(path) == []
+    path.write_text(json.dumps({"seconds": {"total": 3.0}, "processes": 2,
+                                "outcomes": [{"status": "done"}, {"status": "skipped"}]}))
+    assert _earlier_runs(path) == [{"finished": None, "seconds": {"total": 3.0}, "processes": 2,
+                                    "sampled": 1, "reused": 1}]
 
 
 def test_a_fresh_clone_of_committed_results_reuses_their_fits(tmp_path, monkeypatch):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import datetime
 import json
 import time
 from dataclasses import dataclass
@@ -156,8 +157,35 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     t3 = time.perf_counter()
     seconds = {"records": t1 - t0, "fits": t2 - t1, "joint": t_joint - t2, "analysis_and_report": t3 - t_joint,
                "total": t3 - t0}
+    this_run = {"finished": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                "seconds": seconds, "processes": processes,
+                "sampled": sum(o.get("status") == "done" for o in outcomes),
+                "reused": sum(o.get("status") == "skipped" for o in outcomes)}
     info = {"plan": dataclasses.asdict(plan), "versions": versions, "seconds": seconds,
             "processes": processes, "scheduler": scheduler,
-            "outcomes": [{k: v for k, v in o.items() if k != "job"} for o in outcomes]}
+            "outcomes": [{k: v for k, v in o.items() if k != "job"} for o in outcomes],
+            # every run into this folder, oldest first: a run that reuses finished fits
+            # takes seconds, and must not hide the time the sampling took
+            "runs": _earlier_runs(out / "study.json") + [this_run]}
     (out / "study.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
     return StudyResult(out, outcomes, tables, report, seconds)
+
+
+def _earlier_runs(path: Path) -> list:
+    """The ``runs`` of an earlier study.json in the folder (one entry made from its
+    ``seconds`` if it predates the list); none if there is none or it cannot be read."""
+    try:
+        info = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return []
+    if not isinstance(info, dict):
+        return []
+    runs = info.get("runs")
+    if isinstance(runs, list):
+        return runs
+    if isinstance(info.get("seconds"), dict):
+        outcomes = info.get("outcomes") or []
+        return [{"finished": None, "seconds": info["seconds"], "processes": info.get("processes"),
+                 "sampled": sum(o.get("status") == "done" for o in outcomes),
+                 "reused": sum(o.get("status") == "skipped" for o in outcomes)}]
+    return []
