@@ -771,7 +771,7 @@ def _load_specialised(source: str):
         spec.loader.exec_module(module)
         return module.kernel
     namespace: dict = {}
-    exec(compile(_HEADER.replace("@njit(cache=True)", "") + "@njit\n" + source, name, "exec"), namespace)
+    exec(compile(_HEADER + "@njit\n" + source, name, "exec"), namespace)
     return namespace["kernel"]
 
 

@@ -48,6 +48,8 @@ __all__ = [
     "check_record",
     "Drive",
     "run_piecewise_linear",
+    "run_exact",
+    "contacts",
     "SimulationError",
     "MAX_EVENTS_PER_STEP",
     "UNIFORM_RTOL",
@@ -163,9 +165,14 @@ def _mean_acceleration(v, h):
 
 
 def _contacts(compiled: CompiledNetwork):
-    bounds = compiled.coulomb_bounds
+    return contacts(compiled.coulomb_bounds, compiled.masses)
+
+
+def contacts(bounds, masses):
+    """The exact kernel's contacts from per-node Coulomb bounds (N) and masses (kg): their
+    nodes (those with a bound), bounds and masses."""
     nodes = np.flatnonzero(bounds > 0).astype(np.int64)
-    return nodes, bounds[nodes].astype(float), compiled.masses[nodes].astype(float)
+    return nodes, bounds[nodes].astype(float), masses[nodes].astype(float)
 
 
 def run_piecewise_linear(

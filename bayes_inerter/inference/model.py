@@ -30,7 +30,7 @@ from ..models import FIELDS, linear_chain
 from ..network.compile import chain_state_space
 from ..records.conditioning import LOWPASS_HZ, lowpass
 from ..records.record import Record
-from ..simulate import SAMPLINGS, Drive, SimulationError, check_record, run_exact, simulate
+from ..simulate import SAMPLINGS, Drive, SimulationError, check_record, contacts, run_exact, simulate
 from .priors import DEFAULT_PRIORS, NOISE_PRIORS, SPLIT_PRIORS
 
 __all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
@@ -326,9 +326,7 @@ class PosteriorModel:
             return simulate(self.parameters(theta), self._drive, network=self.network, sampling=lk.sampling)
         masses, link_c, link_k, viscous, bounds = self._chain.arrays(self.field_vector(theta))
         A, B = chain_state_space(masses, link_c, link_k, viscous)
-        nodes = np.flatnonzero(bounds > 0)
-        a, _ = run_exact(A, B, nodes, bounds[nodes], masses[nodes], self._force, self._drive.h,
-                         sampling=lk.sampling)
+        a, _ = run_exact(A, B, *contacts(bounds, masses), self._force, self._drive.h, sampling=lk.sampling)
         return a
 
     def simulate_lp(self, theta) -> np.ndarray:

@@ -157,10 +157,8 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     t3 = time.perf_counter()
     seconds = {"records": t1 - t0, "fits": t2 - t1, "joint": t_joint - t2, "analysis_and_report": t3 - t_joint,
                "total": t3 - t0}
-    this_run = {"finished": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-                "seconds": seconds, "processes": processes,
-                "sampled": sum(o.get("status") == "done" for o in outcomes),
-                "reused": sum(o.get("status") == "skipped" for o in outcomes)}
+    this_run = _run_entry(datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), seconds,
+                          processes, outcomes)
     info = {"plan": dataclasses.asdict(plan), "versions": versions, "seconds": seconds,
             "processes": processes, "scheduler": scheduler,
             "outcomes": [{k: v for k, v in o.items() if k != "job"} for o in outcomes],
@@ -184,8 +182,13 @@ def _earlier_runs(path: Path) -> list:
     if isinstance(runs, list):
         return runs
     if isinstance(info.get("seconds"), dict):
-        outcomes = info.get("outcomes") or []
-        return [{"finished": None, "seconds": info["seconds"], "processes": info.get("processes"),
-                 "sampled": sum(o.get("status") == "done" for o in outcomes),
-                 "reused": sum(o.get("status") == "skipped" for o in outcomes)}]
+        return [_run_entry(None, info["seconds"], info.get("processes"), info.get("outcomes") or [])]
     return []
+
+
+def _run_entry(finished, seconds: dict, processes, outcomes: list) -> dict:
+    """One entry of study.json's ``runs``: when it finished, its timings, and how many
+    fits it sampled and reused."""
+    return {"finished": finished, "seconds": seconds, "processes": processes,
+            "sampled": sum(o.get("status") == "done" for o in outcomes),
+            "reused": sum(o.get("status") == "skipped" for o in outcomes)}
