@@ -538,9 +538,165 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
 # sizes, contact nodes and output node, with the state, the current mode's table rows and
 # the guards in local variables; every sum is formed in run_kernel's order, so the
 # numbers are the same bit for bit. The rare path (an interval where the cheap bound
-# fails) stores the locals into the arrays and runs _events, as run_kernel does.
+# fails) stores the locals into the arrays and runs ``events``, _events written out in
+# the same way (``_events_source``). Rare as it is, it was most of the time: on A3 at
+# 1 Hz (10 s, paper's parameters) 226 of 10,000 intervals took it, and their 62
+# bisections and the intervals' remainders came to about 2,100 dyadic steps, each a
+# step, the guards and the Hermite test passing arrays between compiled functions: the
+# kernel took 428 us, and 155 us with the rare path cut out (every interval taken as
+# clear). Written out, it took 256 us (medians of 40, same numbers bit for bit).
 
 _SPECIALISED: dict = {}
+
+
+def _events_source(n: int, n_in: int, node: tuple, r_cols: list, vd_cols: list, rd_cols: list) -> str:
+    """The source of ``crossed`` and ``events``: _crossed and _events (with _bisect, _step,
+    _guards and _advance) written out for one network, every sum in the order of the
+    general functions (the guards' structural zeros left out, as in the fast path). The
+    general functions pass arrays between them at every step of the rare path; here the
+    states and guards live in local variables, so a search for a switch is several times
+    cheaper (see ``benchmarks/bench_kernel.py``)."""
+    nc = len(node)
+    m = n + 2 * n_in + nc
+    lines = []
+    add = lines.append
+
+    def dot(coef, vec, cols):  # s = 0.0; s += c[j] * v[j] in order, as _dot2 / _dot3 sum
+        expr = "0.0"
+        for j in cols:
+            expr = f"({expr} + {coef(j)} * {vec}{j})"
+        return expr
+
+    def step(src, dst, T, ind):  # _step: dst = src + F[mode, level] src over a time T
+        for i in range(n):
+            expr = f"{src}{i}"
+            for j in range(m):
+                expr = f"({expr} + F[mode, level, {i}, {j}] * {src}{j})"
+            add(f"{ind}{dst}{i} = {expr}")
+        for j in range(n, m):
+            add(f"{ind}{dst}{j} = {src}{j}")
+        for q in range(n_in):
+            add(f"{ind}{dst}{n + q} = {src}{n + q} + {T} * {src}{n + n_in + q}")
+
+    def guards(src, val, der, ind):  # _guards: each contact's guard and its rate at src
+        for i in range(nc):
+            add(f"{ind}if (mode >> {i}) & 1:")
+            add(f"{ind}    {val}{i} = {dot(lambda j, i=i: f'R[{i}, {j}]', src, r_cols[i])}")
+            add(f"{ind}    {der}{i} = {dot(lambda j, i=i: f'RD[mode, {i}, {j}]', src, rd_cols[i])}")
+            add(f"{ind}else:")
+            add(f"{ind}    {val}{i} = {src}{node[i]}")
+            add(f"{ind}    {der}{i} = {dot(lambda j, i=i: f'VD[mode, {i}, {j}]', src, vd_cols[i])}")
+
+    def copy(src, dst, ind):
+        for j in range(m):
+            add(f"{ind}{dst}{j} = {src}{j}")
+
+    def load(ind):
+        for j in range(m):
+            add(f"{ind}z{j} = z[{j}]")
+        for i in range(nc):
+            add(f"{ind}sg{i} = sgn[{i}]")
+
+    def store(ind):
+        for j in range(m):
+            add(f"{ind}z[{j}] = z{j}")
+
+    ends = ", ".join(f"va{i}, da{i}, vb{i}, db{i}, sg{i}, f0_{i}" for i in range(nc))
+    add("@_jit")
+    add(f"def crossed(mode, T{', ' + ends if nc else ''}):")
+    add("    # _crossed on scalars")
+    for i in range(nc):
+        add(f"    slack = HERMITE_SLACK * T * (abs(da{i}) + abs(db{i}))")
+        add(f"    if (mode >> {i}) & 1:")
+        add(f"        if abs(vb{i}) > f0_{i}:")
+        add("            return True")
+        add(f"        if not max(abs(va{i}), abs(vb{i})) + slack <= f0_{i}:")
+        add(f"            lo, hi = _cubic_range(va{i}, T * da{i}, vb{i}, T * db{i})")
+        add(f"            if hi > f0_{i} or lo < -f0_{i}:")
+        add("                return True")
+        add("    else:")
+        add(f"        if sg{i} * vb{i} < 0.0:")
+        add("            return True")
+        add(f"        if not min(sg{i} * va{i}, sg{i} * vb{i}) - slack > 0.0:")
+        add(f"            lo, hi = _cubic_range(sg{i} * va{i}, T * sg{i} * da{i}, sg{i} * vb{i}, T * sg{i} * db{i})")
+        add("            if lo < 0.0:")
+        add("                return True")
+    add("    return False")
+    add("")
+    add("")
+    args = ", ".join(f"va{i}, da{i}, vb{i}, db{i}, sg{i}, f0_{i}" for i in range(nc))
+    add("@_jit")
+    add("def events(F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events):")
+    add("    # _events on local variables: z, va, da, sgn in and out")
+    add(f"    wcol = {n + 2 * n_in}")
+    load("    ")
+    for i in range(nc):
+        add(f"    va{i} = va[{i}]")
+        add(f"    da{i} = da[{i}]")
+        add(f"    vb{i} = 0.0")
+        add(f"    db{i} = 0.0")
+        add(f"    f0_{i} = f0[{i}]")
+    add("    FULL = np.int64(1) << J")
+    add("    pos = np.int64(0)")
+    add("    count = 0")
+    add("    while pos < FULL:")
+    add("        if pos == 0:")
+    add("            tz = J")
+    add("        else:")
+    add("            tz = 0")
+    add("            while (pos >> tz) & 1 == 0:")
+    add("                tz += 1")
+    add("        size = np.int64(1) << tz")
+    add("        level = J - tz")
+    add("        T = h * size / FULL")
+    step("z", "y", "T", "        ")
+    guards("y", "vb", "db", "        ")
+    add(f"        if not crossed(mode, T, {args}):")
+    copy("y", "z", "            ")
+    for i in range(nc):
+        add(f"            va{i} = vb{i}")
+        add(f"            da{i} = db{i}")
+    add("            pos += size")
+    add("            continue")
+    add("        stats[1] += 1")
+    add("        # _bisect: [0, size] ticks from z for the first crossing; its end state in y")
+    add("        tick = h / FULL")
+    add("        advanced = np.int64(0)")
+    copy("z", "c", "        ")
+    guards("c", "va", "da", "        ")
+    add("        while size > 1:")
+    add("            size >>= 1")
+    add("            level += 1")
+    add("            T = tick * size")
+    step("c", "w", "T", "            ")
+    guards("w", "vb", "db", "            ")
+    add(f"            if crossed(mode, T, {args}):")
+    copy("w", "y", "                ")
+    add("            else:")
+    copy("w", "c", "                ")
+    for i in range(nc):
+        add(f"                va{i} = vb{i}")
+        add(f"                da{i} = db{i}")
+    add("                advanced += size")
+    add("        pos += advanced")
+    add("        pos += 1")
+    copy("y", "z", "        ")
+    store("        ")
+    add(f"        new_mode = _switch(z, mode, {nc}, node, R, f0, sgn, wcol)")
+    load("        ")
+    add("        if new_mode != mode:")
+    add("            stats[0] += 1")
+    add("            mode = new_mode")
+    add("        count += 1")
+    add("        if count > max_events:")
+    add("            return mode, False")
+    guards("z", "va", "da", "        ")
+    store("    ")
+    for i in range(nc):
+        add(f"    va[{i}] = va{i}")
+        add(f"    da[{i}] = da{i}")
+    add("    return mode, True")
+    return "\n".join(lines) + "\n"
 
 
 def _specialised_source(n: int, n_in: int, node: tuple, out_node: int, nonzero: bytes | None = None) -> str:
@@ -583,6 +739,7 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int, nonzero: 
         for j in range(m):
             add(f"{indent}z[{j}] = {zs[j]}")
 
+    add("@_jit")
     add("def kernel(Abar, n_, n_in_, node, f0, mass, inputs, h, z_init, out_node_, store, max_events):")
     add(f"    n = {n}")
     add(f"    n_in = {n_in}")
@@ -598,11 +755,8 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int, nonzero: 
     add(f"    vel[0] = z[{out_node}]")
     add("    if store:")
     add("        states[0] = z[:n]")
-    add("    zn = np.empty(m)")
-    add("    zc = np.empty(m)")
-    add("    zm = np.empty(m)")
     w = max(nc, 1)
-    for a in ("va", "da", "vb", "db"):
+    for a in ("va", "da"):
         add(f"    {a} = np.empty({w})")
     load_z("    ")
     for i in range(nc):
@@ -689,8 +843,7 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int, nonzero: 
     for i in range(nc):
         add(f"            va[{i}] = va{i}")
         add(f"            da[{i}] = da{i}")
-    add("            mode, ok = _events(F, mode, J, h, z, zn, zc, zm, n, n_in, node, R, VD, RD, va, da, vb, db, "
-        "sgn, f0, stats, max_events)")
+    add("            mode, ok = events(F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events)")
     add("            if not ok:")
     add("                return accel, vel, states, STATUS_TOO_MANY_EVENTS, stats")
     load_z("            ")
@@ -714,7 +867,7 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int, nonzero: 
     for i in range(n):
         add(f"            states[k + 1, {i}] = {zs[i]}")
     add("    return accel, vel, states, STATUS_OK, stats")
-    return "\n".join(lines) + "\n"
+    return _events_source(n, n_in, node, r_cols, vd_cols, rd_cols) + "\n\n" + "\n".join(lines) + "\n"
 
 
 #: Where the specialised kernels' generated modules are written, so that numba's cache
@@ -739,8 +892,8 @@ def _kernel_dirs():
 _HEADER = (
     "import numpy as np\n"
     "from numba import njit\n"
-    "from bayes_inerter._kernel import (HERMITE_SLACK, STATUS_OK, STATUS_TOO_MANY_EVENTS, _dot2, _events,\n"
-    "                                   _guards, _setup, _start)\n\n\n"
+    "from bayes_inerter._kernel import (HERMITE_SLACK, STATUS_OK, STATUS_TOO_MANY_EVENTS, _cubic_range, _dot2,\n"
+    "                                   _guards, _setup, _start, _switch)\n\n"
 )
 
 
@@ -754,7 +907,7 @@ def _load_specialised(source: str):
     own = Path(__file__).read_bytes()
     digest = hashlib.sha256(own + source.encode()).hexdigest()[:20]
     name = f"bayes_inerter_kernel_{digest}"
-    text = _HEADER + "@njit(cache=True)\n" + source
+    text = _HEADER + "_jit = njit(cache=True)\n\n\n" + source
     for folder in _kernel_dirs():
         path = folder / f"{name}.py"
         try:
@@ -771,7 +924,7 @@ def _load_specialised(source: str):
         spec.loader.exec_module(module)
         return module.kernel
     namespace: dict = {}
-    exec(compile(_HEADER + "@njit\n" + source, name, "exec"), namespace)
+    exec(compile(_HEADER + "_jit = njit\n\n\n" + source, name, "exec"), namespace)
     return namespace["kernel"]
 
 

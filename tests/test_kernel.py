@@ -70,6 +70,10 @@ def test_sparse_kernel_leaves_out_only_zero_terms():
         for j in range(nz.shape[1]):
             if f"vd{i}_{j} = VD" in src:
                 assert nz[node, j]
+            if f"VD[mode, {i}, {j}]" in src:  # the rare path's reads (``events``)
+                assert nz[node, j]
+    assert "VD[mode, 0, " in src and "VD[mode, 0, " in dense
+    assert src.count("VD[mode, ") < dense.count("VD[mode, ")
 
 
 def test_kernel_compiled_in_memory_where_no_folder_can_be_written(monkeypatch, tmp_path):
