@@ -549,6 +549,39 @@ def run_kernel(Abar, n, n_in, node, f0, mass, inputs, h, z_init, out_node, store
 _SPECIALISED: dict = {}
 
 
+def _dot_source(coef, names, cols) -> str:
+    """Source of the sum s = 0.0; s += coef(j) * names[j] for j in cols, in that order (as
+    _dot2 and _dot3 sum)."""
+    expr = "0.0"
+    for j in cols:
+        expr = f"({expr} + {coef(j)} * {names[j]})"
+    return expr
+
+
+def _load_source(m: int, indent: str) -> list:
+    """Lines that load the state array z into the locals z0, z1, ..."""
+    return [f"{indent}z{j} = z[{j}]" for j in range(m)]
+
+
+def _store_source(m: int, indent: str) -> list:
+    """Lines that store the locals z0, z1, ... into the state array z."""
+    return [f"{indent}z[{j}] = z{j}" for j in range(m)]
+
+
+def _step_source(n: int, n_in: int, m: int, coef, src: str, dst: str, T: str, indent: str) -> list:
+    """Lines of _step written out: dst = src + F src over a time T (F's entry (i, j) is
+    ``coef(i, j)``; each row's sum in the order of j), for locals named src0, src1, ..."""
+    lines = []
+    for i in range(n):
+        expr = f"{src}{i}"
+        for j in range(m):
+            expr = f"({expr} + {coef(i, j)} * {src}{j})"
+        lines.append(f"{indent}{dst}{i} = {expr}")
+    lines += [f"{indent}{dst}{j} = {src}{j}" for j in range(n, m)]
+    lines += [f"{indent}{dst}{n + q} = {src}{n + q} + {T} * {src}{n + n_in + q}" for q in range(n_in)]
+    return lines
+
+
 def _events_source(n: int, n_in: int, node: tuple, r_cols: list, vd_cols: list, rd_cols: list) -> str:
     """The source of ``crossed`` and ``events``: _crossed and _events (with _bisect, _step,
     _guards and _advance) written out for one network, every sum in the order of the
@@ -561,22 +594,13 @@ def _events_source(n: int, n_in: int, node: tuple, r_cols: list, vd_cols: list, 
     lines = []
     add = lines.append
 
-    def dot(coef, vec, cols):  # s = 0.0; s += c[j] * v[j] in order, as _dot2 / _dot3 sum
-        expr = "0.0"
-        for j in cols:
-            expr = f"({expr} + {coef(j)} * {vec}{j})"
-        return expr
+    args = ", ".join(f"va{i}, da{i}, vb{i}, db{i}, sg{i}, f0_{i}" for i in range(nc))
+
+    def dot(coef, vec, cols):
+        return _dot_source(coef, [f"{vec}{j}" for j in range(m)], cols)
 
     def step(src, dst, T, ind):  # _step: dst = src + F[mode, level] src over a time T
-        for i in range(n):
-            expr = f"{src}{i}"
-            for j in range(m):
-                expr = f"({expr} + F[mode, level, {i}, {j}] * {src}{j})"
-            add(f"{ind}{dst}{i} = {expr}")
-        for j in range(n, m):
-            add(f"{ind}{dst}{j} = {src}{j}")
-        for q in range(n_in):
-            add(f"{ind}{dst}{n + q} = {src}{n + q} + {T} * {src}{n + n_in + q}")
+        lines.extend(_step_source(n, n_in, m, lambda i, j: f"F[mode, level, {i}, {j}]", src, dst, T, ind))
 
     def guards(src, val, der, ind):  # _guards: each contact's guard and its rate at src
         for i in range(nc):
@@ -591,19 +615,27 @@ def _events_source(n: int, n_in: int, node: tuple, r_cols: list, vd_cols: list, 
         for j in range(m):
             add(f"{ind}{dst}{j} = {src}{j}")
 
+    def probe(src, dst, ind):  # a step from src, the guards at its end, and the test
+        step(src, dst, "T", ind)
+        guards(dst, "vb", "db", ind)
+        return f"crossed(mode, T, {args})"
+
+    def advance(src, dst, ind):  # _advance: the step's end becomes the start
+        copy(src, dst, ind)
+        for i in range(nc):
+            add(f"{ind}va{i} = vb{i}")
+            add(f"{ind}da{i} = db{i}")
+
     def load(ind):
-        for j in range(m):
-            add(f"{ind}z{j} = z[{j}]")
+        lines.extend(_load_source(m, ind))
         for i in range(nc):
             add(f"{ind}sg{i} = sgn[{i}]")
 
     def store(ind):
-        for j in range(m):
-            add(f"{ind}z[{j}] = z{j}")
+        lines.extend(_store_source(m, ind))
 
-    ends = ", ".join(f"va{i}, da{i}, vb{i}, db{i}, sg{i}, f0_{i}" for i in range(nc))
     add("@_jit")
-    add(f"def crossed(mode, T{', ' + ends if nc else ''}):")
+    add(f"def crossed(mode, T{', ' + args if nc else ''}):")
     add("    # _crossed on scalars")
     for i in range(nc):
         add(f"    slack = HERMITE_SLACK * T * (abs(da{i}) + abs(db{i}))")
@@ -624,7 +656,6 @@ def _events_source(n: int, n_in: int, node: tuple, r_cols: list, vd_cols: list, 
     add("    return False")
     add("")
     add("")
-    args = ", ".join(f"va{i}, da{i}, vb{i}, db{i}, sg{i}, f0_{i}" for i in range(nc))
     add("@_jit")
     add("def events(F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events):")
     add("    # _events on local variables: z, va, da, sgn in and out")
@@ -649,13 +680,8 @@ def _events_source(n: int, n_in: int, node: tuple, r_cols: list, vd_cols: list, 
     add("        size = np.int64(1) << tz")
     add("        level = J - tz")
     add("        T = h * size / FULL")
-    step("z", "y", "T", "        ")
-    guards("y", "vb", "db", "        ")
-    add(f"        if not crossed(mode, T, {args}):")
-    copy("y", "z", "            ")
-    for i in range(nc):
-        add(f"            va{i} = vb{i}")
-        add(f"            da{i} = db{i}")
+    add(f"        if not {probe('z', 'y', '        ')}:")
+    advance("y", "z", "            ")
     add("            pos += size")
     add("            continue")
     add("        stats[1] += 1")
@@ -668,15 +694,10 @@ def _events_source(n: int, n_in: int, node: tuple, r_cols: list, vd_cols: list, 
     add("            size >>= 1")
     add("            level += 1")
     add("            T = tick * size")
-    step("c", "w", "T", "            ")
-    guards("w", "vb", "db", "            ")
-    add(f"            if crossed(mode, T, {args}):")
+    add(f"            if {probe('c', 'w', '            ')}:")
     copy("w", "y", "                ")
     add("            else:")
-    copy("w", "c", "                ")
-    for i in range(nc):
-        add(f"                va{i} = vb{i}")
-        add(f"                da{i} = db{i}")
+    advance("w", "c", "                ")
     add("                advanced += size")
     add("        pos += advanced")
     add("        pos += 1")
@@ -725,19 +746,13 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int, nonzero: 
     lines = []
     add = lines.append
 
-    def dot(coef, vec, cols=range(m)):  # s = 0.0; s += c[j] * v[j] in order, as _dot2 / _dot3 sum
-        expr = "0.0"
-        for j in cols:
-            expr = f"({expr} + {coef(j)} * {vec[j]})"
-        return expr
+    dot = _dot_source
 
     def load_z(indent):
-        for j in range(m):
-            add(f"{indent}{zs[j]} = z[{j}]")
+        lines.extend(_load_source(m, indent))
 
     def store_z(indent):
-        for j in range(m):
-            add(f"{indent}z[{j}] = {zs[j]}")
+        lines.extend(_store_source(m, indent))
 
     add("@_jit")
     add("def kernel(Abar, n_, n_in_, node, f0, mass, inputs, h, z_init, out_node_, store, max_events):")
@@ -809,15 +824,7 @@ def _specialised_source(n: int, n_in: int, node: tuple, out_node: int, nonzero: 
         add("        pass")
     # the whole interval in one step
     zn = [f"y{j}" for j in range(m)]
-    for i in range(n):
-        expr = zs[i]
-        for j in range(m):
-            expr = f"({expr} + f{i}_{j} * {zs[j]})"
-        add(f"        {zn[i]} = {expr}")
-    for j in range(n, m):
-        add(f"        {zn[j]} = {zs[j]}")
-    for q in range(n_in):
-        add(f"        {zn[n + q]} = {zs[n + q]} + h * {zs[n + n_in + q]}")
+    lines.extend(_step_source(n, n_in, m, lambda i, j: f"f{i}_{j}", "z", "y", "h", "        "))
     add("        clear = True")
     for i in range(nc):
         add(f"        if (mode >> {i}) & 1:")
