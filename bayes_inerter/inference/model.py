@@ -361,16 +361,21 @@ class PosteriorModel:
         rho = float(theta[-1]) if self.likelihood.residual == "ar1" else 0.0
         return sigma, rho
 
+    def _simulation(self, theta):
+        """:meth:`simulate_lp` at theta, or None where the simulation fails or the
+        parameters are out of range."""
+        try:
+            return self.simulate_lp(theta)
+        except (SimulationError, ValueError):
+            return None
+
     def evaluate(self, theta):
         """(log prior, pointwise log-likelihood, low-passed simulation) at theta."""
         lp = self.log_prior(theta)
         if not math.isfinite(lp):
             return lp, None, None
-        try:
-            sim = self.simulate_lp(theta)
-        except (SimulationError, ValueError):
-            return -math.inf, None, None
-        if not np.all(np.isfinite(sim)):
+        sim = self._simulation(theta)
+        if sim is None or not np.all(np.isfinite(sim)):
             return -math.inf, None, None
         sigma, rho = self.noise(theta)
         ll = self.pointwise_loglik(sim[self.grid] - self.observed, sigma, rho)
@@ -380,9 +385,8 @@ class PosteriorModel:
         """(residual on the likelihood's grid, phi) of the simulation at theta; None where
         it fails or is not finite. What :meth:`log_prob` and the joint model need, in one
         compiled pass over the simulation (phi's norm summed in order, not by BLAS)."""
-        try:
-            sim = self.simulate_lp(theta)
-        except (SimulationError, ValueError):
+        sim = self._simulation(theta)
+        if sim is None:
             return None
         w = self.window
         r, sq, ok = _misfit(sim, self.grid, self.observed, int(w[0]), int(w[-1]) + 1, self.measured_lp)
