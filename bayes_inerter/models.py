@@ -177,8 +177,11 @@ def _sums(coef, values):
     return out
 
 
-def _compiled_arrays(name: str, values) -> tuple[np.ndarray, tuple[int, ...]]:
-    compiled = compile_network(build_network(name, InerterParameters(**dict(zip(FIELDS, map(float, values))))))
+def _compiled(name: str, values):
+    return compile_network(build_network(name, InerterParameters(**dict(zip(FIELDS, map(float, values))))))
+
+
+def _flat_arrays(compiled) -> tuple[np.ndarray, tuple[int, ...]]:
     parts = (compiled.masses, compiled.link_c, compiled.link_k, compiled.viscous, compiled.coulomb_bounds)
     return np.concatenate(parts), tuple(len(p) for p in parts)
 
@@ -190,19 +193,19 @@ def linear_chain(name: str) -> LinearChain | None:
     another point; None where the arrays are not sums of parameters (the full network's
     tan(theta) shares) or the network needs more than the exact kernel."""
     base = np.array([getattr(paper_parameters("A3"), f) for f in FIELDS])
-    flat0, sizes = _compiled_arrays(name, base)
+    compiled = _compiled(name, base)
+    if not compiled.all_coulomb:
+        return None
+    flat0, sizes = _flat_arrays(compiled)
     coef = np.empty((len(flat0), len(FIELDS)))
     for k in range(len(FIELDS)):
         v = base.copy()
         v[k] += 1.0
-        coef[:, k] = _compiled_arrays(name, v)[0] - flat0
+        coef[:, k] = _flat_arrays(_compiled(name, v))[0] - flat0
     rounded = np.round(coef)
     if not (np.allclose(coef, rounded, rtol=0, atol=1e-6) and set(np.unique(rounded)) <= {0.0, 1.0}):
         return None
     check = base * np.linspace(0.5, 2.0, len(FIELDS))
-    if not np.allclose(rounded @ check, _compiled_arrays(name, check)[0], rtol=1e-14, atol=0):
-        return None
-    compiled = compile_network(build_network(name, paper_parameters("A3")))
-    if not compiled.all_coulomb:
+    if not np.allclose(rounded @ check, _flat_arrays(_compiled(name, check))[0], rtol=1e-14, atol=0):
         return None
     return LinearChain(name, rounded, sizes)
