@@ -1,11 +1,12 @@
 """The CSV format for records, generated and measured alike, and its validating reader.
 
 A record is a CSV file with the header ``time_s,force_N,accel_m_s2`` (optionally a fourth
-column ``disp_m``), one sample a row, SI units. Its metadata sits either in a JSON file of
+column ``disp_m``), one sample a row, SI units; or any delimited text file (comma,
+semicolon or tab) whose columns and units a :class:`.units.ColumnMap` names. Its metadata sits either in a JSON file of
 the same name beside it (``run1.csv`` -> ``run1.json``) or in ``# key: value`` lines
 before the header (values that read as numbers become numbers). Known keys:
 ``setting`` (A0..B2) or ``m_s`` (kg), ``m_B`` (kg), ``drive_frequency_hz``,
-``sampling_rate_hz``; generated records also carry ``true_parameters`` and ``generator``.
+``sampling_rate_hz``, ``columns`` and ``units`` (:mod:`.units`); generated records also carry ``true_parameters`` and ``generator``.
 
 The reader drops, interpolates and reorders nothing: any problem is a
 :class:`RecordError` (a ValueError) with a one-line message naming the file, the line
@@ -24,6 +25,7 @@ import numpy as np
 from ..device import SETTINGS
 from ..simulate import UNIFORM_RTOL
 from .record import Record
+from .units import QUANTITIES, ColumnMap, UnitError
 
 __all__ = ["RecordError", "read_record", "write_record", "metadata_path", "COLUMNS", "MIN_SAMPLES"]
 
@@ -69,6 +71,8 @@ def _check_metadata(path, meta: dict, time: np.ndarray) -> None:
             raise RecordError(
                 f"{where} says sampling_rate_hz = {rate:g} but the time column is sampled at "
                 f"{actual:g} Hz; correct one of them"
+                + (" (a time column in ms reads 1000 times too slow: give --units time=ms)"
+                   if abs(actual * 1000 - rate) < 0.01 * rate else "")
             )
 
 
@@ -92,8 +96,37 @@ def _read_metadata(path: Path, header_meta: dict) -> dict:
     return meta
 
 
-def read_record(path) -> Record:
-    """Read and validate a record CSV (and its metadata); raise RecordError if unusable."""
+def _delimiter(header: str) -> str:
+    """The field separator of a header line: comma, semicolon or tab, whichever splits
+    it into the most fields (comma when none does)."""
+    counts = {d: header.count(d) for d in (",", ";", "\t")}
+    best = max(counts, key=lambda d: counts[d])
+    return best if counts[best] else ","
+
+
+def _column_map(path, meta: dict, given: ColumnMap | None) -> ColumnMap:
+    """The metadata's ``columns`` and ``units``, overridden by the caller's map."""
+    try:
+        own = ColumnMap.from_options(meta.get("columns"), meta.get("units"), where=f"{path}: metadata")
+    except UnitError as exc:
+        raise RecordError(str(exc)) from None
+    return own if given is None else own.overriding(given)
+
+
+def read_record(path, *, columns=None, units=None) -> Record:
+    """Read and validate a record CSV (and its metadata); raise RecordError if unusable.
+
+    ``columns`` and ``units``: which of the file's columns is which quantity and in which
+    unit (:class:`.units.ColumnMap`; texts as on the command line, ``"time=Zeit,
+    force=Kraft"`` and ``"time=ms,force=kN"``, or dicts); they override the metadata's
+    ``columns`` and ``units`` keys. The record returned is in SI units, its metadata
+    without those two keys but with ``source_columns`` saying what was read from where.
+    The field separator (comma, semicolon or tab) is found from the header line.
+    """
+    try:
+        given = None if columns is None and units is None else ColumnMap.from_options(columns, units)
+    except UnitError as exc:
+        raise RecordError(str(exc)) from None
     path = Path(path)
     if not path.exists():
         raise RecordError(f"{path}: no such file; check the path")
@@ -123,42 +156,57 @@ def read_record(path) -> Record:
         i += 1
     if i == len(lines):
         raise RecordError(f"{path}: no header line; expected {','.join(COLUMNS)}")
+    meta = _read_metadata(path, header_meta)
+    cmap = _column_map(path, meta, given)
     header_line = i + 1
-    header = [h.strip() for h in next(csv.reader([lines[i]]))]
+    delimiter = _delimiter(lines[i])
+    header = [h.strip() for h in next(csv.reader([lines[i]], delimiter=delimiter))]
     dupes = sorted({h for h in header if header.count(h) > 1})
     if dupes:
         raise RecordError(f"{path}: line {header_line}: column {dupes[0]!r} appears more than once")
-    for col in COLUMNS:
-        if col not in header:
+    wanted = {q: cmap.column(q) for q in QUANTITIES}
+    for q in QUANTITIES[:3]:
+        if wanted[q] not in header:
+            hint = (f"correct {q}={wanted[q]} in the column map" if q in cmap.names
+                    else f"name the file's {q} column with --columns {q}=NAME")
             raise RecordError(
-                f"{path}: line {header_line}: missing column {col!r} (found {', '.join(header)}); "
-                f"the header must read {','.join(COLUMNS)}[,disp_m] in SI units"
+                f"{path}: line {header_line}: missing column {wanted[q]!r} (found {', '.join(header)}); "
+                f"the header must read {','.join(COLUMNS)}[,disp_m] in SI units, or {hint}"
             )
-    unknown = [h for h in header if h not in COLUMNS + OPTIONAL_COLUMNS]
-    if unknown:
-        raise RecordError(
-            f"{path}: line {header_line}: unknown column {unknown[0]!r}; allowed columns are "
-            f"{', '.join(COLUMNS + OPTIONAL_COLUMNS)} (SI units)"
-        )
+    if "disp" in cmap.names and wanted["disp"] not in header:
+        raise RecordError(f"{path}: line {header_line}: missing column {wanted['disp']!r} named for disp "
+                          f"(found {', '.join(header)}); check --columns")
+    if not cmap.explicit:
+        unknown = [h for h in header if h not in COLUMNS + OPTIONAL_COLUMNS]
+        if unknown:
+            raise RecordError(
+                f"{path}: line {header_line}: unknown column {unknown[0]!r}; allowed columns are "
+                f"{', '.join(COLUMNS + OPTIONAL_COLUMNS)} (SI units), or map a DAQ export's columns "
+                "with --columns time=NAME,force=NAME,accel=NAME[,disp=NAME] (others are then ignored)"
+            )
+    used = [(q, header.index(wanted[q])) for q in QUANTITIES if wanted[q] in header]
+    # a semicolon-separated export may write decimal commas ("0,5;12,3")
+    decimal_comma = delimiter != "," and any("," in f for f in lines[i + 1].split(delimiter)) if i + 1 < len(lines) else False
 
     ncol = len(header)
-    data = np.empty((len(lines) - i - 1, ncol))
+    data = np.empty((len(lines) - i - 1, len(used)))
     nrow = 0
-    for lineno, row in enumerate(csv.reader(lines[i + 1 :]), start=header_line + 1):
+    for lineno, row in enumerate(csv.reader(lines[i + 1 :], delimiter=delimiter), start=header_line + 1):
         if not row or (len(row) == 1 and not row[0].strip()):
             raise RecordError(f"{path}: line {lineno} is blank; remove blank lines inside the data")
         if len(row) != ncol:
             raise RecordError(f"{path}: line {lineno} has {len(row)} fields, expected {ncol} ({','.join(header)})")
-        for j, field in enumerate(row):
+        for j, (_, k) in enumerate(used):
+            field = row[k].replace(",", ".") if decimal_comma else row[k]
             try:
                 value = float(field)
             except ValueError:
                 raise RecordError(
-                    f"{path}: line {lineno}, column {header[j]}: {field.strip()!r} is not a number"
+                    f"{path}: line {lineno}, column {header[k]}: {row[k].strip()!r} is not a number"
                 ) from None
             if not math.isfinite(value):
                 raise RecordError(
-                    f"{path}: line {lineno}, column {header[j]}: {field.strip()} is not a finite "
+                    f"{path}: line {lineno}, column {header[k]}: {row[k].strip()} is not a finite "
                     "number; repair the sample (the reader interpolates nothing)"
                 )
             data[nrow, j] = value
@@ -167,13 +215,13 @@ def read_record(path) -> Record:
     if nrow < MIN_SAMPLES:
         raise RecordError(f"{path}: {nrow} samples; a record needs at least {MIN_SAMPLES}")
 
-    col = {name: data[:, header.index(name)] for name in header}
-    t = col["time_s"]
+    col = {q: data[:, j] * cmap.factor(q) if cmap.factor(q) != 1.0 else data[:, j] for j, (q, _) in enumerate(used)}
+    t = col["time"]
     dt = np.diff(t)
     if np.any(dt <= 0):
         k = int(np.argmax(dt <= 0))
         raise RecordError(
-            f"{path}: line {header_line + k + 2}: time {t[k + 1]!r} s is not after {t[k]!r} s; "
+            f"{path}: line {header_line + k + 2}: time {data[k + 1, 0]!r} is not after {data[k, 0]!r}; "
             "samples must be in strictly increasing time order"
         )
     h = (t[-1] - t[0]) / (len(t) - 1)
@@ -184,9 +232,11 @@ def read_record(path) -> Record:
             f"{path}: line {header_line + k + 2}: sample interval {dt[k]:.6g} s differs from the "
             f"mean {h:.6g} s by {dev[k]:.2%}; resample the record uniformly"
         )
-    meta = _read_metadata(path, header_meta)
     _check_metadata(path, meta, t)
-    return Record(time=t, force=col["force_N"], accel=col["accel_m_s2"], disp=col.get("disp_m"), metadata=meta)
+    meta = {k: v for k, v in meta.items() if k not in ("columns", "units")}
+    if not cmap.is_identity():
+        meta["source_columns"] = {q: d for q, d in cmap.describe().items() if q in col}
+    return Record(time=t, force=col["force"], accel=col["accel"], disp=col.get("disp"), metadata=meta)
 
 
 def write_record(path, record: Record, *, overwrite: bool = True) -> tuple[Path, Path]:
