@@ -29,6 +29,7 @@ from ..device import TABLE_I, InerterParameters, apparent_inertance, setting as 
 from ..models import FIELDS, linear_chain
 from ..network.compile import chain_state_space
 from ..records.conditioning import LOWPASS_HZ, lowpass
+from ..masses import resolve_masses
 from ..records.record import Record
 from ..simulate import SAMPLINGS, Drive, SimulationError, check_record, contacts, run_exact, simulate
 from .priors import DEFAULT_PRIORS, NOISE_PRIORS, SPLIT_PRIORS
@@ -117,22 +118,10 @@ class LikelihoodSettings:
 
 
 def record_masses(record: Record, m_s: float | None = None, m_B: float | None = None) -> tuple[float, float]:
-    """m_s and m_B (kg) from the options, else the record's metadata (m_s, or setting)."""
-    meta = record.metadata
-    if m_s is None:
-        m_s = meta.get("m_s")
-    if m_s is None and meta.get("setting"):
-        m_s = get_setting(meta["setting"]).m_s
-    if m_s is None:
-        raise ValueError(
-            "the screw mass m_s is unknown: give --m-s KG, or put m_s or setting in the record's metadata"
-        )
-    if m_B is None:
-        m_B = meta.get("m_B", TABLE_I["m_B"])
-    for name, value in (("m_s", m_s), ("m_B", m_B)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a positive number of kg, got {value!r}")
-    return float(m_s), float(m_B)
+    """m_s and m_B (kg) from the options, else the record's metadata (m_s, or setting),
+    else (m_B) the paper's; :func:`..masses.resolve_masses` says where each came from."""
+    found = resolve_masses(record, m_s=m_s, m_B=m_B)
+    return found.m_s, found.m_B
 
 
 @dataclass
