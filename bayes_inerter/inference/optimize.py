@@ -299,13 +299,17 @@ def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rn
     """
     f, u0, from_u, n_evals = _unit_objective(model, theta)
     f0 = f(u0)
+    if not math.isfinite(f0):
+        raise ValueError("the start has zero posterior density (outside the prior, or the record cannot be "
+                         "simulated there); no walkers can be drawn around it")
     d = len(u0)
     root = _laplace_root(_hessian(f, u0, f0))
     floor = f0 - (0.5 * d + INIT_SD * math.sqrt(0.5 * d))
     walkers, scale, tries = [], 1.0, 0
     while len(walkers) < nwalkers:
         u = u0 + scale * root @ rng.standard_normal(d)
-        if f(u) >= floor and (accept is None or accept(from_u(u))):
+        fu = f(u)
+        if math.isfinite(fu) and fu >= floor and (accept is None or accept(from_u(u))):
             walkers.append(u)
         tries += 1
         if tries % (20 * nwalkers) == 0:

@@ -12,7 +12,8 @@
   measured acceleration on that grid.
 
 Summary columns are written by this package from arviz's numbers, so they do not change
-with the arviz line: name, mean, sd, hdi_3%, hdi_97%, r_hat, ess_bulk, ess_tail.
+with the arviz line: name, mean, sd, hdi_3%, hdi_97%, r_hat, ess_bulk, ess_tail, and
+flag (empty, or a warning of :mod:`.end_state` about that row).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from .model import PosteriorModel
 __all__ = ["PosteriorSample", "ar1_noise", "posterior_sample", "contraction", "to_inference_data", "summary_rows",
            "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "MAX_DRAWS"]
 
-SUMMARY_COLUMNS = ("name", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail")
+SUMMARY_COLUMNS = ("name", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail", "flag")
 MAX_DRAWS = 600  # draws that get a simulation for log-likelihood and predictive
 #: A fit's PSIS-LOO (:func:`loo_summary`), beside its summary.
 LOO_FILE = "loo.json"
@@ -190,7 +191,7 @@ def write_summary(path, rows: list[dict]) -> None:
         w = csv.writer(f)
         w.writerow(SUMMARY_COLUMNS)
         for r in rows:
-            w.writerow([r["name"]] + [f"{r[c]:.10g}" for c in SUMMARY_COLUMNS[1:]])
+            w.writerow([r["name"]] + [f"{r[c]:.10g}" for c in SUMMARY_COLUMNS[1:-1]] + [r.get("flag", "")])
 
 
 def loo_summary(idata) -> dict:
