@@ -90,6 +90,27 @@ def _add_generator_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--seed", type=int, default=0, help="noise seed (%(default)s)")
 
 
+#: ``records.checks.CHECKS``, written out so that the parser does not import numpy's
+#: world before it is needed; a test keeps the two equal.
+RECORD_CHECKS = ("time-unit", "flat", "clipped", "accel-vs-disp", "apparent-mass")
+
+
+def _add_record_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("your record and device")
+    g.add_argument("--columns", metavar="Q=NAME,...",
+                   help="the file's columns: time=NAME,force=NAME,accel=NAME[,disp=NAME] (default: the project's "
+                        "time_s,force_N,accel_m_s2,disp_m); other columns are then ignored")
+    g.add_argument("--units", metavar="Q=UNIT,...",
+                   help="units of the file's columns: time s|ms, force N|kN|lbf, accel m/s^2|g|mm/s^2, disp m|mm "
+                        "(default SI), e.g. time=ms,force=kN,accel=g")
+    g.add_argument("--m-s", type=_positive_float, help="screw mass m_s, kg (else metadata, then --device)")
+    g.add_argument("--m-b", type=_positive_float,
+                   help="plate mass m_B, kg (else metadata, then --device, then the paper's 57.2)")
+    g.add_argument("--device", metavar="DEVICE.toml", help="your device: masses and geometry (see README)")
+    g.add_argument("--skip-check", action="append", default=[], choices=RECORD_CHECKS, metavar="CHECK",
+                   help=f"skip a physical-sense check you know to be wrong for your record ({', '.join(RECORD_CHECKS)})")
+
+
 def _settings_from(args):
     from .records.generator import GeneratorSettings
 
@@ -134,21 +155,59 @@ def cmd_generate(args) -> int:
     return EXIT_OK
 
 
-def cmd_inspect(args) -> int:
+def _load_record(args, *, need_masses: bool):
+    """The record of ``args`` (read with --columns and --units), its device file, its
+    masses (None when m_s is unknown and not ``need_masses``), checked for physical
+    sense (--skip-check)."""
+    from .device_file import read_device
+    from .masses import resolve_masses
     from .records import read_record
+    from .records.checks import require_physical
 
-    rec = read_record(args.record)
+    rec = read_record(args.record, columns=args.columns, units=args.units)
+    device = read_device(args.device) if args.device else None
+    try:
+        masses = resolve_masses(rec, m_s=args.m_s, m_B=args.m_b, device=device)
+    except ValueError:
+        if need_masses:
+            raise
+        masses = None
+    require_physical(rec, m_s=masses and masses.m_s, m_B=masses and masses.m_B, skip=tuple(args.skip_check),
+                     where=args.record)
+    return rec, device, masses
+
+
+def cmd_inspect(args) -> int:
+    import math
+
+    from .records import write_record
+    from .records.checks import drive_frequency, fundamental
+
+    rec, device, masses = _load_record(args, need_masses=False)
     print(f"{args.record}: valid record")
     print(f"  samples {len(rec.time)}, duration {rec.duration:g} s, rate {rec.fs:g} Hz")
     for name, x, unit in (("force", rec.force, "N"), ("accel", rec.accel, "m/s^2"), ("disp", rec.disp, "m")):
         if x is not None:
             print(f"  {name:6s} min {x.min():.6g} {unit}, max {x.max():.6g} {unit}, rms {x.std():.6g} {unit}")
-    if rec.metadata:
-        for key, value in rec.metadata.items():
-            text = json.dumps(value) if isinstance(value, (dict, list)) else str(value)
-            print(f"  {key}: {text}")
-    else:
+    freq = drive_frequency(rec)
+    z = fundamental(rec.time, rec.force, freq) / fundamental(rec.time, rec.accel, freq)
+    source = "metadata" if rec.drive_frequency is not None else "from the spectrum"
+    print(f"  drive {freq:.4g} Hz ({source}); at it, inertial mass Re(F/a) {z.real:.5g} kg, "
+          f"resistance Im(F/a) omega {z.imag * 2 * math.pi * freq:.5g} N s/m")
+    print("  physical-sense checks: passed" + (f" (skipped: {', '.join(args.skip_check)})" if args.skip_check else ""))
+    print(f"  masses: {masses.describe()}" if masses else
+          "  masses: m_s unknown (give --m-s, a --device file, or m_s or setting in the metadata when fitting)")
+    if device is not None and device.theoretical_inertance is not None:
+        print(f"  theoretical inertance (device file): {device.theoretical_inertance:.6g} kg")
+    shown = {k: v for k, v in rec.metadata.items() if k not in ("true_parameters", "generator")}
+    for key, value in shown.items():
+        text = json.dumps(value) if isinstance(value, (dict, list)) else str(value)
+        print(f"  {key}: {text}")
+    if not rec.metadata:
         print("  no metadata (give m_s or the setting when fitting)")
+    if args.normalise:
+        path, side = write_record(args.normalise, rec)
+        print(f"wrote {path} and {side} (SI units, the project's columns)")
     if args.plot:
         from .plots import plot_record
 
@@ -159,33 +218,35 @@ def cmd_inspect(args) -> int:
     return EXIT_OK
 
 
+def _percent_interval(lo: float, hi: float) -> str:
+    """'lo % to hi %' with the fewest decimals (2 to 8) that tell the two apart."""
+    for d in range(2, 9):
+        a, b = f"{lo * 100:.{d}f}", f"{hi * 100:.{d}f}"
+        if a != b:
+            break
+    return f"{a} % to {b} %"
+
+
 def cmd_fit(args) -> int:
     import os
 
-    from tqdm import tqdm
-
+    from ._progress import StepProgress
     from .inference import fit_record
     from .inference.coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
     from .inference.model import LikelihoodSettings
     from .inference.sampler import Adaptation
-    from .records import read_record
 
-    rec = read_record(args.record)  # refused here, before the output folder is touched
-    bar = tqdm(total=args.steps, desc="sampling", unit="step", file=sys.stderr, disable=None)
-
-    def progress(iteration, target):
-        _check_interrupt()
-        bar.total = target
-        bar.n = iteration
-        bar.refresh()
-
+    # refused here, before the output folder is touched
+    rec, device, masses = _load_record(args, need_masses=True)
+    print(f"masses: {masses.describe()}", flush=True)
+    bar = StepProgress("sampling", total=args.steps, check_interrupt=_check_interrupt)
     processes = args.processes or min(2, os.cpu_count() or 1)
     try:
         result = fit_record(
-            rec, args.out, model=args.model, m_s=args.m_s, walkers=args.walkers, steps=args.steps,
-            seed=args.seed, fresh=args.fresh, processes=processes,
-            likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=progress,
-            coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
+            rec, args.out, model=args.model, m_s=args.m_s, m_B=args.m_b, device=device, walkers=args.walkers,
+            steps=args.steps, seed=args.seed, fresh=args.fresh, processes=processes,
+            likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=bar.step,
+            report=bar.status, coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
             checkpoint_seconds=args.checkpoint_seconds,
         )
     finally:
@@ -195,8 +256,13 @@ def cmd_fit(args) -> int:
     b = result.row("b")
     print(f"b = {b['mean']:.6g} kg (94 % HDI {b['hdi_3%']:.6g} to {b['hdi_97%']:.6g}), "
           f"{result.iterations} steps")
+    if result.b_theory is not None:
+        print(f"theory (device file geometry): b = {result.b_theory:.6g} kg "
+              f"({(b['mean'] - result.b_theory) / result.b_theory:+.1%} identified against it)")
     phi = result.row("phi")
-    print(f"phi = {phi['mean']:.2%} (94 % HDI {phi['hdi_3%']:.2%} to {phi['hdi_97%']:.2%})")
+    print(f"phi = {phi['mean']:.2%} (94 % HDI {_percent_interval(phi['hdi_3%'], phi['hdi_97%'])})")
+    for w in result.warnings:
+        print(f"warning: {w.message}")
     edge = json.loads((Path(args.out) / "fit.json").read_text()).get("coordinates_domain_edge")
     if edge is not None and edge > EDGE_WARNING:
         print(f"warning: the posterior reaches |dZ/dZ_theta - 1| = {edge:.2f}, near the edge of the impedance "
@@ -218,6 +284,7 @@ def cmd_study(args) -> int:
 
     from tqdm import tqdm
 
+    from ._progress import StepProgress
     from .study import full_plan, quick_plan, run_study
 
     plan = quick_plan() if args.quick else full_plan()
@@ -242,37 +309,48 @@ def cmd_study(args) -> int:
         if not Path(args.records).is_dir():
             raise CliError(f"--records {args.records}: not a folder of CSV records")
         changes["records_dir"] = args.records
+    if args.skip_check:
+        changes["skip_checks"] = tuple(args.skip_check)
     plan = replace(plan, **changes)
-    out = Path(args.out or Path("results") / plan.name)
+    out = Path(args.out or Path("runs") / plan.name)
     processes = args.processes or min(2, os.cpu_count() or 1)
-    bar = tqdm(desc=f"study {plan.name}", unit="fit", file=sys.stderr, disable=None)
+    tty = sys.stderr.isatty()
+    bar = tqdm(desc=f"study {plan.name}", unit="fit", file=sys.stderr, disable=not tty)
+    done_fits = []
 
     def on_jobs(n):
         bar.total = n
         bar.refresh()
+        if not tty:
+            print(f"study {plan.name}: {n} fits into {out}", file=sys.stderr, flush=True)
 
     def on_done(outcome):
         _check_interrupt()
         bar.update(1)
+        done_fits.append(outcome)
         if outcome["status"] == "failed":
             bar.write(f"failed: {outcome['key']}: {outcome.get('error', '')}", file=sys.stderr)
+        elif not tty:
+            state = "reused" if outcome["status"] == "skipped" else (
+                "converged" if outcome.get("converged") else "not converged")
+            print(f"study {plan.name}: fit {len(done_fits)} of {bar.total} done: {outcome['key']} ({state})",
+                  file=sys.stderr, flush=True)
 
     joint_bar = []
 
     def on_joint_step(iteration, target):
-        _check_interrupt()
         if not joint_bar:
             bar.close()
-            joint_bar.append(tqdm(total=target, desc="joint model", unit="step", file=sys.stderr, disable=None))
-        joint_bar[0].update(iteration - joint_bar[0].n)
+            joint_bar.append(StepProgress("joint model", total=target, check_interrupt=_check_interrupt))
+        joint_bar[0].step(iteration, target)
 
     try:
         result = run_study(plan, out, processes=processes, scheduler=args.scheduler, on_done=on_done,
                            on_jobs=on_jobs, on_joint_step=on_joint_step)
     finally:
         bar.close()
-        for b in joint_bar:
-            b.close()
+        for jb in joint_bar:
+            jb.close()
     for row in result.tables["inertance"]:
         print(f"{row['setting']}: b = {row['b_median']:.6g} kg (94 % {row['b_hdi_3%']:.6g} to "
               f"{row['b_hdi_97%']:.6g}); theory {row['b_theory']:.6g}, paper {row['b_paper']:.6g}")
@@ -312,7 +390,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--setting", default="A1", help="flywheel setting (%(default)s)")
     p.add_argument("--freq", type=_positive_float, default=1.0, help="drive frequency, Hz (%(default)s)")
     p.add_argument("--seed", type=int, default=0, help="noise seed (%(default)s)")
-    p.add_argument("--out", default="results/demo", help="output folder (%(default)s)")
+    p.add_argument("--out", default="runs/demo", help="output folder (%(default)s)")
     p.set_defaults(func=cmd_demo)
 
     p = sub.add_parser("generate", help="generate records of the paper's protocol")
@@ -326,7 +404,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("fit", help="sample the posterior of one record with emcee")
     p.add_argument("record", help="record CSV file")
     p.add_argument("--out", required=True, help="output folder (a checkpoint there is continued)")
-    p.add_argument("--m-s", type=_positive_float, help="screw mass m_s, kg (else from the record's metadata)")
+    _add_record_options(p)
     p.add_argument("--model", choices=("two-port", "rigid", "linear"), default="two-port", help="model (%(default)s)")
     p.add_argument("--walkers", type=_positive_int, help="walkers (default 2 x parameters + 2)")
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
@@ -348,7 +426,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("study", help="posteriors of many records, theory against identification, a report")
     p.add_argument("--quick", action="store_true",
                    help="the quick study: 3 settings at 1 Hz, short chains (minutes, not converged)")
-    p.add_argument("--out", help="output folder (default results/quick or results/full); finished fits there are reused")
+    p.add_argument("--out", help="output folder (default runs/quick or runs/full); finished fits there are reused")
+    p.add_argument("--skip-check", action="append", default=[], choices=RECORD_CHECKS, metavar="CHECK",
+                   help="with --records: skip a physical-sense check of your records")
     p.add_argument("--records", help="a folder of your CSV records to fit instead of generated ones")
     p.add_argument("--steps", type=_positive_int, help="steps per chain (default: the plan's; full: until converged)")
     p.add_argument("--seed", type=int, help="seed of the generated records' noise and of the chains (0)")
@@ -362,8 +442,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", help="run the fits on this Dask scheduler (tcp://host:port) instead")
     p.set_defaults(func=cmd_study)
 
-    p = sub.add_parser("inspect", help="validate a record and print its summary")
+    p = sub.add_parser("inspect", help="validate a record, check its physical sense and print its summary")
     p.add_argument("record", help="record CSV file")
+    _add_record_options(p)
+    p.add_argument("--normalise", metavar="OUT.csv",
+                   help="write the record in the project's format (SI units, its columns) to OUT.csv")
     p.add_argument("--plot", help="also plot the record into this PNG file")
     p.set_defaults(func=cmd_inspect)
     return parser

@@ -20,7 +20,10 @@ import numpy as np
 
 from ..records.record import Record
 from .checkpoint import WRITE_SECONDS
+from ..lock import folder_lock
+from ..masses import resolve_masses
 from .coordinates import default_coordinates
+from .end_state import end_state_warnings
 from .model import LikelihoodSettings, PosteriorModel
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
 from .sampler import Adaptation, Convergence, check_run_options, run_sampler
@@ -50,6 +53,12 @@ class FitResult:
     recovered: str = ""
     #: the joint model's kept draws of each b, ``b_<setting>`` -> (walkers, draws) (empty for one record)
     draws: dict = field(default_factory=dict)
+    #: warnings about how the fit ended (``end_state.EndWarning``): b at a prior bound, a poor fit
+    warnings: list = field(default_factory=list)
+    #: the masses used and where each came from (``masses.Masses``; None for the joint model)
+    masses: object = None
+    #: the theoretical inertance from the device file's geometry, kg (None without one)
+    b_theory: float | None = None
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -88,6 +97,7 @@ def fit_record(
     model: str = "two-port",
     m_s: float | None = None,
     m_B: float | None = None,
+    device=None,
     walkers: int | None = None,
     steps: int | None = None,
     seed: int = 0,
@@ -97,6 +107,7 @@ def fit_record(
     priors: dict | None = None,
     convergence: Convergence | None = None,
     progress=None,
+    report=None,
     plots: bool = True,
     coordinates: str = "impedance",
     adaptation: Adaptation | None = Adaptation(),
@@ -108,54 +119,67 @@ def fit_record(
     in the model's parameters whichever is used). ``adaptation``: the fitted independence
     move (``sampler.Adaptation``; None: the ensemble moves alone). ``checkpoint_seconds``:
     the steps reach chain.h5 at most this far apart (0: every step; ``run_sampler``).
+    ``progress``, ``report``: ``run_sampler``'s callbacks. The folder is locked for the run
+    (``lock.folder_lock``): a second run into it is refused at once.
+
+    ``m_s``, ``m_B``, ``device`` (a ``device_file.DeviceFile``): the masses, resolved by
+    ``masses.resolve_masses`` (option, metadata, device file, paper default); fit.json
+    records each with its source, and the device file's theoretical inertance.
 
     Everything that can be checked is checked before sampling starts (record, masses,
-    options, output folder); the folder is not touched if any check fails.
+    options, output folder); the folder is not touched if any check fails. The
+    record's physical sense (``records.checks``) is the caller's to check first.
     """
     out = Path(out)
-    pm = PosteriorModel(record, model, m_s=m_s, m_B=m_B, priors=priors or {},
+    masses = resolve_masses(record, m_s=m_s, m_B=m_B, device=device)
+    b_theory = device.theoretical_inertance if device is not None else None
+    pm = PosteriorModel(record, model, m_s=masses.m_s, m_B=masses.m_B, priors=priors or {},
                         likelihood=likelihood or LikelihoodSettings())
     check_run_options(pm.ndim, walkers, steps)
     coords = default_coordinates(pm, coordinates)
     check_output_folder(out)
-    out.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
-    run = run_sampler(pm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, fresh=fresh,
-                      processes=processes, convergence=convergence, progress=progress, coordinates=coords,
-                      adaptation=adaptation, checkpoint_seconds=checkpoint_seconds)
-    t_sample = time.perf_counter() - t0
-    sample = posterior_sample(pm, run)
-    rows = summary_rows(sample)
-    shrink = contraction(pm, sample)
-    idata, sims = to_inference_data(pm, sample, rng=np.random.default_rng(seed + 1))
-    t_post = time.perf_counter() - t0 - t_sample
-    write_summary(out / "summary.csv", rows)
-    idata.to_netcdf(str(out / "posterior.nc"))
-    write_loo(out, idata)
-    if plots:
-        _write_plots(out, pm, sample, sims)
-    t_total = time.perf_counter() - t0
-    info = {
-        "model": model, "converged": run.converged, "reason": run.reason,
-        "checkpoint_recovered": run.recovered,
-        "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
-        "tau": dict(zip(pm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
-        "transient": int(run.transient), "warmup": int(run.warmup),
-        "m_s": pm.m_s, "m_B": pm.m_B, "likelihood": dataclasses.asdict(pm.likelihood),
-        "stride": pm.stride, "priors": {n: p.describe() for n, p in pm.all_priors.items()},
-        "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
-        "moves": list(run.moves),
-        "coordinates": run.coordinates.describe(),
-        "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
-        "contraction": shrink,
-        "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total,
-                      **_sampling_all_runs(out, t_sample, run, fresh or run.start_theta is not None)},
-        "versions": versions(),
-        "record_metadata": record.metadata,
-    }
-    (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
-    return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, idata,
-                     info["timings_s"], shrink, run.recovered)
+    with folder_lock(out):
+        out.mkdir(parents=True, exist_ok=True)
+        t0 = time.perf_counter()
+        run = run_sampler(pm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, fresh=fresh,
+                          processes=processes, convergence=convergence, progress=progress, report=report, coordinates=coords,
+                          adaptation=adaptation, checkpoint_seconds=checkpoint_seconds)
+        t_sample = time.perf_counter() - t0
+        sample = posterior_sample(pm, run)
+        rows = summary_rows(sample)
+        ended = _flag(rows, end_state_warnings(pm, sample))
+        shrink = contraction(pm, sample)
+        idata, sims = to_inference_data(pm, sample, rng=np.random.default_rng(seed + 1))
+        t_post = time.perf_counter() - t0 - t_sample
+        write_summary(out / "summary.csv", rows)
+        idata.to_netcdf(str(out / "posterior.nc"))
+        write_loo(out, idata)
+        if plots:
+            _write_plots(out, pm, sample, sims)
+        t_total = time.perf_counter() - t0
+        info = {
+            "model": model, "converged": run.converged, "reason": run.reason,
+            "checkpoint_recovered": run.recovered,
+            "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
+            "tau": dict(zip(pm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
+            "transient": int(run.transient), "warmup": int(run.warmup),
+            "m_s": pm.m_s, "m_B": pm.m_B, "masses": masses.as_dict(), "b_theory_device_file": b_theory,
+            "warnings": [dataclasses.asdict(w) for w in ended],
+            "likelihood": dataclasses.asdict(pm.likelihood),
+            "stride": pm.stride, "priors": {n: p.describe() for n, p in pm.all_priors.items()},
+            "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
+            "moves": list(run.moves),
+            "coordinates": run.coordinates.describe(),
+            "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
+            "contraction": shrink,
+            "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total,
+                          **_sampling_all_runs(out, t_sample, run, fresh or run.start_theta is not None)},
+            "versions": versions(),
+            "record_metadata": record.metadata,
+        }
+        (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
+        return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, idata,
+                         info["timings_s"], shrink, run.recovered, warnings=ended, masses=masses, b_theory=b_theory)
 
 
 def fit_joint(
@@ -171,6 +195,7 @@ def fit_joint(
     priors: dict | None = None,
     convergence: Convergence | None = None,
     progress=None,
+    report=None,
     plots: bool = True,
     coordinates: str = "impedance",
     adaptation: Adaptation | None = Adaptation(),
@@ -196,66 +221,79 @@ def fit_joint(
     check_run_options(jm.ndim, walkers, steps)
     coords = default_coordinates(jm, coordinates)
     check_output_folder(out)
-    out.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
+    with folder_lock(out):
+        out.mkdir(parents=True, exist_ok=True)
+        t0 = time.perf_counter()
 
-    def start():  # run_sampler calls it only when the chain starts over
-        given = centres
-        if given is None:
-            rng = np.random.default_rng(seed)
-            given = [part.values(find_start(part, rng)[0]) for part in jm.parts]
-        # Nelder-Mead takes one point at a time: its records are shared among the processes
-        with pooled_log_prob(jm, processes) as log_prob:
-            return local_optimum(jm, jm.start(given), restarts=NM_RESTARTS, log_prob=log_prob)
+        def start():  # run_sampler calls it only when the chain starts over
+            given = centres
+            if given is None:
+                rng = np.random.default_rng(seed)
+                given = [part.values(find_start(part, rng)[0]) for part in jm.parts]
+            # Nelder-Mead takes one point at a time: its records are shared among the processes
+            with pooled_log_prob(jm, processes) as log_prob:
+                return local_optimum(jm, jm.start(given), restarts=NM_RESTARTS, log_prob=log_prob)
 
-    run = run_sampler(jm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, processes=processes,
-                      convergence=convergence, progress=progress, start=start, coordinates=coords,
-                      adaptation=adaptation)
-    t_sample = time.perf_counter() - t0
-    sample = posterior_sample(jm, run)
-    rows = summary_rows(sample)
-    shrink = contraction(jm, sample)
-    write_summary(out / "summary.csv", rows)
-    nb = len(jm.settings)
-    draws = {name: sample.values[:, :, i] for i, name in enumerate(jm.names[:nb])}
-    np.savez_compressed(out / DRAWS_FILE, **draws)
-    if plots:
-        import matplotlib.pyplot as plt
+        run = run_sampler(jm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, processes=processes,
+                          convergence=convergence, progress=progress, report=report, start=start, coordinates=coords,
+                          adaptation=adaptation)
+        t_sample = time.perf_counter() - t0
+        sample = posterior_sample(jm, run)
+        rows = summary_rows(sample)
+        ended = _flag(rows, end_state_warnings(jm, sample))
+        shrink = contraction(jm, sample)
+        write_summary(out / "summary.csv", rows)
+        nb = len(jm.settings)
+        draws = {name: sample.values[:, :, i] for i, name in enumerate(jm.names[:nb])}
+        np.savez_compressed(out / DRAWS_FILE, **draws)
+        if plots:
+            import matplotlib.pyplot as plt
 
-        from .plots import plot_corner, plot_trace
+            from .plots import plot_corner, plot_trace
 
-        flat = sample.values.reshape(-1, jm.ndim)
-        truths = [rec.metadata.get("true_parameters", {}).get("b") for rec in
-                  (next(r for r, s in zip(jm.records, jm.setting_of) if s == name) for name in jm.settings)]
-        figs = {"corner.png": plot_corner(flat[:, :nb], jm.names[:nb],
-                                          truths=truths if all(t is not None for t in truths) else None,
-                                          title=f"joint model, {len(jm.records)} records: inertance per setting"),
-                "trace.png": plot_trace(sample.theta, jm.names, burn=sample.burn, thin=sample.thin)}
-        for name, fig in figs.items():
-            fig.savefig(out / name, dpi=100)
-            plt.close(fig)
-    t_total = time.perf_counter() - t0
-    info = {
-        "model": "joint", "converged": run.converged, "reason": run.reason,
-        "checkpoint_recovered": run.recovered,
-        "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
-        "tau": dict(zip(jm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
-        "transient": int(run.transient), "warmup": int(run.warmup),
-        "records": [f"{s} {f:g} Hz" for s, f in zip(jm.setting_of, jm.freq_of)],
-        "likelihood": dataclasses.asdict(jm.likelihood),
-        "priors": {n: p.describe() for n, p in jm.all_priors.items()},
-        "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
-        "moves": list(run.moves),
-        "coordinates": run.coordinates.describe(),
-        "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
-        "contraction": shrink,
-        "timings_s": {"sampling": t_sample, "total": t_total,
-                      **_sampling_all_runs(out, t_sample, run, run.start_theta is not None)},
-        "versions": versions(),
-    }
-    (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
-    return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"], shrink,
-                     run.recovered, draws)
+            flat = sample.values.reshape(-1, jm.ndim)
+            truths = [rec.metadata.get("true_parameters", {}).get("b") for rec in
+                      (next(r for r, s in zip(jm.records, jm.setting_of) if s == name) for name in jm.settings)]
+            figs = {"corner.png": plot_corner(flat[:, :nb], jm.names[:nb],
+                                              truths=truths if all(t is not None for t in truths) else None,
+                                              title=f"joint model, {len(jm.records)} records: inertance per setting"),
+                    "trace.png": plot_trace(sample.theta, jm.names, burn=sample.burn, thin=sample.thin)}
+            for name, fig in figs.items():
+                fig.savefig(out / name, dpi=100)
+                plt.close(fig)
+        t_total = time.perf_counter() - t0
+        info = {
+            "model": "joint", "converged": run.converged, "reason": run.reason,
+            "checkpoint_recovered": run.recovered,
+            "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
+            "tau": dict(zip(jm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
+            "transient": int(run.transient), "warmup": int(run.warmup),
+            "records": [f"{s} {f:g} Hz" for s, f in zip(jm.setting_of, jm.freq_of)],
+            "warnings": [dataclasses.asdict(w) for w in ended],
+            "likelihood": dataclasses.asdict(jm.likelihood),
+            "priors": {n: p.describe() for n, p in jm.all_priors.items()},
+            "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
+            "moves": list(run.moves),
+            "coordinates": run.coordinates.describe(),
+            "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
+            "contraction": shrink,
+            "timings_s": {"sampling": t_sample, "total": t_total,
+                          **_sampling_all_runs(out, t_sample, run, run.start_theta is not None)},
+            "versions": versions(),
+        }
+        (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
+        return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"], shrink,
+                         run.recovered, draws, warnings=ended)
+
+
+def _flag(rows: list, ended: list) -> list:
+    """Write each warning's flag into its summary row (``flag``); return the warnings."""
+    flags: dict = {}
+    for w in ended:
+        flags.setdefault(w.name, []).append(w.flag)
+    for r in rows:
+        r["flag"] = "; ".join(flags.get(r["name"], []))
+    return ended
 
 
 def _sampling_all_runs(out: Path, t_sample: float, run, started_over: bool) -> dict:

@@ -44,6 +44,7 @@ uninterrupted run gives.
 from __future__ import annotations
 
 import hashlib
+import math
 import multiprocessing
 import signal
 from dataclasses import dataclass
@@ -58,8 +59,8 @@ from .model import PosteriorModel
 from .moves import BlockMove, IndependenceMove, NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, sse
 
-__all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "run_sampler", "record_digest",
-           "check_run_options", "default_moves", "transient"]
+__all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "SamplerStatus", "run_sampler",
+           "record_digest", "check_run_options", "default_moves", "transient"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
@@ -91,6 +92,25 @@ def default_moves(model, ridge_weight: float = RIDGE_WEIGHT, coordinates: Coordi
         return list(DEFAULT_MOVES)
     k, c, b = idx
     return [(m, w * (1.0 - ridge_weight)) for m, w in DEFAULT_MOVES] + [(NutRidgeMove(k, c, b), ridge_weight)]
+
+
+@dataclass(frozen=True)
+class SamplerStatus:
+    """What a run knows of itself, for progress reports: told once when it starts
+    (``resumed_at`` > 0 when it continues a checkpoint) and after each convergence check.
+
+    ``tau_max``: the largest autocorrelation time, steps (NaN before the first check);
+    ``acceptance``: the walkers' mean acceptance fraction; ``steps_needed``: the steps
+    still needed before the chain after its warm-up is ``n_tau`` tau long (an estimate,
+    None before tau is known); ``target``: the steps asked for (None: until converged).
+    """
+
+    iteration: int
+    resumed_at: int
+    target: int | None
+    tau_max: float = math.nan
+    acceptance: float = math.nan
+    steps_needed: int | None = None
 
 
 def default_walkers(ndim: int) -> int:
@@ -436,6 +456,7 @@ def run_sampler(
     convergence: Convergence | None = None,
     moves=None,
     progress=None,
+    report=None,
     start=None,
     coordinates: str | Coordinates = "impedance",
     adaptation: Adaptation | None = Adaptation(),
@@ -452,6 +473,8 @@ def run_sampler(
     fresh : start over even if the checkpoint holds steps.
     processes : worker processes evaluating walkers in parallel (1: none).
     progress : callable(iteration, target or None), called after each step.
+    report : callable(:class:`SamplerStatus`), called when the run starts and after each
+        convergence check.
     start : optional (theta, log prob) to start from instead of the optimiser, or a
         callable returning one, called only when the chain starts over (a continued
         checkpoint needs no start); the walkers are drawn around it by
@@ -484,6 +507,8 @@ def run_sampler(
         done = 0
     else:
         backend, done = opened.backend, opened.steps
+    if report:
+        report(SamplerStatus(done, done, steps))
     _MODEL, _COORDS = model, coords
     moves = moves or default_moves(model, coordinates=coords)
     ensemble = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves)
@@ -521,9 +546,14 @@ def run_sampler(
             elif callable(start):
                 start = start()
             start_theta = np.asarray(start[0], dtype=float)
+            if not math.isfinite(model.log_prob(start_theta)[0]):
+                raise ValueError("no parameters within the priors reproduce this record (the best start found "
+                                 "has zero posterior density): check its columns, units and masses with "
+                                 "bayes-inerter inspect, and the model")
             if not np.all(np.isfinite(coords.to_u(start_theta))):
-                raise ValueError(f"the start lies outside the {coords.kind} coordinates' domain; "
-                                 "use --coordinates unconstrained or physical")
+                advice = ("use --coordinates unconstrained, which covers the whole prior"
+                          if coords.kind == "impedance" else "check the record and the priors")
+                raise ValueError(f"the start lies outside the {coords.kind} coordinates' domain; {advice}")
             # a walker drawn outside the coordinates' domain is drawn again
             walkers, _ = laplace_ensemble(model, start_theta, nwalkers, rng,
                                           accept=lambda t: bool(np.all(np.isfinite(coords.to_u(t)))))
@@ -575,6 +605,8 @@ def run_sampler(
             last_check = sampler.iteration >= conv.max_steps  # its message names R-hat and ESS too
             check = _diagnostics(
                 sampler, coords, conv, rhat_if=lambda n, t: last_check or _tau_settled(n, t, previous, conv))
+            if report:
+                report(_status(sampler, check, done, conv))
             if _is_converged(sampler.iteration - check.warmup, check.tau, previous, check.rhat, check.ess, conv):
                 return finish(check, True)
             if sampler.iteration >= conv.max_steps:
@@ -589,6 +621,17 @@ def run_sampler(
             backend.flush()
         except OSError:  # chain.h5 holds every step; the twin is only behind
             pass
+
+
+def _status(sampler, check, done: int, conv: Convergence) -> SamplerStatus:
+    """The run's :class:`SamplerStatus` after a convergence check."""
+    n = sampler.iteration
+    tau_max = float(np.max(check.tau)) if np.all(np.isfinite(check.tau)) else math.nan
+    needed = None
+    if math.isfinite(tau_max):  # the warm-up takes its share of the longer chain too
+        needed = max(0, math.ceil(conv.n_tau * tau_max / (1.0 - conv.warmup)) - n, check.warmup + math.ceil(
+            conv.n_tau * tau_max) - n)
+    return SamplerStatus(n, done, None, tau_max, float(np.mean(sampler.acceptance_fraction)), needed)
 
 
 def _tau_settled(iteration, tau, previous, conv: Convergence) -> bool:

@@ -53,7 +53,7 @@ class StudyPlan:
 
     Attributes
     ----------
-    name : the study's name (``results/<name>/`` by default).
+    name : the study's name (``runs/<name>/`` by default on the command line).
     settings, frequencies : the grid of generated records (ignored with ``records_dir``).
     records_dir : a folder of the user's CSV records to fit instead of generated ones;
         each needs ``setting`` (or ``m_s``) and ``drive_frequency_hz`` in its metadata.
@@ -69,6 +69,8 @@ class StudyPlan:
     calibration : the sensors' calibration uncertainty (**assumption**, see
         ``records.sensitivity``), added to b in the tables' ``b_cal`` columns; it changes
         no fit.
+    skip_checks : physical-sense checks (``records.checks.CHECKS``) not run on the
+        user's records (``records_dir``).
     """
 
     name: str
@@ -83,6 +85,7 @@ class StudyPlan:
     joint: bool = False
     joint_steps: int | None = None
     calibration: SensorCalibration = field(default_factory=SensorCalibration)
+    skip_checks: tuple = ()
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.settings if s not in SETTINGS]

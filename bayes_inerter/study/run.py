@@ -12,7 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from ..device import SETTINGS, apparent_inertance, paper_parameters
+from ..lock import folder_lock
+from ..masses import resolve_masses
 from ..records import paper_grid, read_record, write_record
+from ..records.checks import require_physical
 from .analysis import (
     collect,
     contraction_table,
@@ -52,6 +55,13 @@ def prepare_records(plan: StudyPlan, out: Path) -> dict:
             raise ValueError(f"{folder}: no .csv records there")
         for path in paths:
             rec = read_record(path)  # refused here, before any fitting, if bad
+            masses = None
+            try:
+                masses = resolve_masses(rec)
+            except ValueError:
+                pass  # the fit names the missing mass
+            require_physical(rec, m_s=masses and masses.m_s, m_B=masses and masses.m_B, skip=plan.skip_checks,
+                             where=str(path))
             setting = rec.metadata.get("setting")
             setting = str(setting).upper() if setting else None
             records[path.stem] = (path, setting if setting in SETTINGS else None, rec.drive_frequency)
@@ -101,15 +111,24 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     from ..inference.fit import check_output_folder
+
+    out = Path(out)
+    check_output_folder(out)
+    with folder_lock(out):
+        return _run_study(plan, out, processes=processes, scheduler=scheduler, on_done=on_done, on_jobs=on_jobs,
+                          on_joint_step=on_joint_step)
+
+
+def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_jobs, on_joint_step) -> StudyResult:
+    """:func:`run_study`'s work, with the folder locked."""
+    import matplotlib.pyplot as plt
+
     from ..inference.fit import versions as fit_versions  # one list of versions for fits and studies
     from .plots import plot_inertance, plot_models, plot_phi_map
     from .report import write_report
 
-    out = Path(out)
-    check_output_folder(out)
     t0 = time.perf_counter()
     records = prepare_records(plan, out)
     jobs = plan.jobs(records, out)
