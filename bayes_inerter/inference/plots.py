@@ -15,17 +15,21 @@ __all__ = ["plot_corner", "plot_bands", "plot_trace", "plot_phi", "reference_val
 
 UNITS = {"b": "kg", "f1_0": "N", "c_f1": "N s/m", "f2_0": "N", "c_f2": "N s/m", "c_n": "N s/m",
          "k_n": "N/m", "c_B": "N s/m", "k_B": "N/m", "sigma": "m/s²", "f_0": "N", "c_f": "N s/m"}
-LINEAR = ("rho", "f_share", "c_share")  # drawn as is; everything else in log10
+LINEAR = ("rho", "f_share", "c_share", "b")  # drawn as is; everything else in log10
 
 
 def _linear(name: str) -> bool:
-    """Drawn as is (shares, AR(1) coefficients: the joint model's ``rho_<f>Hz`` too)."""
-    return name in LINEAR or name.startswith("rho_")
+    """Drawn as is: the inertance in kg (the joint model's ``b_<setting>`` too), shares,
+    AR(1) coefficients (the joint model's ``rho_<f>Hz`` too). The other parameters span
+    orders of magnitude and are drawn in log10."""
+    return name in LINEAR or name.startswith("rho_") or name.startswith("b_")
 
 
 def _label(name: str) -> str:
     unit = UNITS.get("b" if name.startswith("b_") else name, "")  # the joint model's b_<setting>
-    return name if _linear(name) else f"log10 {name} [{unit}]"
+    if _linear(name):
+        return f"{name} [{unit}]" if unit else name
+    return f"log10 {name} [{unit}]"
 
 
 def _to_plot(name, x):
@@ -37,7 +41,8 @@ def reference_values(model, metadata: dict):
     None where they do not apply.
 
     The truth comes from a generated record's metadata; the paper's values are Table I
-    (and Table 2's b for the record's setting), turned into sums and shares where those
+    (and Table 2's b for the record's setting), given only for a record that names one
+    of the paper's settings, turned into sums and shares where those
     are sampled. In the rigid model f1_0 and c_f1 are totals: the truth is summed, the
     paper's split values are not marked.
     """
@@ -54,6 +59,8 @@ def reference_values(model, metadata: dict):
             truth["c_f1"] = truth.get("c_f1", 0.0) + truth.get("c_f2", 0.0)
         paper.pop("f1_0"), paper.pop("c_f1")
     t_s = model.sampled_from_physical(truth) if truth else {}
+    if not (setting and str(setting).upper() in SETTINGS):  # not the paper's device: nothing to mark
+        return [None if n not in t_s else _to_plot(n, t_s[n]) for n in model.names], None
     p_s = model.sampled_from_physical(paper)
     t_out = [None if n not in t_s else _to_plot(n, t_s[n]) for n in model.names]
     p_out = [None if n not in p_s else _to_plot(n, p_s[n]) for n in model.names]
@@ -61,7 +68,9 @@ def reference_values(model, metadata: dict):
 
 
 def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: str = ""):
-    """Corner plot of (n, ndim) draws in SI units, drawn in log10 (rho as is)."""
+    """Corner plot of (n, ndim) draws in SI units: b in kg, shares and rho as they are,
+    the other parameters in log10. ``truths`` and ``paper`` (in the plotted scale, None
+    where unknown) are marked only where given."""
     import corner
 
     import logging
@@ -75,14 +84,17 @@ def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: st
     try:
         fig = corner.corner(
             x, labels=[_label(n) for n in names], truths=truths, truth_color="tab:blue",
-            quantiles=[0.03, 0.5, 0.97], show_titles=True, title_fmt=".3g",
+            quantiles=[0.03, 0.5, 0.97], show_titles=True, title_fmt=".4g",
             title_kwargs={"fontsize": 8}, label_kwargs={"fontsize": 8}, plot_datapoints=False,
         )
     finally:
         root.setLevel(level)
     if paper is not None and any(p is not None for p in paper):
         corner.overplot_lines(fig, [np.nan if p is None else p for p in paper], color="tab:red", ls="--")
-    fig.suptitle(title + "\nblue: truth of a generated record; red dashed: the paper's values", fontsize=10)
+    marks = [m for m, given in (("blue: truth of a generated record", truths is not None and any(
+        t is not None for t in truths)), ("red dashed: the paper's values", paper is not None and any(
+        p is not None for p in paper))) if given]
+    fig.suptitle(title + ("\n" + "; ".join(marks) if marks else ""), fontsize=10)
     return fig
 
 
@@ -103,45 +115,61 @@ def _reversal_time(time, accel_lp, freq):
 
 def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, noise_sd: float | None = None, title: str = ""):
     """Median, 50 % and 94 % credible bands of the simulated low-passed acceleration
-    (parameter uncertainty) over the measured one, and, given ``noise_sd`` (the residual
-    model's marginal sd), the 94 % predictive band that adds the residual's spread to
-    the simulations' (normal approximation): the whole record and a zoom on a velocity
-    reversal."""
+    (parameter uncertainty) and, given ``noise_sd`` (the residual model's marginal sd),
+    the 94 % predictive band that adds the residual's spread (normal approximation).
+
+    Three panels: the measured and the median over the whole record; the residual about
+    the posterior median with the bands about it (bands far thinner than the signal are
+    visible only so); a zoom on a velocity reversal. Legends sit outside the data."""
     q = np.percentile(sims, [3, 25, 50, 75, 97], axis=0)
     t_rev = _reversal_time(time, measured_lp, freq)
     span = 0.12 / (freq or 1.0)
-    fig, axes = plt.subplots(2, 1, figsize=(10, 7), layout="constrained")
-    for ax, window in zip(axes, (None, (t_rev - span, t_rev + span))):
-        sel = slice(None) if window is None else (time >= window[0]) & (time <= window[1])
-        if noise_sd is not None:
-            half = 1.880794 * np.sqrt(((q[4] - q[0]) / (2 * 1.880794)) ** 2 + noise_sd**2)
-            ax.fill_between(time[sel], (q[2] - half)[sel], (q[2] + half)[sel], color="tab:blue", alpha=0.15, lw=0,
-                            label="94 % predictive band (with residual noise)")
-        ax.fill_between(time[sel], q[0][sel], q[4][sel], color="tab:orange", alpha=0.3, lw=0,
-                        label="94 % credible band (parameters)")
-        ax.fill_between(time[sel], q[1][sel], q[3][sel], color="tab:orange", alpha=0.6, lw=0,
-                        label="50 % credible band")
-        ax.plot(time[sel], q[2][sel], color="tab:red", lw=0.8, label="posterior median")
-        ax.plot(time[sel], measured_lp[sel], color="k", lw=0.8, label="measured")
-        ax.set_ylabel("acceleration, low-passed (m/s²)")
+    fig, axes = plt.subplots(3, 1, figsize=(11, 9), layout="constrained")
+    top, mid, zoom = axes
+    top.plot(time, measured_lp, color="k", lw=0.8, label="measured")
+    top.plot(time, q[2], color="tab:red", lw=0.8, label="posterior median")
+    top.set_ylabel("acceleration,\nlow-passed (m/s²)")
+    top.set_title(title)
+    d = q - q[2]
+    if noise_sd is not None:
+        half = 1.880794 * np.sqrt(((q[4] - q[0]) / (2 * 1.880794)) ** 2 + noise_sd**2)
+        mid.fill_between(time, -half, half, color="tab:blue", alpha=0.15, lw=0,
+                         label="94 % predictive band (with residual noise)")
+    mid.fill_between(time, d[0], d[4], color="tab:orange", alpha=0.35, lw=0, label="94 % credible band (parameters)")
+    mid.fill_between(time, d[1], d[3], color="tab:orange", alpha=0.7, lw=0, label="50 % credible band")
+    mid.plot(time, measured_lp - q[2], color="k", lw=0.6, label="measured - median")
+    mid.axhline(0, color="tab:red", lw=0.8)
+    mid.set_ylabel("about the posterior\nmedian (m/s²)")
+    sel = (time >= t_rev - span) & (time <= t_rev + span)
+    if noise_sd is not None:
+        zoom.fill_between(time[sel], (q[2] - half)[sel], (q[2] + half)[sel], color="tab:blue", alpha=0.15, lw=0)
+    zoom.fill_between(time[sel], q[0][sel], q[4][sel], color="tab:orange", alpha=0.35, lw=0)
+    zoom.fill_between(time[sel], q[1][sel], q[3][sel], color="tab:orange", alpha=0.7, lw=0)
+    zoom.plot(time[sel], q[2][sel], color="tab:red", lw=0.8)
+    zoom.plot(time[sel], measured_lp[sel], color="k", lw=0.8)
+    zoom.set_ylabel("acceleration,\nlow-passed (m/s²)")
+    zoom.set_title(f"zoom on a velocity reversal near {t_rev:.2f} s", fontsize=9)
+    zoom.set_xlabel("time (s)")
+    for ax in axes:
         ax.grid(alpha=0.3)
-    axes[0].legend(loc="upper right", fontsize=8)
-    axes[0].set_title(title)
-    axes[1].set_title(f"zoom on a velocity reversal near {t_rev:.2f} s", fontsize=9)
-    axes[1].set_xlabel("time (s)")
+    for ax in (top, mid):
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     return fig
 
 
 def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1):
-    """Walker traces of every parameter as sampled (log values), after burn-in.
+    """Walker traces of every parameter after burn-in: b in kg, shares and rho as they
+    are, the others in log10 (as :func:`plot_corner`).
 
-    ``theta`` has shape (walkers, draws, ndim) from the kept (thinned) chain."""
+    ``theta`` has shape (walkers, draws, ndim) from the kept (thinned) chain, as sampled
+    (natural logs where the prior is log-scaled)."""
     ndim = theta.shape[2]
     fig, axes = plt.subplots(ndim, 1, figsize=(9, 1.3 * ndim + 1), sharex=True, layout="constrained")
     axes = np.atleast_1d(axes)
     steps = burn + thin * np.arange(theta.shape[1])
     for i, ax in enumerate(axes):
-        y = theta[:, :, i] / (1 if _linear(names[i]) else np.log(10))
+        y = theta[:, :, i] / np.log(10) if not _linear(names[i]) else (
+            np.exp(theta[:, :, i]) if names[i] == "b" or names[i].startswith("b_") else theta[:, :, i])
         ax.plot(steps, y.T, lw=0.4, alpha=0.5)
         ax.set_ylabel(_label(names[i]), fontsize=7)
         ax.tick_params(labelsize=7)

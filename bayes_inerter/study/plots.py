@@ -17,7 +17,7 @@ def plot_inertance(rows: list[dict]):
     beside the joint model's b; below, each relative to theory."""
     import matplotlib.pyplot as plt
 
-    fig, (ax, rel) = plt.subplots(2, 1, figsize=(8, 7), sharex=True, gridspec_kw={"height_ratios": [3, 2]})
+    fig, (ax, rel, width) = plt.subplots(3, 1, figsize=(8, 9), sharex=True, gridspec_kw={"height_ratios": [3, 2, 2]})
     x = np.arange(len(rows))
     theory = np.array([r["b_theory"] for r in rows])
     paper = np.array([r["b_paper"] for r in rows])
@@ -46,9 +46,16 @@ def plot_inertance(rows: list[dict]):
         rel.errorbar(x + 0.2, 100 * (pm / theory - 1), yerr=100 * perr / theory, fmt="D", color="tab:green",
                      capsize=4, ms=5)
     rel.set_ylabel("relative to theory (%)")
-    rel.set_xticks(x, [r["setting"] for r in rows])
-    rel.set_xlabel("flywheel setting")
     rel.grid(alpha=0.3)
+    # the intervals are far narrower than the gaps to theory: their own panel shows them
+    width.axhline(0, color="k", lw=0.8)
+    width.errorbar(x, np.zeros_like(med), yerr=100 * err / med, fmt="o", color="tab:blue", capsize=4)
+    if product:
+        width.errorbar(x + 0.2, np.zeros_like(pm), yerr=100 * perr / pm, fmt="D", color="tab:green", capsize=4, ms=5)
+    width.set_ylabel("94 % interval about\nits median (%)")
+    width.set_xticks(x, [r["setting"] for r in rows])
+    width.set_xlabel("flywheel setting")
+    width.grid(alpha=0.3)
     ax.set_title("Inertance per flywheel setting: theory against identification")
     fig.tight_layout()
     return fig
@@ -65,13 +72,18 @@ def plot_phi_map(rows: list[dict]):
         if r["setting"] in settings and r["freq_hz"] in freqs:
             grid[freqs.index(r["freq_hz"]), settings.index(r["setting"])] = 100 * r["phi_mean"]
     fig, ax = plt.subplots(figsize=(1.1 * len(settings) + 2.5, 0.9 * len(freqs) + 1.8))
-    im = ax.imshow(grid, cmap="viridis", vmin=0, vmax=100, aspect="auto")
+    papers = [100 * SETTINGS[s].fit_paper[f] for s in settings for f in freqs if SETTINGS[s].fit_paper.get(f)]
+    shown = np.concatenate([grid[np.isfinite(grid)], papers]) if papers or np.isfinite(grid).any() else np.array([0.0])
+    lo, hi = float(np.min(shown)), float(np.max(shown))
+    if hi - lo < 1e-9:
+        lo, hi = lo - 0.5, hi + 0.5
+    im = ax.imshow(grid, cmap="viridis", vmin=lo, vmax=hi, aspect="auto")  # the scale spans what is shown
     for i, f in enumerate(freqs):
         for j, s in enumerate(settings):
             paper = SETTINGS[s].fit_paper.get(f)
             text = ("-" if np.isnan(grid[i, j]) else f"{grid[i, j]:.1f}") + (f"\n({100 * paper:.1f})" if paper else "")
             ax.text(j, i, text, ha="center", va="center", fontsize=8,
-                    color="w" if np.nan_to_num(grid[i, j]) < 60 else "k")
+                    color="w" if np.nan_to_num(grid[i, j], nan=lo) < (lo + hi) / 2 else "k")
     ax.set_xticks(range(len(settings)), settings)
     ax.set_yticks(range(len(freqs)), [f"{f:g} Hz" for f in freqs])
     ax.set_title("fit accuracy phi (%): posterior mean, (paper's Table 2)")
