@@ -466,8 +466,17 @@ def main(argv=None) -> int:
     ours = previous is signal.default_int_handler and threading.current_thread() is threading.main_thread()
     if ours:
         signal.signal(signal.SIGINT, _on_sigint)
+    import warnings
+
+    import numpy as np
+
+    # library warnings that mean nothing to a user (arviz's FutureWarning on import,
+    # numpy's on an overflow the code handles); the commands say what matters in words
     try:
-        code = args.func(args)
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.filterwarnings("ignore", category=FutureWarning)
+            warnings.filterwarnings("ignore", category=RuntimeWarning)
+            code = args.func(args)
         if _INTERRUPTED:  # came where it could only be dropped, and nothing asked again
             raise KeyboardInterrupt
         return code

@@ -1,0 +1,125 @@
+"""The command line with a user's own files: column maps, units, checks, masses, device
+files, normalising, one run per folder, and progress in a log file."""
+
+import io
+import json
+import math
+
+import numpy as np
+import pytest
+
+from bayes_inerter._progress import StepProgress
+from bayes_inerter.cli import _percent_interval, main
+from bayes_inerter.inference.sampler import SamplerStatus
+from bayes_inerter.lock import folder_lock
+from bayes_inerter.records import read_record
+
+
+def _daq(tmp_path, force_scale=1e-3, name="daq.csv"):
+    """A DAQ export of a rigid 3,100 kg device at 1 Hz: time in ms, force in kN (or
+    ``force_scale`` of N), acceleration in g, semicolons, an extra channel."""
+    t = np.arange(3001) / 1000.0
+    w = 2 * math.pi
+    x = 0.01 * np.sin(w * t)
+    a = -w * w * x
+    f = 3100.0 * a + 300.0 * np.tanh(0.01 * w * np.cos(w * t) / 1e-3)
+    rows = [f"{ti * 1000:.3f};{fi * force_scale:.9g};{ai / 9.80665:.9g};{xi * 1000:.9g};21.5"
+            for ti, fi, ai, xi in zip(t, f, a, x)]
+    p = tmp_path / name
+    p.write_text("# drive_frequency_hz: 1\n# m_s: 21.7\nZeit;Kraft;Beschl;Weg;Temp\n" + "\n".join(rows) + "\n")
+    return p
+
+
+MAP = ["--columns", "time=Zeit,force=Kraft,accel=Beschl,disp=Weg", "--units", "time=ms,force=kN,accel=g,disp=mm"]
+
+
+def test_inspect_reads_a_daq_export_and_normalises_it(tmp_path, capsys):
+    p = _daq(tmp_path)
+    out = tmp_path / "si.csv"
+    assert main(["inspect", str(p), *MAP, "--normalise", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "valid record" in text and "physical-sense checks: passed" in text
+    assert "m_B = 57.2 kg (paper's Table I" in text
+    rec = read_record(out)
+    assert rec.fs == pytest.approx(1000.0) and np.max(np.abs(rec.disp)) == pytest.approx(0.01, rel=1e-6)
+
+
+@pytest.mark.parametrize("units, cause", [
+    ("time=ms,force=N,accel=g,disp=mm", "force in kN"),
+    ("time=ms,force=kN,accel=m/s^2,disp=mm", "acceleration in g"),
+    ("time=ms,force=kN,accel=g,disp=m", "displacement in mm"),
+])
+def test_a_wrong_unit_is_refused_in_one_line_naming_it(tmp_path, capsys, units, cause):
+    p = _daq(tmp_path)
+    argv = ["inspect", str(p), "--columns", "time=Zeit,force=Kraft,accel=Beschl,disp=Weg", "--units", units]
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "\n" not in err and cause in err and "--skip-check" in err
+
+
+def test_fit_refuses_before_touching_the_folder_and_the_override_is_named(tmp_path, capsys):
+    p = _daq(tmp_path)
+    out = tmp_path / "fit"
+    argv = ["fit", str(p), "--columns", "time=Zeit,force=Kraft,accel=Beschl", "--units", "time=ms,accel=g",
+            "--out", str(out), "--steps", "5"]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "force in kN" in err and "--skip-check apparent-mass" in err
+    assert not out.exists()
+
+
+def test_a_second_fit_into_a_held_folder_is_refused_at_once(tmp_path, capsys):
+    p = _daq(tmp_path)
+    out = tmp_path / "fit"
+    with folder_lock(out):
+        assert main(["fit", str(p), *MAP, "--out", str(out), "--steps", "5"]) == 1
+    err = capsys.readouterr().err
+    assert "is in use by another run (process" in err
+    assert not (out / "chain.h5").exists()
+
+
+def test_fit_prints_the_masses_and_their_sources_and_device_theory(tmp_path, capsys):
+    p = _daq(tmp_path)
+    dev = tmp_path / "dev.toml"
+    dev.write_text("m_B = 50.0\n[geometry]\nlead = 0.02\nJ_screw = 0.03\n")
+    out = tmp_path / "fit"
+    code = main(["fit", str(p), *MAP, "--device", str(dev), "--out", str(out), "--steps", "30", "--processes", "1",
+                 "--walkers", "24"])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "m_s = 21.7 kg (record metadata m_s), m_B = 50 kg (device file" in text
+    theory = (2 * math.pi / 0.02) ** 2 * 0.03  # (2 pi / lead)^2 J_screw
+    assert f"theory (device file geometry): b = {theory:.6g} kg" in text
+    info = json.loads((out / "fit.json").read_text())
+    assert info["masses"]["m_B"] == {"kg": 50.0, "source": f"device file {dev}"}
+    assert info["b_theory_device_file"] == pytest.approx((2 * math.pi / 0.02) ** 2 * 0.03)
+
+
+def test_percent_interval_has_digits_enough_to_differ():
+    assert _percent_interval(0.99141, 0.99143) == "99.141 % to 99.143 %"
+    assert _percent_interval(0.5, 0.75) == "50.00 % to 75.00 %"
+
+
+class _Clock:
+    def __init__(self):
+        self.t = 0.0
+
+
+def test_progress_in_a_log_file_prints_lines_at_most_every_interval(monkeypatch):
+    clock = _Clock()
+    monkeypatch.setattr("bayes_inerter._progress.time.monotonic", lambda: clock.t)
+    log = io.StringIO()  # not a terminal
+    bar = StepProgress("sampling", stream=log, interval=30.0)
+    bar.status(SamplerStatus(250, 250, None))
+    for step in range(251, 400):
+        clock.t += 1.0  # a step a second
+        bar.step(step, None)
+        if step == 300:
+            bar.status(SamplerStatus(300, 250, None, tau_max=42.0, acceptance=0.31, steps_needed=3000))
+    bar.close()
+    lines = log.getvalue().splitlines()
+    assert lines[0] == "sampling: continuing from step 250 of until converged (the checkpoint's)"
+    steps = [ln for ln in lines[1:] if ln.startswith("sampling: step")]
+    assert len(steps) == 1 + 149 // 30 + 1  # the first step, one every 30 s, the end
+    assert "tau 42 steps, acceptance 0.31, about 3000 more steps needed" in lines[-1]
+    assert lines[-1].endswith("(done)")
