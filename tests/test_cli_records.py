@@ -123,3 +123,22 @@ def test_progress_in_a_log_file_prints_lines_at_most_every_interval(monkeypatch)
     assert len(steps) == 1 + 149 // 30 + 1  # the first step, one every 30 s, the end
     assert "tau 42 steps, acceptance 0.31, about 3000 more steps needed" in lines[-1]
     assert lines[-1].endswith("(done)")
+
+
+def test_study_checks_the_users_records_before_any_fit(tmp_path, capsys):
+    folder = tmp_path / "records"
+    folder.mkdir()
+    p = _daq(folder, force_scale=1.0, name="good.csv")
+    text = p.read_text().replace("Zeit;Kraft;Beschl;Weg;Temp", "time_s;force_N;accel_m_s2;disp_m;temp")
+    # a file in the project's columns but with the force in kN and no map: refused
+    rows = text.splitlines()
+    header_at = next(i for i, r in enumerate(rows) if r.startswith("time_s"))
+    body = [";".join([f"{float(a) / 1000:.6f}", f"{float(b) / 1000:.9g}", f"{float(c) * 9.80665:.9g}",
+                      f"{float(d) / 1000:.9g}"]) for a, b, c, d, _ in (r.split(";") for r in rows[header_at + 1:])]
+    (folder / "good.csv").unlink()
+    (folder / "kN.csv").write_text("\n".join(rows[:header_at] + ["time_s;force_N;accel_m_s2;disp_m"] + body) + "\n")
+    out = tmp_path / "study"
+    assert main(["study", "--quick", "--records", str(folder), "--out", str(out), "--no-joint"]) == 1
+    err = capsys.readouterr().err
+    assert "kN.csv" in err and "force in kN" in err and "--skip-check apparent-mass" in err
+    assert not (out / "fits").exists()

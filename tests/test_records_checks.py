@@ -84,15 +84,17 @@ def test_wrong_files_are_refused_naming_the_cause(device, mistake):
 
 
 @FAST
-@given(devices.filter(lambda d: d["disp"]), st.sampled_from(["swap", "disp mm", "accel g"]))
+@given(devices.filter(lambda d: d["disp"]), st.sampled_from(["swap", "disp mm", "accel g", "force-disp"]))
 def test_acceleration_against_displacement(device, mistake):
     rec = rigid_record(**device)
     wrong = {"swap": dataclasses.replace(rec, accel=rec.disp, disp=rec.accel),
+             "force-disp": dataclasses.replace(rec, force=rec.disp, disp=rec.force),
              "disp mm": dataclasses.replace(rec, disp=rec.disp * 1000),
              "accel g": dataclasses.replace(rec, accel=rec.accel / 9.80665)}[mistake]
     found = first_check(wrong)
     assert found is not None and found.check == "accel-vs-disp"
     words = {"swap": "acceleration and displacement columns swapped", "disp mm": "disp=mm",
+             "force-disp": "force and displacement columns swapped",
              "accel g": "accel=g"}[mistake]
     assert words in found.message
 

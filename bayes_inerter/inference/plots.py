@@ -184,6 +184,7 @@ def plot_phi(phi: np.ndarray, *, paper: float | None = None, title: str = ""):
     if paper is not None:
         ax.axvline(paper * 100, color="tab:red", ls="--", label=f"paper: {paper:.1%}")
         ax.legend(fontsize=8)
+    ax.ticklabel_format(axis="x", useOffset=False)  # phi near 100 %: the digits themselves, no offset
     ax.set_xlabel("fit accuracy φ (%), low-passed")
     ax.set_ylabel("draws")
     ax.set_title(title, fontsize=10)

@@ -192,6 +192,8 @@ _CAUSES = (
     ("force and acceleration columns swapped", lambda r: replace(r, force=r.accel, accel=r.force)),
     ("acceleration and displacement columns swapped",
      lambda r: None if r.disp is None else replace(r, accel=r.disp, disp=r.accel)),
+    ("force and displacement columns swapped",
+     lambda r: None if r.disp is None else replace(r, force=r.disp, disp=r.force)),
     ("force in kN (--units force=kN)", lambda r: _scaled(r, force=UNITS["force"]["kN"])),
     ("force in lbf (--units force=lbf)", lambda r: _scaled(r, force=UNITS["force"]["lbf"])),
     ("acceleration in g (--units accel=g)", lambda r: _scaled(r, accel=UNITS["accel"]["g"])),
