@@ -87,7 +87,20 @@ def versions() -> dict:
 
     return {"bayes_inerter": __version__, "numpy": np.__version__, "scipy": scipy.__version__,
             "emcee": emcee.__version__, "arviz": arviz.__version__, "numba": numba.__version__,
-            "python": platform.python_version()}
+            "python": platform.python_version(), "machine": platform.machine(), "cpu": _cpu_model()}
+
+
+def _cpu_model() -> str:
+    """The processor's model name: numbers are reproduced bit for bit only on the same
+    kind of processor (docs/reproducibility.md), so each result names its own."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
 
 
 def fit_record(
