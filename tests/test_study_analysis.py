@@ -105,11 +105,11 @@ def test_joint_table_holds_b_and_the_apparent_inertance_against_their_truths():
 
 
 def test_report_names_the_settings_whose_sd_was_widened():
-    from bayes_inerter.study.report import _inertance_text
+    from bayes_inerter.study.report import _how_identified
 
     rows = inertance_table([fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1030.0, 20.0),
                             fake_fit("A2", 0.5, 2000.0, 10.0), fake_fit("A2", 1.0, 2010.0, 10.0)])
-    text = _inertance_text(rows, {"A1": 1006.0, "A2": 2005.0})
+    text = _how_identified(rows)
     assert "Birge ratio" in text and "A1 (1.34)" in text  # sqrt(1.8)
     assert "beyond chance" not in text  # chi2 1.8 on 1 degree of freedom: p = 0.18
     assert "A2 (" not in text  # its records agree (chi2 0.5 on 1 degree of freedom)
@@ -173,11 +173,11 @@ def test_report_on_calibration_says_what_the_generated_records_can_check():
 
 
 def test_report_flags_records_that_disagree_beyond_chance():
-    from bayes_inerter.study.report import _inertance_text
+    from bayes_inerter.study.report import _how_identified
 
     # 1000 +- 1 against 1010 +- 1: chi2 50 on 1 degree of freedom
     rows = inertance_table([fake_fit("A1", 0.5, 1000.0, 1.0), fake_fit("A1", 1.0, 1010.0, 1.0)])
-    assert "A1 the disagreement is beyond chance" in _inertance_text(rows, None)
+    assert "A1 the disagreement is beyond chance" in _how_identified(rows)
 
 
 def test_collect_orders_fits_by_setting_and_frequency_as_numbers(tmp_path):
@@ -200,7 +200,7 @@ def test_collect_orders_fits_by_setting_and_frequency_as_numbers(tmp_path):
 
 def test_report_says_how_records_were_combined_or_that_b_is_the_joint_models():
     from bayes_inerter.study.analysis import joint_estimate
-    from bayes_inerter.study.report import _combination_note, _inertance_text
+    from bayes_inerter.study.report import _answer_section, _combination_note
 
     inert = inertance_table([fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1010.0, 10.0),
                              fake_fit("A2", 1.0, 2000.0, 5.0)])
@@ -216,8 +216,8 @@ def test_report_says_how_records_were_combined_or_that_b_is_the_joint_models():
     # the product's own list and coverage (A1 1005 +- 1.88 * 7.07: holds 1004; A2 2000 +- 9.4: holds 2001)
     assert "joint model's b's" in text and "A1 1005 kg" in text and "for 2 of 2 settings" in text
     assert "settings" not in _combination_note(joint, [{"setting": "A1"}]).split("the same records give")[1]
-    lead = _inertance_text(joint, {"A1": 1004.0, "A2": 2010.0})
-    assert "from the joint model" in lead and "holds the true value for 1 of 2 settings" in lead
+    lead = "\n".join(_answer_section(None, joint, {}, {"A1": 1004.0, "A2": 2010.0}))
+    assert "Identified: the joint model" in lead and "holds the true value for 1 of 2 settings" in lead
     assert "not converged" in lead and "Birge" not in lead
 
 

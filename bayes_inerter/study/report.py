@@ -18,6 +18,8 @@ __all__ = ["write_report", "design_report", "calibration_report", "calibration_c
 
 #: Contraction below which a parameter is reported as not identified by the records.
 NOT_IDENTIFIED = 0.5
+#: Pareto k above which PSIS-LOO is flagged as unreliable (Vehtari et al. 2017).
+PARETO_K = 0.7
 
 
 def _table(rows: list[dict], columns: list[str], fmt: dict | None = None) -> str:
@@ -80,18 +82,6 @@ def _outlying_text(rows, name: str = "phi") -> str:
             "read that record's posterior as holding a second, minor mode that its convergence checks did not catch.")
 
 
-def _inertance_text(rows, truth_b: dict | None) -> str:
-    joint = is_joint(rows)
-    text = ("Posterior inertance per setting " + ("from the joint model of all records (median, 94 % HDI): "
-                                                  if joint else "(median, 94 % interval): ")
-            + _interval_list(rows) + ".")
-    if truth_b:
-        text += f" The records were generated with known inertances: {_truth_sentence(rows, truth_b)}."
-    if joint and not all(r["converged"] for r in rows):
-        text += " **The joint chain is not converged: read these intervals as indicative.**"
-    return text + ("" if joint else _discrepancy_text(rows))
-
-
 def _combination_note(inert, joint_rows) -> str:
     """Where the per-setting b's above come from: the joint model (and then what each
     setting's records, fitted one by one and combined, give beside it), or the product of
@@ -132,8 +122,8 @@ def _calibration_text(rows, calibration, truth_b: dict | None, prefix: str, gain
             f"to {100 * calibration.force:.2g} % and the accelerometer's to {100 * calibration.accel:.2g} % (standard "
             f"uncertainties, an **assumption**: `--sensor-uncertainty`), a record reads the same whether b or the "
             f"sensitivities' ratio is off (`records.sensitivity`), so b carries a further {100 * u:.2g} % of "
-            f"b plus the moving mass that no record can reduce: the 94 % intervals widen to "
-            + "; ".join(f"{r['setting']} {r[f'{prefix}hdi_3%']:.0f}-{r[f'{prefix}hdi_97%']:.0f}" for r in rows) + ".")
+            f"b plus the moving mass that no record can reduce: the 94 % intervals widen to those of the first "
+            f"table's last column.")
     if truth_b and gains is not None:
         if tuple(gains) == (1.0, 1.0):
             text += (" The records were generated with exact sensitivities, so the records-alone intervals are the "
@@ -169,10 +159,10 @@ def _joint_section(rows, info, calibration=None, truth_b=None, gains=None) -> li
             "b_joint_cal_hdi_3%", "b_joint_cal_hdi_97%", "r_hat", "ess_bulk")
     one = ("b_theory", "b_truth", "b_single_median", "b_joint_mean", "b_joint_hdi_3%", "b_joint_hdi_97%",
            "b_app_truth", "b_app_joint_hdi_3%", "b_app_joint_hdi_97%", "b_joint_cal_hdi_3%", "b_joint_cal_hdi_97%")
-    out = ["## Joint model: all records at once", "", text, "",
+    out = ["### Joint model: all records at once", "", text, "",
            _table(rows, [c for c in cols if c in rows[0]],
                   {c: "{:.1f}" for c in one} | {"r_hat": "{:.3f}", "ess_bulk": "{:.0f}"}), "",
-           "![joint posterior of b](joint/corner.png)", ""]
+           "The joint posterior's corner plot is `joint/corner.png`, drawn where the joint chain ran.", ""]
     return out
 
 
@@ -241,51 +231,121 @@ _AMBIGUITY = (
     "the rotation, where b is largest) lies at the top of b's posterior, and may fall just outside its interval.")
 
 
-def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: dict, truth_b: dict | None,
-                 truth_app: dict | None = None) -> Path:
-    """Write ``out``/REPORT.md from the study's tables; return its path. ``truth_b`` and
-    ``truth_app``: the generating b and b_app per setting, where the records were generated."""
-    inert, reg, phi, comp, contr, recs = (tables.get(k, []) for k in
-                                          ("inertance", "regression", "phi", "models", "contraction", "records"))
+def _how_identified(inert) -> str:
+    """How the per-setting intervals were made, in a sentence or two."""
+    if is_joint(inert):
+        return ("the joint model of all records (one set of friction and deformation parameters, one b per setting; "
+                "`joint/`): posterior median and 94 % highest-density interval.")
+    if all(r.get("records", 1) <= 1 for r in inert):
+        return "each setting's one record: posterior median and 94 % highest-density interval."
+    return ("each setting's records fitted one by one and combined as independent normals (the product of their "
+            "posteriors): median and 94 % interval." + _discrepancy_text(inert))
+
+
+def _answer_section(plan, inert, tables, truth_b) -> list[str]:
+    """The report's first screen: one table of theory, paper and identified inertance
+    with its interval per setting, how the interval was made, and the figure."""
+    joint = is_joint(inert)
+    how = _how_identified(inert)
+    rows = [{"setting": r["setting"], "theory (kg)": r["b_theory"], "paper (kg)": r["b_paper"],
+             "identified (kg)": r["b_median"], "94 % interval (kg)": f"{r['b_hdi_3%']:.1f} to {r['b_hdi_97%']:.1f}",
+             "against theory": f"{100 * (r['b_median'] / r['b_theory'] - 1):+.1f} %",
+             **({"with sensor uncertainty (kg)": f"{r['b_cal_hdi_3%']:.1f} to {r['b_cal_hdi_97%']:.1f}"}
+                if "b_cal_hdi_3%" in r else {})} for r in inert]
+    cols = list(rows[0])
+    lines = ["## Inertance per flywheel setting", "",
+             _table(rows, cols, {"theory (kg)": "{:.1f}", "paper (kg)": "{:.1f}", "identified (kg)": "{:.1f}"}), "",
+             f"Identified: {how} Theory: the paper's geometry (`device.theoretical_inertance`). Paper: its Table 2, "
+             "tuned by hand."
+             + (" The last column adds the sensors' calibration uncertainty (below)." if "b_cal_hdi_3%" in inert[0]
+                else "")
+             + (f" The records were generated with known inertances: {_truth_sentence(inert, truth_b)}."
+                if truth_b else "")
+             + (" **The joint chain is not converged: read these intervals as indicative.**"
+                if joint and not all(r["converged"] for r in inert) else ""), "",
+             "![theory against identification](theory_vs_identified.png)", ""]
+    return lines
+
+
+def _limitations_section(plan, tables, outcomes, truth_b) -> list[str]:
+    """What the answer does not cover: where the records come from, what they do not
+    identify, what the intervals were not tested against, unconverged or failed fits,
+    and unreliable LOO."""
+    contr, comp = tables.get("contraction", []), tables.get("models", [])
     done = [o for o in outcomes if o["status"] != "failed"]
     failed = [o for o in outcomes if o["status"] == "failed"]
     n_conv = sum(bool(o.get("converged")) for o in done)
+    items = []
+    if plan.records_dir:
+        items.append(f"The records are the user's (`{plan.records_dir}`): no true inertance is known, and no model "
+                     "fits a real device exactly; the intervals are the model's.")
+    else:
+        items.append("The records were generated by this package from the model it fits (the paper's reduced "
+                     "two-port network, Coulomb friction, its parameters): the fitted model is the true one. The "
+                     "intervals have not been tested here against a device richer than the model (Stribeck "
+                     "friction, nut backlash, sensor errors), which a real inerter is.")
+    if contr:
+        names = [k for k in contr[0] if k != "record"]
+        weak = [n for n in names if min(r[n] for r in contr) < NOT_IDENTIFIED]
+        if weak:
+            items.append(f"Not identified by some record (posterior contraction below {NOT_IDENTIFIED}): "
+                         f"{', '.join(weak)}; their intervals are the prior's, and b moves with some of them "
+                         "(details below).")
+    if plan.calibration.ratio_sd > 0:
+        items.append("Every interval but the last column's takes the sensors' sensitivities as exact.")
+    conv = Convergence()
+    if n_conv < len(done):
+        items.append(f"**{len(done) - n_conv} of {len(done)} chains did not meet the convergence criteria** "
+                     f"({conv.n_tau:g} autocorrelation times after a {100 * conv.warmup:.0f} % warm-up, R-hat < "
+                     f"{conv.max_rhat:g}, ESS >= {conv.min_ess:g}): read their intervals as indicative.")
+    else:
+        items.append(f"All {len(done)} chains met the convergence criteria ({conv.n_tau:g} autocorrelation times "
+                     f"after a {100 * conv.warmup:.0f} % warm-up, R-hat < {conv.max_rhat:g}, ESS >= {conv.min_ess:g}).")
+    if failed:
+        items.append("**Failed fits:** " + "; ".join(f"{o['key']}: {o.get('error', '')}" for o in failed))
+    high_k = [f"{r['record']} ({r['model']}, k = {r['pareto_k_max']:.2f})" for r in comp
+              if r.get("pareto_k_max") is not None and r["pareto_k_max"] > PARETO_K]
+    if high_k:
+        items.append(f"LOO is unreliable (Pareto k above {PARETO_K}) for " + ", ".join(high_k)
+                     + ": their model comparison is approximate.")
+    return ["## Limitations", "", *[f"- {t}" for t in items], ""]
+
+
+def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: dict, truth_b: dict | None,
+                 truth_app: dict | None = None) -> Path:
+    """Write ``out``/REPORT.md from the study's tables; return its path. ``truth_b`` and
+    ``truth_app``: the generating b and b_app per setting, where the records were generated.
+
+    The answer first (one table and one figure), then the limitations, then the details;
+    each interval says how it was made."""
+    inert, reg, phi, comp, contr, recs = (tables.get(k, []) for k in
+                                          ("inertance", "regression", "phi", "models", "contraction", "records"))
     gains = None if plan.records_dir else (plan.generator.force_gain, plan.generator.accel_gain)
-    lines = [f"# Study `{plan.name}`: the inertance of each flywheel setting, with uncertainty", ""]
     source = (f"the records in `{plan.records_dir}`" if plan.records_dir else
               f"records generated at the paper's parameters (settings {', '.join(plan.settings)}; "
               f"{', '.join(f'{f:g}' for f in plan.frequencies)} Hz; noise seed {plan.seed})")
     chains = (f"each chain {plan.steps} steps" if plan.steps else "each chain run until converged")
-    lines += [f"Fitted: {source}; {len(outcomes)} posteriors ({chains}).", ""]
-    conv = Convergence()
-    criteria = (f"{conv.n_tau:g} autocorrelation times after a warm-up of {100 * conv.warmup:.0f} % of the chain, "
-                f"R-hat < {conv.max_rhat:g}, ESS >= {conv.min_ess:g}")
-    if n_conv < len(done):
-        lines += [f"**Convergence: {n_conv} of {len(done)} chains met the convergence criteria ({criteria}). The "
-                  "others are not converged: read their intervals as indicative only.**", ""]
-    else:
-        lines += [f"Convergence: all {len(done)} chains met the criteria ({criteria}).", ""]
-    if failed:
-        lines += ["**Failed fits:** " + "; ".join(f"{o['key']}: {o.get('error', '')}" for o in failed), ""]
+    lines = [f"# Study `{plan.name}`: the inertance of each flywheel setting", "",
+             f"Fitted: {source}; {len(outcomes)} posteriors ({chains}).", ""]
     if inert:
-        cal_cols = [c for c in ("b_cal_hdi_3%", "b_cal_hdi_97%") if c in inert[0]]
+        lines += _answer_section(plan, inert, tables, truth_b)
+    lines += _limitations_section(plan, tables, outcomes, truth_b)
+    lines += ["## Details", ""]
+    if inert:
         app_cols = [c for c in ("b_app_hdi_3%", "b_app_hdi_97%") if recs and c in recs[0]]
         note = _combination_note(inert, tables.get("joint"))
-        lines += ["## Inertance per flywheel setting", "", _inertance_text(inert, truth_b), "",
-                  *([note, ""] if note else []),
-                  _table(inert, ["setting", "b_theory", "b_paper", "b_median", "b_hdi_3%", "b_hdi_97%", *cal_cols,
-                                 "records", "converged"],
-                         {c: "{:.1f}" for c in ("b_theory", "b_paper", "b_median", "b_hdi_3%", "b_hdi_97%",
-                                                *cal_cols)}), "",
-                  _calibration_text(inert, plan.calibration, truth_b, "b_cal_", gains), "",
-                  "![theory against identification](theory_vs_identified.png)", "",
-                  _records_sentence(recs, truth_b, truth_app), "",
+        lines += ["### Each record on its own", "",
+                  _records_sentence(recs, truth_b, truth_app)
+                  + " Intervals here are each record's own posterior (median and 94 % HDI), with its own friction "
+                    "and deformation parameters: wider than the per-setting ones above.", "",
                   _table(recs, ["record", "b_mean", "b_hdi_3%", "b_hdi_97%", *app_cols, "b_r_hat", "iterations",
                                 "converged"],
                          {c: "{:.1f}" for c in ("b_mean", "b_hdi_3%", "b_hdi_97%", *app_cols)}), "",
-                  _AMBIGUITY if recs and app_cols else "", ""]
+                  *([note, ""] if note else []),
+                  _AMBIGUITY if recs and app_cols else "", "",
+                  "### Sensor calibration", "", _calibration_text(inert, plan.calibration, truth_b, "b_cal_", gains), ""]
     if reg:
-        lines += ["## Inertance added per flywheel", "", _regression_text(reg, is_joint(inert)), "",
+        lines += ["### Inertance added per flywheel", "", _regression_text(reg, is_joint(inert)), "",
                   _regression_table(reg), "",
                   "The records were generated with the paper's identified b per setting, not the geometry's: "
                   "`truth` is what the regression gives on those values, `theory` the geometry."
@@ -296,9 +356,9 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
                       "independent normals):", "",
                       _regression_table(product), ""]
     if tables.get("joint"):
-        lines += _joint_section(tables["joint"], tables["joint_info"], plan.calibration, truth_b, gains)
+        lines += _joint_section(tables["joint"], tables["joint_info"], None, truth_b, gains)
     if phi:
-        lines += ["## Fit accuracy phi (the paper's Table 2, with uncertainty)", "",
+        lines += ["### Fit accuracy phi (the paper's Table 2, with uncertainty)", "",
                   "phi (eq. 5) on the 30 Hz low-passed accelerations inside the likelihood's window, for every "
                   "posterior draw; the paper's phi is on its unfiltered measured records, so the two are not the "
                   "same measure: ours says how well the model explains what the filter keeps."
@@ -307,43 +367,45 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
                          {c: "{:.4f}" for c in ("phi_mean", "phi_hdi_3%", "phi_hdi_97%", "phi_paper")}), "",
                   "![phi heat map](phi_map.png)", ""]
     if comp:
-        best = {}
-        for r in comp:
-            if r["record"] not in best or r["elpd_loo"] > best[r["record"]]["elpd_loo"]:
-                best[r["record"]] = r
-        sent = "; ".join(f"{rec}: {r['model']}" for rec, r in best.items())
-        lines += ["## Model comparison", "",
-                  f"Best model by LOO (expected log predictive density) per record: {sent}.", "",
-                  "A Pareto k above 0.7 (`pareto_k_max`) means LOO's importance sampling is unreliable for some "
-                  "observations of that fit; its elpd is then approximate.", "",
-                  _table(comp, ["record", "model", "elpd_loo", "elpd_se", "p_loo", "pareto_k_max", "phi_mean",
-                                "phi_paper_overall", "converged"],
-                         {"elpd_loo": "{:.1f}", "elpd_se": "{:.1f}", "p_loo": "{:.1f}", "pareto_k_max": "{:.2f}",
-                          "phi_mean": "{:.4f}"}), "",
-                  "![model comparison](model_comparison.png)", ""]
+        lines += _comparison_section(comp)
     if contr:
         names = [k for k in contr[0] if k != "record"]
-        weak = [n for n in names if min(r[n] for r in contr) < NOT_IDENTIFIED]
-        lines += ["## What the records identify", "",
+        lines += ["### What the records identify", "",
                   "Posterior contraction 1 - var(posterior) / var(prior) in the sampled scale: 1 is pinned down by "
-                  "the data, 0 is the prior unchanged. "
-                  + (f"Not identified (contraction below {NOT_IDENTIFIED} on some record): {', '.join(weak)}. "
-                     "Their intervals are the prior's, not a finding." if weak else
-                     "Every sampled quantity contracted by more than "
-                     f"{NOT_IDENTIFIED} on every record."), "",
+                  "the data, 0 is the prior unchanged.", "",
                   _table(contr, ["record"] + names, {n: "{:.2f}" for n in names}), "",
                   "What other experiments (frequency, amplitude, accelerometer band and noise) would identify, and "
                   "what a Stribeck hump or nut backlash does to b: `python studies/design.py`, written to "
                   "`results/design/REPORT.md`.", ""]
-    lines += ["## Per-record figures", "",
-              "Each fit's folder under `fits/<model>/<record>/` holds its corner plot (`corner.png`), credible "
-              "bands on the acceleration (`bands.png`), traces and phi.", "",
-              "## How this was made", "",
+    lines += ["### Per-record figures", "",
+              "`bayes-inerter report DIR` draws each fit's corner plot, credible bands, traces and phi into its "
+              "folder under `fits/<model>/<record>/` from its checkpoint (kept where the fit ran).", "",
+              "### How this was made", "",
               "Versions: " + ", ".join(f"{k} {v}" for k, v in versions.items()) + ".", "",
               f"Plan: `{plan!r}`", ""]
     path = Path(out) / "REPORT.md"
     path.write_text("\n".join(lines))
     return path
+
+
+def _comparison_section(comp) -> list[str]:
+    """Model comparison by LOO, each Pareto k above :data:`PARETO_K` flagged."""
+    best = {}
+    for r in comp:
+        if r["record"] not in best or r["elpd_loo"] > best[r["record"]]["elpd_loo"]:
+            best[r["record"]] = r
+    sent = "; ".join(f"{rec}: {r['model']}" for rec, r in best.items())
+    rows = [{**r, "loo_reliable": "yes" if r.get("pareto_k_max") is not None and r["pareto_k_max"] <= PARETO_K
+             else "**no**"} for r in comp]
+    return ["### Model comparison", "",
+            f"Best model by LOO (expected log predictive density) per record: {sent}.", "",
+            f"A Pareto k above {PARETO_K} (`pareto_k_max`; `loo_reliable` no) means LOO's importance sampling is "
+            "unreliable for some observations of that fit; its elpd is then approximate.", "",
+            _table(rows, ["record", "model", "elpd_loo", "elpd_se", "p_loo", "pareto_k_max", "loo_reliable",
+                          "phi_mean", "phi_paper_overall", "converged"],
+                   {"elpd_loo": "{:.1f}", "elpd_se": "{:.1f}", "p_loo": "{:.1f}", "pareto_k_max": "{:.2f}",
+                    "phi_mean": "{:.4f}"}), "",
+            "![model comparison](model_comparison.png)", ""]
 
 
 def design_report(out: Path, rows: list[dict], shifts: list[dict], names: list[str], versions: dict,
