@@ -247,7 +247,7 @@ def cmd_fit(args) -> int:
             steps=args.steps, seed=args.seed, fresh=args.fresh, processes=processes,
             likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=bar.step,
             report=bar.status, coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
-            checkpoint_seconds=args.checkpoint_seconds,
+            checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots,
         )
     finally:
         bar.close()
@@ -273,8 +273,8 @@ def cmd_fit(args) -> int:
     else:
         print(f"warning: {result.reason}; do not trust these intervals yet "
               "(run again with more --steps, or without --steps)")
-    print(f"wrote {args.out}/summary.csv, posterior.nc, loo.json, chain.h5 (and its twin), corner.png, bands.png, trace.png, "
-          "phi.png, fit.json")
+    figures = "" if args.no_plots else "corner.png, bands.png, trace.png, phi.png, "
+    print(f"wrote {args.out}/summary.csv, posterior.nc, loo.json, chain.h5 (and its twin), {figures}fit.json")
     return EXIT_OK
 
 
@@ -311,6 +311,8 @@ def cmd_study(args) -> int:
         changes["records_dir"] = args.records
     if args.skip_check:
         changes["skip_checks"] = tuple(args.skip_check)
+    if args.figures:
+        changes["figures"] = True
     plan = replace(plan, **changes)
     out = Path(args.out or Path("runs") / plan.name)
     processes = args.processes or min(2, os.cpu_count() or 1)
@@ -371,6 +373,15 @@ def cmd_study(args) -> int:
     return EXIT_OK
 
 
+def cmd_report(args) -> int:
+    from .study.redraw import redraw_fits
+
+    done = redraw_fits(args.folder, on_fit=lambda folder, status: print(f"{folder}: {status}", flush=True))
+    drawn = sum(status == "drawn" for _, status in done)
+    print(f"drew the figures of {drawn} of {len(done)} fits")
+    return EXIT_OK if drawn == len(done) else EXIT_FAIL
+
+
 def cmd_demo(args) -> int:
     from .demo import run_demo
 
@@ -418,6 +429,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="where the walkers move (%(default)s; the outputs are the same parameters either way)")
     p.add_argument("--no-adaptation", action="store_true",
                    help="emcee's ensemble moves alone, without the independence move fitted to the chain")
+    p.add_argument("--no-plots", action="store_true", help="write no figures (they take several seconds)")
     p.add_argument("--checkpoint-seconds", type=_non_negative_float, default=CHECKPOINT_SECONDS,
                    help="write the chain's steps at most this many seconds apart (%(default)s; 0: every step): "
                         "a kill loses at most that much sampling")
@@ -429,6 +441,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output folder (default runs/quick or runs/full); finished fits there are reused")
     p.add_argument("--skip-check", action="append", default=[], choices=RECORD_CHECKS, metavar="CHECK",
                    help="with --records: skip a physical-sense check of your records")
+    p.add_argument("--figures", action="store_true",
+                   help="each fit draws its figures as it ends (default: later, by bayes-inerter report DIR)")
     p.add_argument("--records", help="a folder of your CSV records to fit instead of generated ones")
     p.add_argument("--steps", type=_positive_int, help="steps per chain (default: the plan's; full: until converged)")
     p.add_argument("--seed", type=int, help="seed of the generated records' noise and of the chains (0)")
@@ -441,6 +455,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--processes", type=_positive_int, help="local worker processes, one fit each (default: up to 2)")
     p.add_argument("--scheduler", help="run the fits on this Dask scheduler (tcp://host:port) instead")
     p.set_defaults(func=cmd_study)
+
+    p = sub.add_parser("report", help="draw a study's per-fit figures again from the fits' checkpoints")
+    p.add_argument("folder", help="a study's folder (or one fit's folder in it)")
+    p.set_defaults(func=cmd_report)
 
     p = sub.add_parser("inspect", help="validate a record, check its physical sense and print its summary")
     p.add_argument("record", help="record CSV file")
@@ -473,6 +491,9 @@ def main(argv=None) -> int:
     # library warnings that mean nothing to a user (arviz's FutureWarning on import,
     # numpy's on an overflow the code handles); the commands say what matters in words
     try:
+        import logging
+
+        logging.getLogger("arviz").setLevel(logging.ERROR)  # shape warnings of short chains, said in words
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.filterwarnings("ignore", category=FutureWarning)
             warnings.filterwarnings("ignore", category=RuntimeWarning)

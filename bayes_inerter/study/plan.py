@@ -71,6 +71,9 @@ class StudyPlan:
         no fit.
     skip_checks : physical-sense checks (``records.checks.CHECKS``) not run on the
         user's records (``records_dir``).
+    figures : each fit draws its own figures as it ends (several seconds a fit); by
+        default they are drawn afterwards, for the fits one wants, by
+        ``bayes-inerter report`` (``study.redraw``).
     """
 
     name: str
@@ -86,6 +89,7 @@ class StudyPlan:
     joint_steps: int | None = None
     calibration: SensorCalibration = field(default_factory=SensorCalibration)
     skip_checks: tuple = ()
+    figures: bool = False
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.settings if s not in SETTINGS]

@@ -92,10 +92,42 @@ def run_joint(plan: StudyPlan, out: Path, fits: list, records: dict, *, processe
     if len(chosen) < 2:
         return None
     recs = [read_record(records[f.name][0]) for f in chosen]
+    reused = finished_joint(out / "joint", recs, plan)
+    if reused is not None:
+        return reused
     names = PosteriorModel(recs[0]).names
     centres = [{n: f.stat(n, "mean") for n in names} for f in chosen]
     return fit_joint(recs, out / "joint", centres=centres, steps=plan.joint_steps, seed=plan.seed,
-                     processes=processes, progress=progress)
+                     processes=processes, progress=progress, plots=plan.figures)
+
+
+def finished_joint(folder: Path, records, plan: StudyPlan):
+    """The joint model's outputs from an earlier run into ``folder``, as a FitResult,
+    if it finished converged (or with ``plan.joint_steps`` steps) on the same records with
+    the same seed and left what the tables need (summary.csv, fit.json, b_draws.npz);
+    else None. A fresh clone of committed results thus rebuilds its tables and report
+    without sampling the joint chain again (its checkpoint is not committed)."""
+    import csv
+
+    from ..inference.fit import DRAWS_FILE, FitResult
+    from ..inference.joint import JointModel
+
+    try:
+        info = json.loads((folder / "fit.json").read_text())
+        with open(folder / "summary.csv", newline="") as f:
+            rows = [{k: (v if k in ("name", "flag") else float(v)) for k, v in r.items()} for r in csv.DictReader(f)]
+        with np.load(folder / DRAWS_FILE) as npz:
+            draws = {k: npz[k] for k in npz.files}
+    except (OSError, ValueError, KeyError):
+        return None
+    jm = JointModel(tuple(records))
+    same = (info.get("records") == [f"{s} {f:g} Hz" for s, f in zip(jm.setting_of, jm.freq_of)]
+            and info.get("seed") == plan.seed)
+    ended = info.get("converged") if plan.joint_steps is None else info.get("iterations") == plan.joint_steps
+    if not (same and ended):
+        return None
+    return FitResult(folder, rows, bool(info["converged"]), info.get("reason", ""), int(info["iterations"]),
+                     np.array(list(info.get("tau", {}).values())), None, info.get("timings_s", {}), {}, "", draws)
 
 
 def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None = None, on_done=None,
@@ -135,7 +167,7 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
     if on_jobs:
         on_jobs(len(jobs))
     t1 = time.perf_counter()
-    outcomes = run_jobs(jobs, processes=processes, scheduler=scheduler, on_done=on_done)
+    outcomes = run_jobs(jobs, processes=processes, scheduler=scheduler, on_done=on_done, plots=plan.figures)
     t2 = time.perf_counter()
     fits = collect(out / "fits")
     joint = run_joint(plan, out, fits, records, processes=processes, progress=on_joint_step) if plan.joint else None

@@ -50,15 +50,16 @@ def finished(job: FitJob, needs_loo: bool = True) -> dict | None:
     return done if done.get("job") == dataclasses.asdict(job) else None
 
 
-def run_job(job: FitJob) -> dict:
-    """Fit one job (in the calling process) and record its outcome in ``done.json``."""
+def run_job(job: FitJob, plots: bool = True) -> dict:
+    """Fit one job (in the calling process) and record its outcome in ``done.json``;
+    ``plots``: draw the fit's figures too (``fit_record``)."""
     from ..inference import fit_record
     from ..records import read_record
 
     t0 = time.perf_counter()
     rec = read_record(job.record)
     res = fit_record(rec, job.out, model=job.model, steps=job.steps, walkers=job.walkers, seed=job.seed,
-                     processes=1)
+                     processes=1, plots=plots)
     outcome = {
         "key": job.key, "status": "done", "converged": bool(res.converged), "reason": res.reason,
         "iterations": int(res.iterations), "seconds": time.perf_counter() - t0,
@@ -73,16 +74,16 @@ def _failed(job: FitJob, error: str) -> dict:
     return {"key": job.key, "status": "failed", "error": error, "job": dataclasses.asdict(job)}
 
 
-def _child(job: FitJob, conn) -> None:
+def _child(job: FitJob, conn, plots: bool) -> None:
     try:
-        conn.send(run_job(job))
+        conn.send(run_job(job, plots))
     except BaseException as exc:  # reported to the parent, which goes on with the others
         conn.send(_failed(job, f"{type(exc).__name__}: {exc}"))
     finally:
         conn.close()
 
 
-def _run_local(jobs, processes: int, on_done) -> list[dict]:
+def _run_local(jobs, processes: int, on_done, plots: bool) -> list[dict]:
     ctx = multiprocessing.get_context("fork")
     pending = list(jobs)
     running = {}  # sentinel -> (process, connection, job)
@@ -92,7 +93,7 @@ def _run_local(jobs, processes: int, on_done) -> list[dict]:
             while pending and len(running) < processes:
                 job = pending.pop(0)
                 recv, send = ctx.Pipe(duplex=False)
-                proc = ctx.Process(target=_child, args=(job, send), daemon=True)
+                proc = ctx.Process(target=_child, args=(job, send, plots), daemon=True)
                 proc.start()
                 send.close()
                 running[proc.sentinel] = (proc, recv, job)
@@ -116,14 +117,14 @@ def _run_local(jobs, processes: int, on_done) -> list[dict]:
     return outcomes
 
 
-def _run_dask(jobs, scheduler: str, on_done) -> list[dict]:
+def _run_dask(jobs, scheduler: str, on_done, plots: bool) -> list[dict]:
     try:
         from distributed import Client, as_completed
     except ImportError:
         raise RuntimeError("running on a Dask cluster needs dask.distributed: pip install 'bayes-inerter[dask]'") from None
     outcomes = []
     with Client(scheduler) as client:
-        futures = {client.submit(run_job, job, pure=False): job for job in jobs}
+        futures = {client.submit(run_job, job, plots, pure=False): job for job in jobs}
         for fut in as_completed(futures):
             job = futures[fut]
             try:
@@ -135,8 +136,10 @@ def _run_dask(jobs, scheduler: str, on_done) -> list[dict]:
     return outcomes
 
 
-def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=None) -> list[dict]:
+def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=None,
+             plots: bool = True) -> list[dict]:
     """Run the jobs not finished before; return one outcome per job (in job order).
+    ``plots``: each fit draws its figures too.
 
     ``processes``: local worker processes at a time; ``scheduler``: the address of a
     Dask scheduler (``tcp://host:port``) to run them there instead. ``on_done`` is called
@@ -157,6 +160,7 @@ def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=
             on_done(outcomes[job.key])
         else:
             todo.append(job)
-    ran = _run_dask(todo, scheduler, on_done) if scheduler else _run_local(todo, processes, on_done)
+    ran = (_run_dask(todo, scheduler, on_done, plots) if scheduler else
+           _run_local(todo, processes, on_done, plots))
     outcomes.update((o["key"], o) for o in ran)
     return [outcomes[job.key] for job in jobs]
