@@ -88,7 +88,7 @@ class _Backend(emcee.backends.HDFBackend):
 TWIN_EVERY = 10
 
 #: Steps are written to chain.h5 at most this many seconds apart (default 0.5; 0: every
-#: step, as until 2026-11-25). A write costs about 2 ms however many steps it carries;
+#: step). A write costs about 2 ms however many steps it carries;
 #: at every step it was about 10 % of a two-port step's 24 evaluations, and a kill loses
 #: at most this much sampling (the continued run takes it again, identically).
 WRITE_SECONDS = 0.5

@@ -124,13 +124,12 @@ def default_walkers(ndim: int) -> int:
 class Convergence:
     """When an open-ended run stops (see module docstring).
 
-    ``check_every`` was 500 steps until 2026-11-25; at 250 (the adaptation's period) a
+    ``check_every`` is 250 steps (the adaptation's period): against 500, a
     chain stops on average 125 steps nearer the point where the rule first holds: the
     full study's 27-record joint chain (``results/joint-rerun``), checked again step by
     step from its checkpoint, meets the rule at 3,250 steps where it stopped at 3,500.
 
-    ``warmup`` (default :data:`WARMUP`, a third; 0 until 2026-11-25, when only the
-    transient was left out): the share of the chain left out before tau, R-hat and ESS
+    ``warmup`` (default :data:`WARMUP`, a third; 0 leaves out only the transient): the share of the chain left out before tau, R-hat and ESS
     are computed, and from the kept draws. The fitted moves learn the posterior from the
     chain itself, so its first several hundred steps mix several times slower than the
     rest: on A3 at 1 Hz (5,000 steps, seed 0) tau over the whole chain was 81 steps at
@@ -168,8 +167,7 @@ class Adaptation:
     docstring). By default the independence move's t is fitted in the chain's normal
     scores (:mod:`.marginals`), and half of the fitted moves' share goes to block moves
     (:class:`.moves.BlockMove`) from a normal in the same scores; ``knots=None,
-    blocks=0`` is the one t in the sampler's coordinates that was the default until
-    2026-11-25. Measured side by side with it (same starts and seeds): on the joint model
+    blocks=0`` is one t in the sampler's coordinates, the earlier default. Measured side by side with it (same starts and seeds): on the joint model
     of 9 records (``studies/joint_mixing.py``, 3,000 steps) the largest autocorrelation
     time over the last four fifths fell from 115.0 to 30.0 steps; on single records to
     convergence (``benchmarks/bench_adaptation.py``), A3 at 1 Hz took 4,500 steps
@@ -341,7 +339,7 @@ def _log_prob_many(us):
     """The target in sampler coordinates for a batch of walkers (emcee's ``vectorize``):
     log p(theta(u)) + log |d theta / d u|, as a list of (value, phi). The coordinates'
     map is taken for the whole batch at once (numpy over the walkers: 0.13 ms for 12 walkers
-    on A3 at 1 Hz against 0.86 ms walker by walker, medians of 200, 2026-11-25), the model
+    on A3 at 1 Hz against 0.86 ms walker by walker, medians of 200), the model
     walker by walker, on the worker processes if any."""
     us = np.atleast_2d(np.asarray(us, dtype=float))
     thetas, logj = _COORDS.transform(us)
