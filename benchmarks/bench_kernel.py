@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from _timing import record_row
 from bayes_inerter import _kernel as new_kernel
 from bayes_inerter.device import paper_parameters
 from bayes_inerter.models import build_network
@@ -139,6 +140,10 @@ def main():
     print(f"largest output difference: {worst:.2e}; status or stats mismatches: {mismatches}; "
           f"median ratio old/run_kernel {statistics.median(r[0] for r in ratios):.3f}, "
           f"old/specialised {statistics.median(r[1] for r in ratios):.3f}")
+    path = record_row("kernel", {"records": len(args.records), "repeats": args.repeats, "mismatches": mismatches,
+                                 "ratio_old_over_run_kernel": round(statistics.median(r[0] for r in ratios), 3),
+                                 "ratio_old_over_specialised": round(statistics.median(r[1] for r in ratios), 3)})
+    print(f"wrote a row to {path}")
 
 
 def special(a):

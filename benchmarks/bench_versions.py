@@ -30,6 +30,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from _timing import record_row
+
 ROOT = Path(__file__).resolve().parents[1]
 
 PROBE = r'''
@@ -112,6 +114,8 @@ def main():
         b = statistics.median(x[key] for x in results["before"])
         n = statistics.median(x[key] for x in results["now"])
         print(f"  {key:7s} before {b * 1e3:9.3f} ms   now {n * 1e3:9.3f} ms   ratio {b / n:.2f}")
+        record_row("versions", {"measure": key, "before": args.before, "rounds": args.rounds,
+                                "before_ms": round(b * 1e3, 3), "now_ms": round(n * 1e3, 3), "ratio": round(b / n, 3)})
 
 
 if __name__ == "__main__":
