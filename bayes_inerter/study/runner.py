@@ -47,7 +47,21 @@ def finished(job: FitJob, needs_loo: bool = True) -> dict | None:
         done = json.loads((folder / DONE_FILE).read_text())
     except (OSError, ValueError):
         return None
-    return done if done.get("job") == dataclasses.asdict(job) else None
+    return done if _same_job(done.get("job"), job) else None
+
+
+def _same_job(recorded, job: FitJob) -> bool:
+    """Whether ``recorded`` (a done.json's job) is ``job``: the same settings and the same
+    record file name. Paths are compared by name, not as written: a study run with
+    ``--out results/full`` and one with that folder's absolute path, or a fresh clone
+    in another place, are the same study."""
+    if not isinstance(recorded, dict):
+        return False
+    want = dataclasses.asdict(job)
+    names = ("record", "out")
+    if {k: v for k, v in recorded.items() if k not in names} != {k: v for k, v in want.items() if k not in names}:
+        return False
+    return all(isinstance(recorded.get(k), str) and Path(recorded[k]).name == Path(want[k]).name for k in names)
 
 
 def run_job(job: FitJob, plots: bool = True) -> dict:
@@ -137,7 +151,7 @@ def _run_dask(jobs, scheduler: str, on_done, plots: bool) -> list[dict]:
 
 
 def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=None,
-             plots: bool = True) -> list[dict]:
+             plots: bool = False) -> list[dict]:
     """Run the jobs not finished before; return one outcome per job (in job order).
     ``plots``: each fit draws its figures too.
 
