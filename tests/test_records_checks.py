@@ -146,3 +146,17 @@ def test_generated_records_pass(tmp_path):
         p = paper_parameters(name)
         rec = generate_record(p, freq, settings=GeneratorSettings(duration=2.0, ramp=0.5), rng=3, setting_name=name)
         assert check_record(rec, m_s=p.m_s, m_B=p.m_B) == []
+
+
+@pytest.mark.parametrize("bits", [8, 10, 12, 16])
+def test_a_quantised_record_without_noise_is_not_called_clipped(bits):
+    # a DAQ's levels make many samples share the peak's value; only a pile-up is a rail
+    rec = rigid_record(b=800.0, freq=0.5)
+    a = -(2 * math.pi * 0.5) ** 2 * 0.01 * np.sin(2 * math.pi * 0.5 * rec.time)  # noise-free
+    quiet = dataclasses.replace(rec, force=(M_B + M_S + 800.0) * a, accel=a, disp=None)
+    for channel in ("force", "accel"):
+        x = getattr(quiet, channel)
+        q = (x.max() - x.min()) / 2**bits
+        quantised = dataclasses.replace(quiet, **{channel: np.round(x / q) * q})
+        found = check_record(quantised, m_s=M_S, m_B=M_B)
+        assert all(f.check != "clipped" for f in found), (bits, channel, found)

@@ -12,7 +12,8 @@ and names the likely cause and the fix in one line:
   frequency (its fundamental's amplitude below :data:`MIN_DRIVE_SHARE` of its rms): a
   dead channel or the wrong column.
 - ``clipped``: a channel that sits at its largest or smallest value for at least
-  :data:`CLIP_SHARE` of the samples: clipped at a sensor's or the DAQ's range.
+  :data:`CLIP_SHARE` of the samples, :data:`CLIP_PILE` times as many as at the
+  quantisation level beside it: clipped at a sensor's or the DAQ's range.
 - ``accel-vs-disp`` (where the displacement is given): the acceleration's fundamental
   against the second derivative of the displacement's, ``-omega^2 d``: the amplitude
   ratio must lie within :data:`ACCEL_DISP_RATIO` and the phase within
@@ -44,7 +45,7 @@ from .record import Record
 from .units import UNITS
 
 __all__ = ["CHECKS", "Finding", "RecordCheckError", "check_record", "require_physical", "fundamental",
-           "drive_frequency", "MIN_RATE_HZ", "MIN_DRIVE_SHARE", "CLIP_SHARE", "ACCEL_DISP_RATIO",
+           "drive_frequency", "MIN_RATE_HZ", "MIN_DRIVE_SHARE", "CLIP_SHARE", "CLIP_PILE", "ACCEL_DISP_RATIO",
            "ACCEL_DISP_PHASE_DEG", "B_RANGE", "DISP_RANGE"]
 
 #: The checks, in the order they run (each named for ``skip``).
@@ -54,8 +55,11 @@ CHECKS = ("time-unit", "flat", "clipped", "accel-vs-disp", "apparent-mass")
 MIN_RATE_HZ = 50.0
 #: Smallest amplitude of a channel's drive-frequency component, as a share of its rms.
 MIN_DRIVE_SHARE = 0.1
-#: Largest share of samples a channel may spend at its extreme value.
+#: Largest share of samples a channel may spend at its extreme value ...
 CLIP_SHARE = 0.01
+#: ... unless the level beside it holds at least this fraction as many (a quantised but
+#: unclipped peak).
+CLIP_PILE = 4
 #: Accepted range of |a| / |omega^2 d| at the drive frequency.
 ACCEL_DISP_RATIO = (0.5, 2.0)
 #: Accepted phase between a and -omega^2 d, degrees.
@@ -169,11 +173,15 @@ def _flat(record: Record, freq: float):
 
 def _clipped(record: Record, freq: float):
     for name, x, unit in _channels(record):
-        span = float(np.ptp(x))
-        for side, value in (("largest", float(np.max(x))), ("smallest", float(np.min(x)))):
-            share = float(np.mean(np.abs(x - value) <= 1e-9 * span))
-            if share >= CLIP_SHARE and np.count_nonzero(np.abs(x - value) <= 1e-9 * span) >= 5:
-                return (f"the {_NAMES[name]} column sits at its {side} value {value:.6g} {unit} for "
+        levels, counts = np.unique(x, return_counts=True)
+        if len(levels) < 3:
+            continue  # a constant or two-valued channel: the flat check's business
+        for side, at, beside in (("largest", -1, -2), ("smallest", 0, 1)):
+            share = counts[at] / len(x)
+            # a rail piles samples on one value; a quantised peak holds about as many as
+            # the level beside it (an unclipped sine's top level about 1.4 times)
+            if share >= CLIP_SHARE and counts[at] >= max(CLIP_PILE * counts[beside], 5):
+                return (f"the {_NAMES[name]} column sits at its {side} value {float(levels[at]):.6g} {unit} for "
                         f"{share:.1%} of the samples: clipped at the sensor's or the DAQ's range; "
                         "record again with a larger range")
     return None
