@@ -9,8 +9,9 @@ and names the likely cause and the fix in one line:
 - ``time-unit``: a sampling rate below :data:`MIN_RATE_HZ`, or a drive frequency
   1000 times below the metadata's: a time column in ms read as seconds.
 - ``flat``: a channel that is constant, or carries almost nothing at the drive
-  frequency (its fundamental's amplitude below :data:`MIN_DRIVE_SHARE` of its rms): a
-  dead channel or the wrong column.
+  frequency (its fundamental's amplitude below :data:`MIN_DRIVE_SHARE` of its spread,
+  the interquartile range over 1.349, which a few spikes do not move): a dead channel
+  or the wrong column.
 - ``clipped``: a channel that sits at its largest or smallest value for at least
   :data:`CLIP_SHARE` of the samples, :data:`CLIP_PILE` times as many as at the
   quantisation level beside it: clipped at a sensor's or the DAQ's range.
@@ -53,7 +54,7 @@ CHECKS = ("time-unit", "flat", "clipped", "accel-vs-disp", "apparent-mass")
 
 #: Slowest sampling rate taken as given, Hz (a 1 kHz record timed in ms reads as 1 Hz).
 MIN_RATE_HZ = 50.0
-#: Smallest amplitude of a channel's drive-frequency component, as a share of its rms.
+#: Smallest amplitude of a channel's drive-frequency component, as a share of its spread.
 MIN_DRIVE_SHARE = 0.1
 #: Largest share of samples a channel may spend at its extreme value ...
 CLIP_SHARE = 0.01
@@ -163,10 +164,14 @@ def _flat(record: Record, freq: float):
         if rms == 0 or rms <= 1e-12 * float(np.max(np.abs(x))):
             return (f"the {_NAMES[name]} column is constant ({float(x[0]):.6g} {unit}): a dead channel or "
                     "the wrong column; check the file or --columns")
-        share = abs(fundamental(record.time, x, freq)) / rms
+        # the spread of the bulk of the samples (interquartile range / 1.349, the sd of a
+        # normal), so that a few spikes (impacts in a backlash) do not hide the drive
+        q1, q3 = np.percentile(x, [25, 75])
+        spread = (q3 - q1) / 1.349 or rms
+        share = abs(fundamental(record.time, x, freq)) / spread
         if share < MIN_DRIVE_SHARE:
             return (f"the {_NAMES[name]} column has almost nothing at the drive frequency {freq:.3g} Hz "
-                    f"(its amplitude there is {share:.1%} of its rms): a dead or noisy channel, the wrong "
+                    f"(its amplitude there is {share:.1%} of its spread): a dead or noisy channel, the wrong "
                     "column, or a wrong drive_frequency_hz; check the file, --columns and the metadata")
     return None
 
