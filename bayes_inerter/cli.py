@@ -162,7 +162,7 @@ def _load_record(args, *, need_masses: bool):
     from .device_file import read_device
     from .masses import resolve_masses
     from .records import read_record
-    from .records.checks import require_physical
+    from .records.checks import b_range_for, require_physical
 
     rec = read_record(args.record, columns=args.columns, units=args.units)
     device = read_device(args.device) if args.device else None
@@ -172,8 +172,8 @@ def _load_record(args, *, need_masses: bool):
         if need_masses:
             raise
         masses = None
-    require_physical(rec, m_s=masses and masses.m_s, m_B=masses and masses.m_B, skip=tuple(args.skip_check),
-                     where=args.record)
+    require_physical(rec, m_s=masses and masses.m_s, m_B=masses and masses.m_B, b_range=b_range_for(rec, device),
+                     skip=tuple(args.skip_check), where=args.record)
     return rec, device, masses
 
 

@@ -169,3 +169,20 @@ def test_spikes_do_not_hide_the_drive():
     accel = rec.accel.copy()
     accel[::250] += 40.0  # 40 m/s^2 spikes, four a second, against a 0.1 m/s^2 drive
     assert check_record(dataclasses.replace(rec, accel=accel), m_s=M_S, m_B=M_B) == []
+
+
+def test_a_named_setting_narrows_b_and_sees_a_g_or_lbf_that_the_prior_allows():
+    from bayes_inerter.device import SETTINGS
+    from bayes_inerter.records.checks import EXPECTED_B_FACTOR, b_range_for
+
+    b = SETTINGS["A3"].b_paper
+    rec = dataclasses.replace(rigid_record(b=b, disp=False), metadata={"setting": "A3", "drive_frequency_hz": 1.0})
+    narrow = b_range_for(rec)
+    assert narrow == (b / EXPECTED_B_FACTOR, b * EXPECTED_B_FACTOR)
+    assert check_record(rec, m_s=M_S, m_B=M_B, b_range=narrow) == []
+    for wrong, words in ((dataclasses.replace(rec, accel=rec.accel / 9.80665), "acceleration in g"),
+                         (dataclasses.replace(rec, force=rec.force / 4.4482216152605), "force in lbf")):
+        assert check_record(wrong, m_s=M_S, m_B=M_B) == []  # the default prior's range cannot see it
+        found = check_record(wrong, m_s=M_S, m_B=M_B, b_range=narrow)
+        assert found and found[0].check == "apparent-mass" and words in found[0].message
+    assert b_range_for(dataclasses.replace(rec, metadata={})) == B_RANGE

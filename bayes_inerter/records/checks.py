@@ -24,7 +24,10 @@ and names the likely cause and the fix in one line:
   ``m_B + (m_s + b_lo) / 2 <= M <= m_B + 3 (m_s + b_hi) / 2``. **Assumption** (the
   impedance coordinates' domain, :mod:`..inference.coordinates`): the nut and bearing
   pass the inertance on to the drive within a factor 1/2 to 3/2. Coulomb friction's
-  fundamental is in phase with the velocity, so it does not enter M.
+  fundamental is in phase with the velocity, so it does not enter M. Where b is
+  expected (the record names one of the paper's settings, or a device file gives a
+  geometry), [b_lo, b_hi] is within :data:`EXPECTED_B_FACTOR` of it (:func:`b_range_for`);
+  else the default prior's.
 
 Where a check fails, candidate causes (a unit, a swap, a sign) are tried in turn and the
 ones that make the record pass are named. An acceleration in g without a displacement
@@ -47,7 +50,7 @@ from .units import UNITS
 
 __all__ = ["CHECKS", "Finding", "RecordCheckError", "check_record", "require_physical", "fundamental",
            "drive_frequency", "MIN_RATE_HZ", "MIN_DRIVE_SHARE", "CLIP_SHARE", "CLIP_PILE", "ACCEL_DISP_RATIO",
-           "ACCEL_DISP_PHASE_DEG", "B_RANGE", "DISP_RANGE"]
+           "ACCEL_DISP_PHASE_DEG", "B_RANGE", "DISP_RANGE", "EXPECTED_B_FACTOR", "b_range_for"]
 
 #: The checks, in the order they run (each named for ``skip``).
 CHECKS = ("time-unit", "flat", "clipped", "accel-vs-disp", "apparent-mass")
@@ -68,6 +71,10 @@ ACCEL_DISP_PHASE_DEG = 30.0
 #: The default prior's bounds on b, kg (``inference.priors.DEFAULT_PRIORS["b"]``; a test
 #: keeps them equal, without the records importing the inference package).
 B_RANGE = (100.0, 1e5)
+#: Where the inertance is expected (the paper's Table 2 for a record that names one of
+#: its settings, or a device file's geometry), b is looked for within this factor of
+#: it, inside :data:`B_RANGE`: the paper's identified b lies within 1.6 of its theory.
+EXPECTED_B_FACTOR = 2.0
 #: Plausible displacement amplitudes of a test rig, m, used to tell an acceleration's
 #: unit from a force's when only their ratio is wrong.
 DISP_RANGE = (1e-5, 0.5)
@@ -262,6 +269,21 @@ def _apparent_mass(record: Record, freq: float, m_s, m_B, b_range):
                 f"b from {b_range[0]:g} to {b_range[1]:g} kg gives")
     return (f"the acceleration's amplitude at {freq:.3g} Hz means a displacement of {disp_amp:.3g} m, "
             f"outside the {DISP_RANGE[0]:g} to {DISP_RANGE[1]:g} m of a test rig")
+
+
+def b_range_for(record: Record, device=None) -> tuple[float, float]:
+    """The range of b the apparent-mass check allows for ``record``: within
+    :data:`EXPECTED_B_FACTOR` of the b expected from its metadata's ``setting`` (the
+    paper's Table 2) or else a device file's theoretical inertance, inside
+    :data:`B_RANGE`; :data:`B_RANGE` where nothing is expected."""
+    from ..device import SETTINGS
+
+    setting = str(record.metadata.get("setting") or "").upper()
+    expected = SETTINGS[setting].b_paper if setting in SETTINGS else (
+        device.theoretical_inertance if device is not None else None)
+    if not expected:
+        return B_RANGE
+    return (max(B_RANGE[0], expected / EXPECTED_B_FACTOR), min(B_RANGE[1], expected * EXPECTED_B_FACTOR))
 
 
 def check_record(record: Record, *, m_s: float | None = None, m_B: float | None = None,

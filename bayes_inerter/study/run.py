@@ -15,7 +15,7 @@ from ..device import SETTINGS, apparent_inertance, paper_parameters
 from ..lock import folder_lock
 from ..masses import resolve_masses
 from ..records import paper_grid, read_record, write_record
-from ..records.checks import require_physical
+from ..records.checks import b_range_for, require_physical
 from .analysis import (
     collect,
     contraction_table,
@@ -60,8 +60,8 @@ def prepare_records(plan: StudyPlan, out: Path) -> dict:
                 masses = resolve_masses(rec)
             except ValueError:
                 pass  # the fit names the missing mass
-            require_physical(rec, m_s=masses and masses.m_s, m_B=masses and masses.m_B, skip=plan.skip_checks,
-                             where=str(path))
+            require_physical(rec, m_s=masses and masses.m_s, m_B=masses and masses.m_B, b_range=b_range_for(rec),
+                             skip=plan.skip_checks, where=str(path))
             setting = rec.metadata.get("setting")
             setting = str(setting).upper() if setting else None
             records[path.stem] = (path, setting if setting in SETTINGS else None, rec.drive_frequency)
