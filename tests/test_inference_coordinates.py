@@ -184,6 +184,7 @@ def test_the_invariance_check_sees_a_missing_jacobian(two_port):
     assert min(p) < 1e-6, p
 
 
+@pytest.mark.slow
 def test_run_sampler_in_impedance_coordinates_samples_theta(two_port, tmp_path):
     # the sampler's own plumbing (start mapped to u, Jacobian added, chain read back in
     # theta): the model's posterior swapped for a known density

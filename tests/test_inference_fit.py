@@ -82,7 +82,7 @@ def test_physical_coordinates_keep_the_ridge_move(tmp_path, record_file):
 
 def test_no_adaptation_leaves_the_ensemble_moves_alone(tmp_path, record_file):
     out = tmp_path / "fit"
-    assert main(["fit", str(record_file), "--out", str(out), "--steps", "4", "--walkers", "24", "--processes", "1",
+    assert main(["fit", str(record_file), "--out", str(out), "--steps", "4", "--walkers", "24", "--processes", "1", "--no-plots",
                  "--no-adaptation"]) == 0
     moves = json.loads((out / "fit.json").read_text())["moves"]
     assert moves and not any(m.startswith("IndependenceMove") for m in moves), moves
@@ -134,7 +134,7 @@ def _finish_and_compare(cmd, chain_file, before, tmp_path, record_file) -> None:
     np.testing.assert_array_equal(after[: len(before)], before)
     ref = tmp_path / "uninterrupted"
     assert main(["fit", str(record_file), "--out", str(ref), "--steps", "40", "--walkers", "24",
-                 "--processes", "1", "--seed", "3"]) == 0
+                 "--processes", "1", "--no-plots", "--seed", "3"]) == 0
     np.testing.assert_array_equal(_chain(ref / "chain.h5"), after)
 
 
@@ -143,33 +143,35 @@ def test_resume_after_sigkill(tmp_path, record_file):
     the same chain as a run that was never interrupted."""
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
-           "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
+           "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     _run_until_killed(cmd, out / "chain.h5", 8)
     before = read_chain(out / "chain.h5")
     assert 7 <= len(before) < 40
     _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
 
 
+@pytest.mark.slow
 def test_resume_after_sigkill_with_steps_held_between_writes(tmp_path, record_file):
     """Written every 0.02 s rather than every step and killed: the steps held since the
     last write are lost and taken again, and the finished chain is the uninterrupted one
     (whose run writes at the default interval)."""
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
-           "--checkpoint-seconds", "0.02", "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
+           "--checkpoint-seconds", "0.02", "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     _run_until_killed(cmd, out / "chain.h5", 8)
     before = read_chain(out / "chain.h5")
     assert 1 <= len(before) < 40
     _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
 
 
+@pytest.mark.slow
 def test_ctrl_c_on_worker_processes_ends_the_run_with_130_and_keeps_its_steps(tmp_path, record_file):
     """Ctrl-C goes to the whole process group, the walkers' worker processes included: the
     run must stop (it used to wait for ever for a worker that died of it), say so with
     exit status 130, and leave a checkpoint that a second run continues."""
     out = tmp_path / "interrupted"
     cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
-           "--steps", "400", "--walkers", "24", "--processes", "2", "--seed", "3"]
+           "--steps", "400", "--walkers", "24", "--processes", "2", "--seed", "3", "--no-plots"]
     # a test run in the background of a non-interactive shell (as CI may be) inherits
     # SIGINT ignored, and Python then never turns it into KeyboardInterrupt: give the
     # run a terminal's default, as a user pressing Ctrl-C has
@@ -201,7 +203,7 @@ def test_resume_after_sigkill_several_times(tmp_path, record_file):
     steps, every earlier step kept, and the same chain as a run never interrupted."""
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
-           "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
+           "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     chain_file = out / "chain.h5"
     before = None
     for at in sorted(np.random.default_rng(2).integers(4, 34, size=3)):
@@ -221,7 +223,7 @@ def test_resume_after_many_kills_at_random_moments(tmp_path, record_file):
     the finished chain is the uninterrupted one."""
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
-           "--steps", "40", "--walkers", "24", "--processes", "1", "--seed", "3"]
+           "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     chain_file = out / "chain.h5"
     rng = np.random.default_rng(7)
     before = None
@@ -261,7 +263,7 @@ def test_bad_options_refused_before_sampling(tmp_path, record_file, capsys):
 
 def _fit(record_file, out, steps, walkers=24):
     return main(["fit", str(record_file), "--out", str(out), "--steps", str(steps), "--walkers", str(walkers),
-                 "--processes", "1"])
+                 "--processes", "1", "--no-plots"])
 
 
 @pytest.fixture(scope="module")
@@ -422,7 +424,7 @@ def test_reading_the_checkpoint_does_not_stop_a_run(tmp_path, record_file):
     """A reader holding chain.h5 open (with HDF5's default lock) must not make the
     sampler's next write fail."""
     out = tmp_path / "busy"
-    args = ["fit", str(record_file), "--out", str(out), "--steps", "6", "--walkers", "24", "--processes", "1"]
+    args = ["fit", str(record_file), "--out", str(out), "--steps", "6", "--walkers", "24", "--processes", "1", "--no-plots"]
     assert main(args) == 0
     # another process holds the file open, locked the usual way, while the run goes on
     reader = subprocess.Popen([sys.executable, "-c",

@@ -406,7 +406,7 @@ def test_block_move_leaves_the_target_invariant(sizes, wide):
     assert p > 0.001  # as for the mixture: the smallest of 5 p-values
 
 
-@pytest.mark.parametrize("broken", [_BlockWithoutJacobian, _BlockWithoutHastings])
+@pytest.mark.parametrize("broken", [_BlockWithoutJacobian, pytest.param(_BlockWithoutHastings, marks=pytest.mark.slow)])
 def test_the_invariance_check_sees_a_block_move_without_its_factors(broken):
     assert _run_gaussian(broken(np.full(4, 0.3), np.diag([1.0, 2.0, 0.5, 1.0]), _SCORES), steps=30, n=800)[1] < 1e-6
 

@@ -35,6 +35,7 @@ def _run(model, path, max_steps):
     return run_sampler(model, path, nwalkers=24, seed=3, convergence=conv, start=model.test_start)
 
 
+@pytest.mark.slow
 def test_a_continued_chain_stops_where_an_uninterrupted_one_does(model, tmp_path):
     whole = _run(model, tmp_path / "whole.h5", 2000)
     assert whole.converged and whole.iteration % CONV.check_every == 0
@@ -49,6 +50,7 @@ def test_a_continued_chain_stops_where_an_uninterrupted_one_does(model, tmp_path
     assert np.array_equal(again.sampler.get_chain(), whole.sampler.get_chain())
 
 
+@pytest.mark.slow
 def test_a_chain_stopped_on_a_check_continues_with_that_checks_tau(model, tmp_path):
     # stopped exactly on a check before convergence: continued, it must be checked there
     # again with the tau of the check before (as the uninterrupted run was) and go on

@@ -76,6 +76,7 @@ def test_sparse_kernel_leaves_out_only_zero_terms():
     assert src.count("VD[mode, ") < dense.count("VD[mode, ")
 
 
+@pytest.mark.slow
 def test_kernel_compiled_in_memory_where_no_folder_can_be_written(monkeypatch, tmp_path):
     blocked = tmp_path / "file"
     blocked.write_text("not a folder")

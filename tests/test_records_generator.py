@@ -126,6 +126,7 @@ def test_metadata_holds_truth_and_settings():
     assert m["generator"]["k_p"] == 5e7 and m["generator"]["antialias"] == "fir"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "options",
     [dict(friction="stribeck"), dict(network="full"), dict(backlash=2e-5), dict(friction="smooth")],

@@ -23,7 +23,8 @@ def rel_error(a, ref):
 
 @pytest.mark.parametrize(
     "setting, freq, network",
-    [("A0", 0.5, "reduced"), ("B2", 1.5, "reduced"), ("A3", 1.0, "full"), ("A2", 1.0, "rigid")],
+    [pytest.param("A0", 0.5, "reduced", marks=pytest.mark.slow), pytest.param("B2", 1.5, "reduced", marks=pytest.mark.slow),
+     pytest.param("A3", 1.0, "full", marks=pytest.mark.slow), ("A2", 1.0, "rigid")],
 )
 def test_matches_independent_hybrid_reference(setting, freq, network):
     p = paper_parameters(setting)
@@ -217,6 +218,7 @@ def test_bad_options():
         simulate(p, t, f, x0=np.zeros(3))
 
 
+@pytest.mark.slow
 def test_non_coulomb_laws_use_the_stiff_solver():
     p = paper_parameters("A2")
     t, f = inverse_dynamics_force(p, 1.0, duration=0.6, ramp=0.2)
@@ -238,7 +240,7 @@ def test_regularised_solver_converges_to_exact_kernel():
     assert errs[1] < errs[0] / 3
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=8, deadline=None)
 @given(
     st.sampled_from(sorted(NETWORKS)),
     st.fixed_dictionaries(
