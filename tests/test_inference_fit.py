@@ -70,6 +70,7 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     assert 0.0 < info["coordinates_domain_edge"] < 0.5  # how near the domain's edge its draws came
 
 
+@pytest.mark.slow
 def test_physical_coordinates_keep_the_ridge_move(tmp_path, record_file):
     from bayes_inerter.records import read_record
 
@@ -80,6 +81,7 @@ def test_physical_coordinates_keep_the_ridge_move(tmp_path, record_file):
     assert any(m.startswith("NutRidgeMove") for m in info["moves"]), info["moves"]
 
 
+@pytest.mark.slow
 def test_no_adaptation_leaves_the_ensemble_moves_alone(tmp_path, record_file):
     out = tmp_path / "fit"
     assert main(["fit", str(record_file), "--out", str(out), "--steps", "4", "--walkers", "24", "--processes", "1", "--no-plots",
@@ -336,6 +338,7 @@ def test_damaged_file_moved_aside_and_run_continues_from_its_twin(tmp_path, reco
     assert "kept as" in json.loads((out / "fit.json").read_text())["checkpoint_recovered"]
 
 
+@pytest.mark.slow
 def test_kill_between_random_state_and_step_count(tmp_path, record_file, ten_steps):
     """emcee writes a step's random state before it counts the step: a kill in between
     leaves the random state of step k + 1 beside k steps. The run continues from the
@@ -420,6 +423,7 @@ def test_unwritable_output_refused(tmp_path, record_file, capsys):
         assert "cannot write there" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_reading_the_checkpoint_does_not_stop_a_run(tmp_path, record_file):
     """A reader holding chain.h5 open (with HDF5's default lock) must not make the
     sampler's next write fail."""

@@ -145,6 +145,7 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     assert fourth.timings["sampling_all_runs"] == fourth.timings["sampling"]
 
 
+@pytest.mark.slow
 def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_path, monkeypatch):
     from bayes_inerter.inference import optimize
 

@@ -396,7 +396,7 @@ class _BlockWithoutHastings(BlockMove):
         return q, np.zeros(len(q))
 
 
-@pytest.mark.parametrize("sizes, wide", [((1, 2, 3), 0.1), ((4,), 0.0)])
+@pytest.mark.parametrize("sizes, wide", [((1, 2, 3), 0.1), pytest.param((4,), 0.0, marks=pytest.mark.slow)])
 def test_block_move_leaves_the_target_invariant(sizes, wide):
     # the normal in scores is off the target (the map is fitted to log-normal draws)
     # 800 walkers (its per-walker proposals are slower than the vectorised moves')
@@ -406,7 +406,7 @@ def test_block_move_leaves_the_target_invariant(sizes, wide):
     assert p > 0.001  # as for the mixture: the smallest of 5 p-values
 
 
-@pytest.mark.parametrize("broken", [_BlockWithoutJacobian, pytest.param(_BlockWithoutHastings, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("broken", [pytest.param(_BlockWithoutJacobian, marks=pytest.mark.slow), _BlockWithoutHastings])
 def test_the_invariance_check_sees_a_block_move_without_its_factors(broken):
     assert _run_gaussian(broken(np.full(4, 0.3), np.diag([1.0, 2.0, 0.5, 1.0]), _SCORES), steps=30, n=800)[1] < 1e-6
 

@@ -62,6 +62,7 @@ def test_a_chain_stopped_on_a_check_continues_with_that_checks_tau(model, tmp_pa
     assert np.array_equal(again.sampler.get_chain(), whole.sampler.get_chain())
 
 
+@pytest.mark.slow
 def test_a_converged_chain_run_again_comes_back_as_it_is(model, tmp_path):
     done = _run(model, tmp_path / "c.h5", 2000)
     again = _run(model, tmp_path / "c.h5", 2000)

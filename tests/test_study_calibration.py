@@ -31,6 +31,7 @@ def test_writes_ranks_coverage_and_report(calibration):
         assert all(rep["in50"][n] <= rep["in90"][n] for n in rep["in50"])  # the 50 % interval lies inside the 90 %
 
 
+@pytest.mark.slow
 def test_same_seed_same_replicate_and_a_rerun_reuses_them(calibration):
     out, res = calibration
     stamp = {p.name: p.stat().st_mtime_ns for p in (out / "replicates").iterdir()}

@@ -153,6 +153,7 @@ def test_a_users_folder_of_records(study, tmp_path):
     assert "the records in" in res.report.read_text()
 
 
+@pytest.mark.slow
 def test_the_joint_model_takes_only_records_that_name_their_setting(study, tmp_path):
     """A record known only by its screw mass has no setting to share a b with: the joint
     model leaves it out (here that leaves one record, so no joint model), and the study
