@@ -83,7 +83,7 @@ def test_fit_prints_the_masses_and_their_sources_and_device_theory(tmp_path, cap
     dev = tmp_path / "dev.toml"
     dev.write_text("m_B = 50.0\n[geometry]\nlead = 0.02\nJ_screw = 0.03\n")
     out = tmp_path / "fit"
-    code = main(["fit", str(p), *MAP, "--device", str(dev), "--out", str(out), "--steps", "10", "--processes", "1",
+    code = main(["fit", str(p), *MAP, "--device", str(dev), "--out", str(out), "--steps", "4", "--processes", "1",
                  "--walkers", "24", "--no-plots"])
     assert code == 0
     text = capsys.readouterr().out

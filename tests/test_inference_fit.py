@@ -116,6 +116,10 @@ def test_same_seed_same_summary(tmp_path, record_file):
 EVERY_STEP = ("--checkpoint-seconds", "0")
 
 
+#: Steps of the kill-and-resume fits: the kill comes at 8, so the finish has most of them to take.
+RESUME_STEPS = 24
+
+
 def _run_until_killed(cmd, chain_file, at_least: int) -> None:
     """Start ``cmd`` and SIGKILL it once its checkpoint holds ``at_least`` steps."""
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -128,14 +132,15 @@ def _run_until_killed(cmd, chain_file, at_least: int) -> None:
 
 
 def _finish_and_compare(cmd, chain_file, before, tmp_path, record_file) -> None:
-    """Run ``cmd`` to the end: exactly 40 steps, the killed runs' steps kept, and the same
-    chain as a run never interrupted."""
+    """Run ``cmd`` to the end: exactly its ``--steps``, the killed runs' steps kept, and the
+    same chain as a run never interrupted."""
+    steps = int(cmd[cmd.index("--steps") + 1])
     assert subprocess.run(cmd, capture_output=True).returncode == 0
     after = _chain(chain_file)
-    assert len(after) == 40
+    assert len(after) == steps
     np.testing.assert_array_equal(after[: len(before)], before)
     ref = tmp_path / "uninterrupted"
-    assert main(["fit", str(record_file), "--out", str(ref), "--steps", "40", "--walkers", "24",
+    assert main(["fit", str(record_file), "--out", str(ref), "--steps", str(steps), "--walkers", "24",
                  "--processes", "1", "--no-plots", "--seed", "3"]) == 0
     np.testing.assert_array_equal(_chain(ref / "chain.h5"), after)
 
@@ -145,10 +150,10 @@ def test_resume_after_sigkill(tmp_path, record_file):
     the same chain as a run that was never interrupted."""
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
-           "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
+           "--steps", str(RESUME_STEPS), "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     _run_until_killed(cmd, out / "chain.h5", 8)
     before = read_chain(out / "chain.h5")
-    assert 7 <= len(before) < 40
+    assert 7 <= len(before) < RESUME_STEPS
     _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
 
 
@@ -294,6 +299,7 @@ def test_checkpoint_of_another_run_refused(tmp_path, record_file, capsys):
     assert "use the same --walkers, or --fresh" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_damaged_checkpoint_with_no_intact_copy_refused(tmp_path, record_file, capsys):
     out = tmp_path / "fit"
     assert _fit(record_file, out, 5) == 0
@@ -355,6 +361,7 @@ def test_kill_between_random_state_and_step_count(tmp_path, record_file, ten_ste
     np.testing.assert_array_equal(_chain(out / "chain.h5"), ten_steps)
 
 
+@pytest.mark.slow
 def test_intact_checkpoint_continues(tmp_path, record_file, ten_steps):
     out = tmp_path / "fit"
     assert _fit(record_file, out, 5) == 0

@@ -107,6 +107,7 @@ def test_checkpoint_identity_depends_on_every_record(records):
     assert record_digest(a, default_coordinates(a)) != record_digest(a)
 
 
+@pytest.mark.slow
 def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     centres = []
     for rec in records:
