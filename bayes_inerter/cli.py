@@ -230,7 +230,7 @@ def _percent_interval(lo: float, hi: float) -> str:
 def cmd_fit(args) -> int:
     import os
 
-    from ._progress import StepProgress
+    from .cli_progress import StepProgress
     from .inference import fit_record
     from .inference.coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
     from .inference.model import LikelihoodSettings
@@ -284,7 +284,7 @@ def cmd_study(args) -> int:
 
     from tqdm import tqdm
 
-    from ._progress import StepProgress
+    from .cli_progress import StepProgress
     from .study import full_plan, quick_plan, run_study
 
     plan = quick_plan() if args.quick else full_plan()

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from bayes_inerter._progress import StepProgress
+from bayes_inerter.cli_progress import StepProgress
 from bayes_inerter.cli import _percent_interval, main
 from bayes_inerter.inference.sampler import SamplerStatus
 from bayes_inerter.lock import folder_lock
@@ -107,7 +107,7 @@ class _Clock:
 
 def test_progress_in_a_log_file_prints_lines_at_most_every_interval(monkeypatch):
     clock = _Clock()
-    monkeypatch.setattr("bayes_inerter._progress.time.monotonic", lambda: clock.t)
+    monkeypatch.setattr("bayes_inerter.cli_progress.time.monotonic", lambda: clock.t)
     log = io.StringIO()  # not a terminal
     bar = StepProgress("sampling", stream=log, interval=30.0)
     bar.status(SamplerStatus(250, 250, None))

@@ -61,7 +61,7 @@ class StepProgress:
         self.last = status
         if status.target is not None:
             self.target = status.target
-        if status.iteration == status.resumed_at and status.tau_max != status.tau_max:  # the start
+        if status.iteration == status.resumed_at and math.isnan(status.tau_max):  # the run's start
             if status.resumed_at:
                 total = status.target if status.target else "until converged"
                 self._say(f"{self.desc}: continuing from step {status.resumed_at} of {total} (the checkpoint's)")
