@@ -1,7 +1,7 @@
 """The command line: ``bayes-inerter COMMAND ...``.
 
 Exit status: 0 success; 1 bad input or a failed run (one-line error, no traceback);
-2 usage error (argparse); 130 interrupted.
+2 usage error (argparse); 130 interrupted; 141 the output's reader closed the pipe.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 
 __all__ = ["main"]
 
-EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 130, 141
 
 
 class CliError(Exception):
@@ -98,8 +98,8 @@ RECORD_CHECKS = ("time-unit", "flat", "clipped", "accel-vs-disp", "apparent-mass
 def _add_record_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("your record and device")
     g.add_argument("--columns", metavar="Q=NAME,...",
-                   help="the file's columns: time=NAME,force=NAME,accel=NAME[,disp=NAME] (default: the project's "
-                        "time_s,force_N,accel_m_s2,disp_m); other columns are then ignored")
+                   help="the file's columns: time=NAME,force=NAME,accel=NAME[,disp=NAME]; a quantity not named keeps "
+                        "the project's name (time_s, force_N, accel_m_s2, disp_m); other columns are then ignored")
     g.add_argument("--units", metavar="Q=UNIT,...",
                    help="units of the file's columns: time s|ms, force N|kN|lbf, accel m/s^2|g|mm/s^2, disp m|mm "
                         "(default SI), e.g. time=ms,force=kN,accel=g")
@@ -192,8 +192,10 @@ def cmd_inspect(args) -> int:
     freq = drive_frequency(rec)
     z = fundamental(rec.time, rec.force, freq) / fundamental(rec.time, rec.accel, freq)
     source = "metadata" if rec.drive_frequency is not None else "from the spectrum"
+    # F/a = M + iD at the drive: M the inertial mass; F/v = i omega F/a, whose real part
+    # -omega D is the resistance (friction and damping, positive for a dissipating device)
     print(f"  drive {freq:.4g} Hz ({source}); at it, inertial mass Re(F/a) {z.real:.5g} kg, "
-          f"resistance Im(F/a) omega {z.imag * 2 * math.pi * freq:.5g} N s/m")
+          f"resistance Re(F/v) {-z.imag * 2 * math.pi * freq:.5g} N s/m")
     print("  physical-sense checks: passed" + (f" (skipped: {', '.join(args.skip_check)})" if args.skip_check else ""))
     print(f"  masses: {masses.describe()}" if masses else
           "  masses: m_s unknown (give --m-s, a --device file, or m_s or setting in the metadata when fitting)")
@@ -504,6 +506,11 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # the reader went away (| head): nothing more to say, to anyone
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_PIPE
     except (CliError, ValueError, OSError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_FAIL

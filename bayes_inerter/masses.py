@@ -65,5 +65,5 @@ def resolve_masses(record: Record, *, m_s: float | None = None, m_B: float | Non
     elif device is not None and device.m_B is not None:
         mb, mb_src = device.m_B, dev_name
     else:
-        mb, mb_src = TABLE_I["m_B"], "paper's Table I (assumption: give --m-b for another device)"
+        mb, mb_src = TABLE_I["m_B"], "the paper's Table I, an assumption: give --m-b for another device"
     return Masses(_check("m_s", ms), _check("m_B", mb), ms_src, mb_src)

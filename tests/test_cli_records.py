@@ -39,7 +39,7 @@ def test_inspect_reads_a_daq_export_and_normalises_it(tmp_path, capsys):
     assert main(["inspect", str(p), *MAP, "--normalise", str(out)]) == 0
     text = capsys.readouterr().out
     assert "valid record" in text and "physical-sense checks: passed" in text
-    assert "m_B = 57.2 kg (paper's Table I" in text
+    assert "m_B = 57.2 kg (the paper's Table I" in text
     rec = read_record(out)
     assert rec.fs == pytest.approx(1000.0) and np.max(np.abs(rec.disp)) == pytest.approx(0.01, rel=1e-6)
 
@@ -142,3 +142,30 @@ def test_study_checks_the_users_records_before_any_fit(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "kN.csv" in err and "force in kN" in err and "--skip-check apparent-mass" in err
     assert not (out / "fits").exists()
+
+
+def test_swapped_columns_named_through_their_declared_units(tmp_path, capsys):
+    # the file's force column holds the acceleration (in g) and its acceleration column
+    # the force (in kN), and the user declared the units as the columns' names promised
+    p = _daq(tmp_path)
+    lines = p.read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    rows = [ln.split(";") for ln in lines[len(head) + 1:]]
+    swapped = [";".join([r[0], r[2], r[1], r[3], r[4]]) for r in rows]
+    p.write_text("\n".join(head + ["Zeit;Kraft;Beschl;Weg;Temp"] + swapped) + "\n")
+    assert main(["inspect", str(p), *MAP]) == 1
+    err = capsys.readouterr().err
+    assert "likely force and acceleration columns swapped" in err
+    assert "force in kN" not in err  # declared already: no advice to declare it
+
+
+def test_a_closed_pipe_ends_quietly(tmp_path):
+    import subprocess
+    import sys
+
+    p = _daq(tmp_path)
+    proc = subprocess.Popen([sys.executable, "-m", "bayes_inerter.cli", "inspect", str(p), *MAP],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # as `| head -0` does
+    err = proc.stderr.read().decode()
+    assert proc.wait() in (0, 141) and "Broken pipe" not in err and "Traceback" not in err

@@ -60,7 +60,7 @@ MIN_RATE_HZ = 50.0
 #: Smallest amplitude of a channel's drive-frequency component, as a share of its spread.
 MIN_DRIVE_SHARE = 0.1
 #: Largest share of samples a channel may spend at its extreme value ...
-CLIP_SHARE = 0.01
+CLIP_SHARE = 0.002
 #: ... unless the level beside it holds at least this fraction as many (a quantised but
 #: unclipped peak).
 CLIP_PILE = 4
@@ -207,18 +207,43 @@ def _scaled(record: Record, **factors) -> Record:
     return replace(record, **{k: getattr(record, k) * f for k, f in factors.items()})
 
 
+def _declared(record: Record, quantity: str) -> float:
+    """The factor to SI of the unit the file's ``quantity`` column was read in
+    (``source_columns`` in the metadata, :func:`.io.read_record`); 1 for SI."""
+    unit = (record.metadata.get("source_columns") or {}).get(quantity, {}).get("unit")
+    return UNITS[quantity].get(unit, 1.0) if unit else 1.0
+
+
+def _swapped(record: Record, a: str, b: str) -> Record | None:
+    """The record with the file's columns of ``a`` and ``b`` exchanged: each raw column
+    back through its own declared unit, then through the other's."""
+    x, y = getattr(record, a), getattr(record, b)
+    if x is None or y is None:
+        return None
+    fa, fb = _declared(record, a), _declared(record, b)
+    return replace(record, **{a: y / fb * fa, b: x / fa * fb})
+
+
+def _in_unit(quantity: str, unit: str):
+    """The correction for a column read as SI that was in ``unit``; none where the user
+    declared a unit for that column (the advice to declare one would be wrong)."""
+    def fix(r: Record):
+        if getattr(r, quantity) is None or _declared(r, quantity) != 1.0:
+            return None
+        return _scaled(r, **{quantity: UNITS[quantity][unit]})
+    return fix
+
+
 #: Mistakes a file commonly holds, each with the record it would be without the mistake.
 _CAUSES = (
-    ("force and acceleration columns swapped", lambda r: replace(r, force=r.accel, accel=r.force)),
-    ("acceleration and displacement columns swapped",
-     lambda r: None if r.disp is None else replace(r, accel=r.disp, disp=r.accel)),
-    ("force and displacement columns swapped",
-     lambda r: None if r.disp is None else replace(r, force=r.disp, disp=r.force)),
-    ("force in kN (--units force=kN)", lambda r: _scaled(r, force=UNITS["force"]["kN"])),
-    ("force in lbf (--units force=lbf)", lambda r: _scaled(r, force=UNITS["force"]["lbf"])),
-    ("acceleration in g (--units accel=g)", lambda r: _scaled(r, accel=UNITS["accel"]["g"])),
-    ("acceleration in mm/s^2 (--units accel=mm/s^2)", lambda r: _scaled(r, accel=UNITS["accel"]["mm/s^2"])),
-    ("displacement in mm (--units disp=mm)", lambda r: None if r.disp is None else _scaled(r, disp=UNITS["disp"]["mm"])),
+    ("force and acceleration columns swapped", lambda r: _swapped(r, "force", "accel")),
+    ("acceleration and displacement columns swapped", lambda r: _swapped(r, "accel", "disp")),
+    ("force and displacement columns swapped", lambda r: _swapped(r, "force", "disp")),
+    ("force in kN (--units force=kN)", _in_unit("force", "kN")),
+    ("force in lbf (--units force=lbf)", _in_unit("force", "lbf")),
+    ("acceleration in g (--units accel=g)", _in_unit("accel", "g")),
+    ("acceleration in mm/s^2 (--units accel=mm/s^2)", _in_unit("accel", "mm/s^2")),
+    ("displacement in mm (--units disp=mm)", _in_unit("disp", "mm")),
     ("the force's sign reversed", lambda r: _scaled(r, force=-1.0)),
     ("the acceleration's sign reversed", lambda r: _scaled(r, accel=-1.0)),
     ("the displacement's sign reversed", lambda r: None if r.disp is None else _scaled(r, disp=-1.0)),
@@ -315,7 +340,8 @@ def check_record(record: Record, *, m_s: float | None = None, m_B: float | None 
         if f.check in ("accel-vs-disp", "apparent-mass"):
             causes = _likely_causes(record, freq, motion)
             fix = (f": likely {_name_causes(causes)}; fix the file, --columns or --units" if causes else
-                   ": check the columns and units, the masses (--m-s, --m-b) and that the record is of an inerter")
+                   ": check the columns and units" + (", the masses (--m-s, --m-b) and that the record is of an "
+                                                      "inerter" if f.check == "apparent-mass" else ""))
             found[i] = Finding(f.check, f.message + fix)
     return found
 
