@@ -3,7 +3,6 @@ written with the commit, machine and date it was measured on."""
 
 import csv
 import datetime
-import platform
 import subprocess
 import time
 from pathlib import Path
@@ -32,15 +31,12 @@ def provenance() -> dict:
 
     commit = git("rev-parse", "--short", "HEAD") + ("-dirty" if git("status", "--porcelain", "--untracked-files=no")
                                                      else "")
-    cpu = "unknown"
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), cpu)
-    except OSError:
-        pass
     import os
 
-    machine = f"{platform.machine()} {cpu}, {os.cpu_count()} cores"
+    from bayes_inerter.inference.fit import versions
+
+    v = versions()
+    machine = f"{v['machine']} {v['cpu']}, {os.cpu_count()} cores"
     return {"commit": commit, "machine": machine, "date": datetime.datetime.now(datetime.timezone.utc).date().isoformat()}
 
 

@@ -22,7 +22,6 @@ class _Model:
 
 
 def _sample(log_b, phi, share=0.5):
-    rng = np.random.default_rng(0)
     theta = np.stack([log_b, np.full_like(log_b, share)], axis=-1)
     return PosteriorSample(_Model.names, np.exp(theta), theta, {}, phi + 0 * log_b, 0 * log_b, 0, 1)
 

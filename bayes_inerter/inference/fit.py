@@ -281,7 +281,7 @@ def fit_joint(
             "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
             "tau": dict(zip(jm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
             "transient": int(run.transient), "warmup": int(run.warmup),
-            "records": [f"{s} {f:g} Hz" for s, f in zip(jm.setting_of, jm.freq_of)],
+            "records": joint_records(jm),
             "warnings": [dataclasses.asdict(w) for w in ended],
             "likelihood": dataclasses.asdict(jm.likelihood),
             "priors": {n: p.describe() for n, p in jm.all_priors.items()},
@@ -297,6 +297,12 @@ def fit_joint(
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
         return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"], shrink,
                          run.recovered, draws, warnings=ended)
+
+
+def joint_records(jm) -> list[str]:
+    """The joint model's records as fit.json names them ("A0 1 Hz", ...): what an earlier
+    run's outputs are matched by (``study.run.finished_joint``)."""
+    return [f"{s} {f:g} Hz" for s, f in zip(jm.setting_of, jm.freq_of)]
 
 
 def _flag(rows: list, ended: list) -> list:

@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit
 from scipy import signal
 
-from ..device import TABLE_I, InerterParameters, apparent_inertance, setting as get_setting
+from ..device import TABLE_I, InerterParameters, apparent_inertance
 from ..models import FIELDS, linear_chain
 from ..network.compile import chain_state_space
 from ..records.conditioning import LOWPASS_HZ, lowpass

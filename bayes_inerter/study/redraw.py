@@ -20,8 +20,8 @@ def redraw_fits(folder, *, on_fit=None) -> list[tuple[str, str]]:
     """Draw the figures of every study fit under ``folder`` (a study's folder, or one
     fit's) that has a checkpoint. Returns (fit folder, "drawn" or why not) per fit;
     ``on_fit(folder, status)`` hears each as it ends. ValueError if there is no fit."""
-    from ..inference import fit_record
-    from ..records import read_record
+    from .plan import FitJob
+    from .runner import run_job
 
     folder = Path(folder)
     dones = sorted(folder.glob("fits/*/*/done.json")) or sorted(folder.glob("done.json"))
@@ -40,8 +40,7 @@ def redraw_fits(folder, *, on_fit=None) -> list[tuple[str, str]]:
             elif not Path(job["record"]).exists():
                 status = f"its record {job['record']} is not there"
             else:
-                fit_record(read_record(job["record"]), fit, model=job["model"], steps=job["steps"],
-                           walkers=job["walkers"], seed=job["seed"], processes=1)
+                run_job(FitJob(**{**job, "out": str(fit)}), plots=True)
                 status = "drawn"
         out.append((str(fit), status))
         if on_fit:

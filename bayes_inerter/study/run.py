@@ -109,7 +109,7 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
     without sampling the joint chain again (its checkpoint is not committed)."""
     import csv
 
-    from ..inference.fit import DRAWS_FILE, FitResult
+    from ..inference.fit import DRAWS_FILE, FitResult, joint_records
     from ..inference.joint import JointModel
 
     try:
@@ -121,8 +121,7 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
     except (OSError, ValueError, KeyError):
         return None
     jm = JointModel(tuple(records))
-    same = (info.get("records") == [f"{s} {f:g} Hz" for s, f in zip(jm.setting_of, jm.freq_of)]
-            and info.get("seed") == plan.seed)
+    same = info.get("records") == joint_records(jm) and info.get("seed") == plan.seed
     ended = info.get("converged") if plan.joint_steps is None else info.get("iterations") == plan.joint_steps
     if not (same and ended):
         return None
