@@ -3,7 +3,8 @@
 Run by hand from the project root: ``python benchmarks/bench_pool_chunks.py [--processes 2]
 [--repeats 7]``.
 
-The joint model's walkers are evaluated on a process pool (``sampler._log_prob_many``),
+The joint model's walkers are evaluated on worker processes (``target.Target.batch`` on
+``executor.LocalProcesses``, which deals one walker per task),
 one batch per move: 21 walkers for the ensemble moves (half of 42), all 42 for the fitted
 independence move. ``Pool.map`` deals its items in chunks of about a quarter of a worker's
 share by default, so at the end of a batch one worker may still have a chunk to go while
@@ -21,24 +22,35 @@ import time
 import numpy as np
 
 from bayes_inerter.device import paper_parameters
-from bayes_inerter.inference import sampler as S
+from bayes_inerter.executor import Executor
 from bayes_inerter.inference.coordinates import default_coordinates
 from bayes_inerter.inference.joint import JointModel
 from bayes_inerter.inference.model import PosteriorModel
+from bayes_inerter.inference.target import Target, log_prob_at
 from bayes_inerter.records.generator import paper_grid
 
+_TARGET = None  # the target each worker of this script's pool was given
 
-class _Pool:
-    """A pool whose map uses the given chunk size (None: Pool.map's default)."""
 
-    def __init__(self, pool, chunksize):
-        self.pool, self.chunksize = pool, chunksize
+def _install(target):
+    global _TARGET
+    _TARGET = target
 
-    def map(self, fn, items, chunksize=None):
-        items = list(items)
-        if self.chunksize is None:
-            return self.pool.map(fn, items)
-        return self.pool.map(fn, items, chunksize=self.chunksize)
+
+def _evaluate(theta):
+    return log_prob_at(_TARGET, theta)
+
+
+class _Chunks(Executor):
+    """An executor over ``pool`` whose map deals items in ``chunksize`` (None: Pool.map's
+    default chunks)."""
+
+    def __init__(self, pool, chunksize, workers):
+        self.pool, self.chunksize, self.workers = pool, chunksize, workers
+
+    def map_state(self, fn, items):
+        kw = {} if self.chunksize is None else {"chunksize": self.chunksize}
+        return self.pool.map(_evaluate, list(items), **kw)
 
 
 def main():
@@ -59,21 +71,19 @@ def main():
     u0 = coords.to_u(theta)
     rng = np.random.default_rng(0)
     batches = {n: u0 + 1e-3 * rng.standard_normal((n, len(u0))) for n in (21, 42)}
-    S._MODEL, S._COORDS = jm, coords
+    target = Target(jm, coords)
     times = {(n, c): [] for n in batches for c in ("default", "one")}
-    with multiprocessing.get_context("fork").Pool(args.processes) as pool:
+    with multiprocessing.get_context("fork").Pool(args.processes, initializer=_install, initargs=(target,)) as pool:
+        ways = {label: _Chunks(pool, chunks, args.processes) for label, chunks in (("default", None), ("one", 1))}
         for n, us in batches.items():
-            for label, chunks in (("default", None), ("one", 1)):
-                S._POOL = _Pool(pool, chunks)
-                S._log_prob_many(us)  # warm-up
+            for executor in ways.values():
+                target.batch(us, executor)  # warm-up
         for _ in range(args.repeats):
             for n, us in batches.items():
-                for label, chunks in (("default", None), ("one", 1)):
-                    S._POOL = _Pool(pool, chunks)
+                for label, executor in ways.items():
                     t0 = time.perf_counter()
-                    S._log_prob_many(us)
+                    target.batch(us, executor)
                     times[(n, label)].append(time.perf_counter() - t0)
-    S._MODEL, S._COORDS, S._POOL = None, None, None
     for n in batches:
         d = statistics.median(times[(n, "default")])
         o = statistics.median(times[(n, "one")])

@@ -40,11 +40,11 @@ def main():
 
     import h5py
 
-    import bayes_inerter.inference.sampler as sampler
     from bayes_inerter.inference.coordinates import default_coordinates
     from bayes_inerter.inference.joint import JointModel
     from bayes_inerter.inference.moves import IndependenceMove
     from bayes_inerter.inference.sampler import Adaptation
+    from bayes_inerter.inference.target import Target
     from bayes_inerter.records import read_record
 
     study = Path(args.study)
@@ -53,10 +53,10 @@ def main():
         sys.exit(f"error: {chain_file} not found (the joint chain's checkpoint is not committed: run the study)")
     records = [read_record(p) for p in sorted((study / "records").glob("*.csv"))]
     jm = JointModel(tuple(records))
-    sampler._MODEL, sampler._COORDS = jm, default_coordinates(jm)
+    target = Target(jm, default_coordinates(jm))
     with h5py.File(chain_file, "r") as f:
         chain, log_p = f["mcmc/chain"][:], f["mcmc/log_prob"][:]
-    if not np.isclose(sampler._log_prob(chain[-1, 0])[0], log_p[-1, 0], rtol=1e-12, atol=0):
+    if not np.isclose(target(chain[-1, 0])[0], log_p[-1, 0], rtol=1e-12, atol=0):
         sys.exit(f"error: {chain_file} was not sampled from {study}/records with this model")
     d = chain.shape[-1]
     fit_to = len(chain) if args.fit_to is None else args.fit_to
@@ -76,7 +76,7 @@ def main():
         t_fit = time.perf_counter() - t0
         y, _ = move._propose(np.zeros((args.proposals, d)), np.random.RandomState(args.seed))
         t0 = time.perf_counter()
-        ly = np.array([sampler._log_prob(u)[0] for u in y])
+        ly = np.array([target(u)[0] for u in y])
         t_eval = (time.perf_counter() - t0) / len(y)
         lwx = lx[pairs] - move.log_density(x[pairs])
         lwy = ly - move.log_density(y)

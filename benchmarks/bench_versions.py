@@ -10,7 +10,7 @@ Python process that imports that version and times on generated records (A3 at 1
 the paper's 27-record grid for the joint model):
 
 - ``single``: one single-record two-port evaluation in the sampler's coordinates (the
-  target emcee calls, ``sampler._log_prob``), median of 300 points drawn around the
+  target emcee calls, ``target.Target``), median of 300 points drawn around the
   paper's parameters;
 - ``joint``: one 27-record joint evaluation, median of 20 points;
 - ``steps``: 150 sampler steps of a single-record fit from a fixed start (no start-up
@@ -42,6 +42,7 @@ from bayes_inerter.records.generator import paper_grid, paper_record
 from bayes_inerter.inference.model import PosteriorModel
 from bayes_inerter.inference.joint import JointModel
 from bayes_inerter.inference import sampler as S
+from bayes_inerter.inference.target import Target
 from bayes_inerter.inference.coordinates import default_coordinates
 
 def med(fn, xs):
@@ -55,11 +56,11 @@ rng = np.random.default_rng(0)
 rec = paper_record("A3", 1.0, seed=0)
 pm = PosteriorModel(rec)
 coords = default_coordinates(pm)
-S._MODEL, S._COORDS = pm, coords
+target = Target(pm, coords)
 theta = pm.to_theta(paper_parameters("A3"), 0.003, 0.3)
 u0 = coords.to_u(theta)
 us = [u0 + 0.01 * rng.standard_normal(len(u0)) for _ in range(300)]
-out = {"single": med(S._log_prob, us)}
+out = {"single": med(target, us)}
 
 records = [r for _, _, r in paper_grid(seed=0)]
 jm = JointModel(tuple(records))

@@ -39,13 +39,13 @@ def replay(chain, log_prob, conv):
     """(step, check) where ``run_sampler``'s open-ended loop would stop ``chain``
     (steps, walkers, ndim; theta) under ``conv``: its checks at every multiple of
     ``conv.check_every``, each against the one before; (None, last check) if none holds."""
-    from bayes_inerter.inference.sampler import _check_chain, _is_converged, _tau_settled
+    from bayes_inerter.inference.convergence import check_chain, is_converged, tau_settled
 
     previous, check = None, None
     for step in range(conv.check_every, len(chain) + 1, conv.check_every):
-        check = _check_chain(chain[:step], log_prob[:step], conv,
-                             rhat_if=lambda n, t: _tau_settled(n, t, previous, conv))
-        if _is_converged(step - check.warmup, check.tau, previous, check.rhat, check.ess, conv):
+        check = check_chain(chain[:step], log_prob[:step], conv,
+                             rhat_if=lambda n, t: tau_settled(n, t, previous, conv))
+        if is_converged(step - check.warmup, check.tau, previous, check.rhat, check.ess, conv):
             return step, check
         previous = check.tau
     return None, check

@@ -4,8 +4,9 @@ samplers they compare by name."""
 
 import csv
 import sys
-from multiprocessing import get_context
 from pathlib import Path
+
+from bayes_inerter.executor import make_executor
 
 #: The adaptive samplers compared side by side, by name: keyword arguments of
 #: ``sampler.Adaptation`` (``adaptive``: one t in the sampler's coordinates, the default
@@ -28,12 +29,12 @@ def record_arg(item: str) -> tuple[str, float]:
 
 
 def map_rows(func, jobs: list, processes: int) -> list[dict]:
-    """``func`` over ``jobs`` on ``processes`` forked processes (at least one), in order;
+    """``func`` over ``jobs`` on ``processes`` local processes (at least one), in order;
     a ValueError (bad input, such as an unknown setting) ends the script with a
     one-line error."""
     try:
-        with get_context("fork").Pool(max(1, processes)) as pool:
-            return pool.map(func, jobs)
+        with make_executor(max(1, processes)) as executor:
+            return executor.map(func, jobs)
     except ValueError as exc:
         sys.exit(f"error: {exc}")
 

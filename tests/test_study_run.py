@@ -176,10 +176,10 @@ def test_failed_and_dying_jobs_are_reported_and_the_others_finish(study, tmp_pat
     dying = FitJob(str(study.out / "records" / "A2_1Hz.csv"), str(tmp_path / "dying"), steps=4)
     real = runner_module.run_job
 
-    def run_or_die(job, *args):  # the forked worker of `dying` is killed outright
+    def run_or_die(job, *args, **kwargs):  # the forked worker of `dying` is killed outright
         if job.out.endswith("dying"):
             os.kill(os.getpid(), signal.SIGKILL)
-        return real(job, *args)
+        return real(job, *args, **kwargs)
 
     monkeypatch.setattr(runner_module, "run_job", run_or_die)
     by_out = {o["job"]["out"]: o for o in run_jobs([good, missing, dying], processes=2)}

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..device import SETTINGS, apparent_inertance
+from ..executor import make_executor
 from .model import LikelihoodSettings, PosteriorModel
 from .priors import NOISE_PRIORS
 
@@ -197,14 +198,9 @@ class JointModel:
         return np.clip(np.array(theta), lo, hi)
 
 
-# The joint model for worker processes: set before the pool forks, so that only theta
-# and the records' indices are pickled per call.
-_POOLED: JointModel | None = None
-
-
-def _pooled_terms(args):
+def _terms(model: JointModel, args):
     theta, ks = args
-    return _POOLED.terms(theta, ks)
+    return model.terms(theta, ks)
 
 
 @contextmanager
@@ -214,34 +210,24 @@ def pooled_log_prob(model: JointModel, processes: int):
     search, where the walkers' own parallelism has nothing to share). The same numbers as
     ``model.log_prob``, bit for bit: the terms are added in the records' order. With one
     process, ``model.log_prob`` itself."""
-    global _POOLED
     if processes <= 1:
         yield model.log_prob
         return
-    import multiprocessing
-    import signal
-
     n = len(model.parts)
     # every processes-th record to each worker: neighbours in the records' order (one
     # setting's records, alike in cost) go to different workers
     chunks = [list(range(i, n, processes)) for i in range(min(processes, n))]
-    _POOLED = model
-    try:
-        # workers leave Ctrl-C to the parent, which ends them (as the sampler's do)
-        with multiprocessing.get_context("fork").Pool(
-                len(chunks), initializer=signal.signal, initargs=(signal.SIGINT, signal.SIG_IGN)) as pool:
+    with make_executor(len(chunks), state=model) as executor:
 
-            def log_prob(theta):
-                theta = np.asarray(theta, dtype=float)
-                lp = model.log_prior(theta)
-                if not math.isfinite(lp):
-                    return -math.inf, math.nan
-                terms = [None] * n  # a record whose simulation failed, or after it, stays None
-                for ks, got in zip(chunks, pool.map(_pooled_terms, [(theta, ks) for ks in chunks])):
-                    for k, t in zip(ks, got):
-                        terms[k] = t
-                return model.combine(lp, terms)  # -inf where any is None
+        def log_prob(theta):
+            theta = np.asarray(theta, dtype=float)
+            lp = model.log_prior(theta)
+            if not math.isfinite(lp):
+                return -math.inf, math.nan
+            terms = [None] * n  # a record whose simulation failed, or after it, stays None
+            for ks, got in zip(chunks, executor.map_state(_terms, [(theta, ks) for ks in chunks])):
+                for k, t in zip(ks, got):
+                    terms[k] = t
+            return model.combine(lp, terms)  # -inf where any is None
 
-            yield log_prob
-    finally:
-        _POOLED = None
+        yield log_prob

@@ -33,13 +33,13 @@ import copy
 import csv
 import json
 import math
-import multiprocessing
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..device import TABLE_I, paper_parameters
+from ..executor import make_executor
 from ..inference.model import LikelihoodSettings, PosteriorModel
 from ..inference.priors import LogNormal, LogUniform, Uniform
 from ..inference.results import ar1_noise, posterior_sample
@@ -210,15 +210,10 @@ def run_calibration(cs: CalibrationSettings, out, replicates: int, *, processes:
     if progress:
         progress(done, replicates)
     jobs = [(cs, k, out) for k in todo]
-    if processes > 1 and len(jobs) > 1:
-        with multiprocessing.get_context("fork").Pool(processes, maxtasksperchild=1) as pool:
-            for _ in pool.imap_unordered(_worker, jobs):
-                done += 1
-                if progress:
-                    progress(done, replicates)
-    else:
-        for job in jobs:
-            _worker(job)
+    with make_executor(processes if len(jobs) > 1 else 1) as executor:
+        for outcome in executor.as_completed(_worker, jobs):  # each replicate in a process of its own
+            if not outcome.ok:
+                raise outcome.error
             done += 1
             if progress:
                 progress(done, replicates)

@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import multiprocessing
-import multiprocessing.connection
+import functools
 import time
 from pathlib import Path
 
+from ..executor import Dask, Executor, LocalProcesses, WorkerDied
 from ..inference.results import LOO_FILE
 from .plan import FitJob
 
@@ -88,66 +88,24 @@ def _failed(job: FitJob, error: str) -> dict:
     return {"key": job.key, "status": "failed", "error": error, "job": dataclasses.asdict(job)}
 
 
-def _child(job: FitJob, conn, plots: bool) -> None:
-    try:
-        conn.send(run_job(job, plots))
-    except BaseException as exc:  # reported to the parent, which goes on with the others
-        conn.send(_failed(job, f"{type(exc).__name__}: {exc}"))
-    finally:
-        conn.close()
-
-
-def _run_local(jobs, processes: int, on_done, plots: bool) -> list[dict]:
-    ctx = multiprocessing.get_context("fork")
-    pending = list(jobs)
-    running = {}  # sentinel -> (process, connection, job)
+def _run(jobs, executor: Executor, on_done, plots: bool) -> list[dict]:
+    """Each job on ``executor``, in a worker process of its own where it runs locally; a
+    job that fails, or whose worker dies, is reported as failed and the others go on."""
     outcomes = []
-    try:
-        while pending or running:
-            while pending and len(running) < processes:
-                job = pending.pop(0)
-                recv, send = ctx.Pipe(duplex=False)
-                proc = ctx.Process(target=_child, args=(job, send, plots), daemon=True)
-                proc.start()
-                send.close()
-                running[proc.sentinel] = (proc, recv, job)
-            ready = multiprocessing.connection.wait(list(running))
-            for sentinel in ready:
-                proc, recv, job = running.pop(sentinel)
-                try:  # a worker that died before sending leaves the pipe at end-of-file
-                    outcome = recv.recv() if recv.poll() else None
-                except EOFError:
-                    outcome = None
-                proc.join()
-                recv.close()
-                if outcome is None:
-                    outcome = _failed(job, f"worker process died (exit code {proc.exitcode})")
-                outcomes.append(outcome)
-                on_done(outcome)
-    finally:
-        for proc, recv, _ in running.values():
-            proc.terminate()
-            proc.join()
+    for got in executor.as_completed(functools.partial(run_job, plots=plots), jobs):
+        job = jobs[got.index]
+        outcome = got.value if got.ok else _failed(job, _message(got.error))
+        outcomes.append(outcome)
+        on_done(outcome)
     return outcomes
 
 
-def _run_dask(jobs, scheduler: str, on_done, plots: bool) -> list[dict]:
-    try:
-        from distributed import Client, as_completed
-    except ImportError:
-        raise RuntimeError("running on a Dask cluster needs dask.distributed: pip install 'bayes-inerter[dask]'") from None
-    outcomes = []
-    with Client(scheduler) as client:
-        futures = {client.submit(run_job, job, plots, pure=False): job for job in jobs}
-        for fut in as_completed(futures):
-            job = futures[fut]
-            try:
-                outcome = fut.result()
-            except Exception as exc:  # the job's error, or a worker lost mid-job
-                outcome = _failed(job, f"{type(exc).__name__}: {exc}")
-            outcomes.append(outcome)
-            on_done(outcome)
-    return outcomes
+def _message(error: BaseException) -> str:
+    """A failed job's error as done.json and the study's report name it; a worker that
+    died says so with its exit code."""
+    if isinstance(error, WorkerDied):
+        return str(error)
+    return f"{type(error).__name__}: {error}"
 
 
 def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=None,
@@ -174,7 +132,8 @@ def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=
             on_done(outcomes[job.key])
         else:
             todo.append(job)
-    ran = (_run_dask(todo, scheduler, on_done, plots) if scheduler else
-           _run_local(todo, processes, on_done, plots))
+    # locally, every job runs in a process of its own, one process at a time included
+    with (Dask(scheduler) if scheduler else LocalProcesses(processes)) as executor:
+        ran = _run(todo, executor, on_done, plots)
     outcomes.update((o["key"], o) for o in ran)
     return [outcomes[job.key] for job in jobs]

@@ -1,0 +1,197 @@
+"""When a chain has converged: emcee's autocorrelation time, R-hat and bulk ESS after a
+warm-up, checked at fixed steps (see :class:`Convergence` and docs/inference.md).
+
+The rule (documented defaults, :class:`Convergence`): emcee's integrated
+autocorrelation time tau (``emcee.autocorr.integrated_time(tol=0)`` on the chain in
+theta, the reported parameters) per parameter, checked every ``check_every`` steps, on
+the chain after its warm-up: its :func:`transient` (the steps before the walkers reach
+equilibrium, none for a chain that starts there) or its first ``warmup`` share,
+whichever is longer; converged when the chain after the warm-up is longer than
+``n_tau`` times the largest tau (and than ``n_tau`` times the last check's, if that was
+larger), tau grew by less than ``tau_rtol`` since the last check (a tau that still grows
+with the chain is underestimated), and, after discarding 2 tau more, R-hat <
+``max_rhat`` and bulk ESS >= ``min_ess`` (arviz, treating walkers as chains: they are
+not independent, so R-hat here is a check that no walker is stuck apart from the
+others, not a proof). Or stops at ``max_steps``. The draws kept for the posterior
+(:func:`.results.posterior_sample`) are the same: after the warm-up and 2 tau more.
+
+:class:`Monitor` applies the rule along one run: it remembers the last check's tau.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import emcee
+import numpy as np
+
+__all__ = ["Convergence", "Check", "Monitor", "WARMUP", "transient", "check_chain", "tau_settled",
+           "is_converged", "why_not"]
+
+#: Share of a chain left out as warm-up before its convergence is judged and its draws
+#: kept (:class:`Convergence`), unless its transient is longer.
+WARMUP = 1 / 3
+
+
+@dataclass(frozen=True)
+class Convergence:
+    """When an open-ended run stops (see module docstring).
+
+    ``check_every`` is 250 steps (the adaptation's period): against 500, a
+    chain stops on average 125 steps nearer the point where the rule first holds: the
+    full study's 27-record joint chain (``results/joint-rerun``), checked again step by
+    step from its checkpoint, meets the rule at 3,250 steps where it stopped at 3,500.
+
+    ``warmup`` (default :data:`WARMUP`, a third; 0 leaves out only the transient): the share of the chain left out before tau, R-hat and ESS
+    are computed, and from the kept draws. The fitted moves learn the posterior from the
+    chain itself, so its first several hundred steps mix several times slower than the
+    rest: on A3 at 1 Hz (5,000 steps, seed 0) tau over the whole chain was 81 steps at
+    4,250 and over its last two thirds 30 at 2,500, and tau taken over everything
+    counted that early stretch against the chain for as long as it ran. The chain kept
+    must still be 50 times its own tau, so a chain whose warm-up is longer than a third
+    waits until it is not (``benchmarks/bench_warmup.py`` replays both rules on the same
+    chains).
+    """
+
+    n_tau: float = 50.0
+    tau_rtol: float = 0.05
+    max_rhat: float = 1.05
+    min_ess: float = 400.0
+    check_every: int = 250
+    max_steps: int = 20_000
+    warmup: float = WARMUP
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.warmup <= 0.5:
+            raise ValueError(f"convergence setting warmup (a share of the chain) must lie in [0, 0.5], "
+                             f"got {self.warmup}")
+        for name in ("n_tau", "tau_rtol", "max_rhat", "min_ess"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"convergence setting {name} must be positive, got {getattr(self, name)}")
+        for name in ("check_every", "max_steps"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= 1):
+                raise ValueError(f"convergence setting {name} must be a positive whole number, got {value!r}")
+
+
+
+def transient(log_prob: np.ndarray) -> int:
+    """Steps at the start of a chain before its walkers reach equilibrium: the first step
+    at which the walkers' median log posterior comes within three robust spreads (at
+    least 1 nat) of its median over the chain's last half. 0 for a chain that starts in
+    equilibrium; a start in a worse basin (the full study's A2 at 0.5 Hz: 2,000 steps
+    about 440 nats below) would otherwise inflate tau, estimated on the whole chain, by
+    an order of magnitude. ``log_prob``: shape (steps, walkers)."""
+    m = np.median(np.asarray(log_prob, dtype=float), axis=1)
+    if len(m) < 4:
+        return 0
+    late = m[len(m) // 2:]
+    ref = np.median(late)
+    spread = max(3.0 * 1.4826 * np.median(np.abs(late - ref)), 1.0)
+    return int(np.argmax(m >= ref - spread))
+
+
+@dataclass(frozen=True)
+class Check:
+    """One convergence check: tau, R-hat and ESS after the warm-up (in theta), the
+    warm-up's steps and the transient's among them."""
+
+    tau: np.ndarray
+    rhat: np.ndarray
+    ess: np.ndarray
+    warmup: int
+    transient: int
+
+
+def check_chain(chain: np.ndarray, log_prob: np.ndarray, conv: Convergence, rhat_if=None) -> Check:
+    """tau, R-hat and bulk ESS of ``chain`` (steps, walkers, ndim) after its warm-up (its
+    :func:`transient` from ``log_prob``, at most half the chain, or ``conv.warmup`` of
+    it, whichever is longer).
+
+    ``rhat_if(steps after the warm-up, tau)``: where it says no, R-hat (inf) and ESS
+    (0) are not computed. arviz takes about half a second per thousand steps of a
+    single-record chain, a tenth of the sampling between two checks of a long chain,
+    and they decide nothing while the chain is still too short for its tau."""
+    from .diagnostics import rhat_ess
+
+    n = len(chain)
+    skip = min(transient(log_prob), n // 2)
+    warm = max(skip, int(conv.warmup * n))
+    with np.errstate(invalid="ignore", divide="ignore"):  # a parameter that never moved: tau NaN, handled below
+        tau = emcee.autocorr.integrated_time(chain[warm:], tol=0)
+    if rhat_if is not None and not rhat_if(n - warm, tau):
+        return Check(tau, np.full(len(tau), np.inf), np.zeros(len(tau)), warm, skip)
+    burn = warm + (int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else (n - warm) // 2)
+    rhat, ess = rhat_ess(chain[min(burn, n - 2):])
+    return Check(tau, rhat, ess, warm, skip)
+
+
+
+def tau_settled(iteration, tau, previous, conv: Convergence) -> bool:
+    """The autocorrelation part of the rule: ``iteration`` (the chain's steps after its
+    warm-up) at least ``n_tau`` tau, and tau settled since the ``previous`` check."""
+    if not np.all(np.isfinite(tau)):
+        return False
+    if iteration < conv.n_tau * np.max(tau):
+        return False
+    if previous is not None and np.all(np.isfinite(previous)):
+        # a tau that grows is not yet to be trusted; one that falls (an early stretch of
+        # slow exploration weighing less as the chain grows) is, but the chain must also
+        # be long enough for the last check's larger estimate
+        if np.max((tau - previous) / previous) > conv.tau_rtol or iteration < conv.n_tau * np.max(previous):
+            return False
+    return True
+
+
+def is_converged(iteration, tau, previous, rhat, ess, conv: Convergence) -> bool:
+    """``iteration``: the chain's steps after its warm-up."""
+    if not tau_settled(iteration, tau, previous, conv):
+        return False
+    return bool(np.nanmax(rhat) < conv.max_rhat and np.nanmin(ess) >= conv.min_ess)
+
+
+def why_not(iteration, check: Check, conv: Convergence) -> str:
+    tau, rhat, ess, skip = check.tau, check.rhat, check.ess, check.warmup
+    parts = []
+    if np.all(np.isfinite(tau)):
+        need = conv.n_tau * np.max(tau)
+        if iteration - skip < need:
+            after = f" after a warm-up of {skip}" if skip else ""
+            parts.append(f"chain of {iteration - skip} steps{after} is shorter than {conv.n_tau:g} tau = {need:.0f}")
+    else:
+        parts.append("autocorrelation time not estimable")
+    if not np.nanmax(rhat) < conv.max_rhat:
+        parts.append(f"max R-hat {np.nanmax(rhat):.3f} >= {conv.max_rhat}")
+    if not np.nanmin(ess) >= conv.min_ess:
+        parts.append(f"min bulk ESS {np.nanmin(ess):.0f} < {conv.min_ess:g}")
+    return "not converged: " + ("; ".join(parts) if parts else "tau still growing, or the chain shorter than "
+                                f"{conv.n_tau:g} times the last check's tau")
+
+
+class Monitor:
+    """The convergence rule along one run: :meth:`check` the chain at a check step and
+    remember its tau for the next (a continued run first takes the tau of the last check
+    before its start from the stored chain, :meth:`resume`, so that it stops where an
+    uninterrupted run would)."""
+
+    def __init__(self, conv: Convergence):
+        self.conv = conv
+        self.previous: np.ndarray | None = None
+
+    def resume(self, chain: np.ndarray, log_prob: np.ndarray, done: int) -> None:
+        """Take ``previous`` from the first steps of a stored ``chain`` (in theta) up to the
+        last check before step ``done``."""
+        last = ((done - 1) // self.conv.check_every) * self.conv.check_every if done else 0
+        if last > 0:
+            self.previous = check_chain(chain[:last], log_prob[:last], self.conv, rhat_if=lambda *_: False).tau
+
+    def check(self, chain: np.ndarray, log_prob: np.ndarray) -> tuple[Check, bool]:
+        """The check of ``chain`` (steps, walkers, ndim; theta) and whether it has
+        converged; its tau becomes the next check's ``previous``. R-hat and ESS are
+        computed only where tau says they could decide something, or at ``max_steps``."""
+        n, previous, conv = len(chain), self.previous, self.conv
+        last = n >= conv.max_steps  # its message names R-hat and ESS too
+        check = check_chain(chain, log_prob, conv, rhat_if=lambda k, t: last or tau_settled(k, t, previous, conv))
+        ok = is_converged(n - check.warmup, check.tau, previous, check.rhat, check.ess, conv)
+        self.previous = check.tau
+        return check, ok

@@ -1,0 +1,59 @@
+"""Tests of the convergence rule (bayes_inerter.inference.convergence)."""
+
+import numpy as np
+
+from bayes_inerter.inference.convergence import Convergence, check_chain, is_converged, transient
+
+
+def test_transient_is_none_for_a_chain_in_equilibrium_and_the_climb_for_one_that_is_not():
+    rng = np.random.default_rng(0)
+    still = rng.normal(2700.0, 2.0, size=(4000, 24))
+    assert transient(still) <= 2
+    climbing = still.copy()
+    climbing[:1500] -= np.linspace(440.0, 0.0, 1500)[:, None]  # a start 440 nats below, as A2 at 0.5 Hz
+    assert 1300 <= transient(climbing) <= 1500
+    assert transient(still[:3]) == 0  # too short to say
+
+
+def test_the_warm_up_share_leaves_a_slow_start_out_of_tau():
+    # 24 walkers in equilibrium from the start (no transient in the log posterior), whose
+    # first 600 steps are a slow AR(1) (tau about 200) and the rest nearly independent
+    # (tau about 1.2), as the fitted moves make a chain mix once they have seen it
+    rng = np.random.default_rng(4)
+    steps, slow = 1800, 600
+    x = np.empty((steps, 24, 1))
+    x[0] = rng.normal(size=(24, 1))
+    for i in range(1, steps):
+        a = 0.99 if i < slow else 0.1
+        x[i] = a * x[i - 1] + np.sqrt(1 - a * a) * rng.normal(size=(24, 1))
+    lp = rng.normal(size=(steps, 24))
+    whole = check_chain(x, lp, Convergence(warmup=0.0), rhat_if=lambda *_: False)
+    third = check_chain(x, lp, Convergence(warmup=1 / 3), rhat_if=lambda *_: False)
+    assert whole.warmup == whole.transient <= 2 and third.warmup == steps // 3
+    # the whole chain's tau carries the slow start: 50 of it are far more than the chain;
+    # after the warm-up share (600 steps) tau is the fast part's, and 1,200 steps are plenty
+    assert whole.tau[0] > 20 and steps - whole.warmup < 50 * whole.tau[0]
+    assert third.tau[0] < 3 and steps - third.warmup > 50 * third.tau[0]
+    # a transient longer than the share is left out instead (the climb of the test above)
+    climbing = lp - np.r_[np.linspace(440.0, 0.0, 900), np.zeros(steps - 900)][:, None]
+    late = check_chain(x, climbing, Convergence(warmup=1 / 3), rhat_if=lambda *_: False)
+    assert late.warmup == late.transient and 800 <= late.warmup <= 900
+
+
+def test_a_falling_tau_counts_as_settled_but_a_growing_one_does_not():
+    conv = Convergence()  # 50 tau, 5 %
+    good = dict(rhat=np.array([1.01]), ess=np.array([2000.0]))
+    # the adaptive A3 1 Hz chain of benchmarks/bench_adaptation.py at its checks of
+    # 4,500 and 5,000 steps: tau fell 3.7 %, the chain is longer than 50 times either
+    assert is_converged(5000, np.array([91.7]), np.array([95.2]), conv=conv, **good)
+    # fallen by 10 %, more than the 5 % that the old two-sided rule allowed: settled
+    assert is_converged(5000, np.array([90.0]), np.array([99.0]), conv=conv, **good)
+    # grown by more than 5 %: underestimated, wait (5 % of the earlier estimate)
+    assert not is_converged(5000, np.array([95.2]), np.array([89.0]), conv=conv, **good)
+    assert not is_converged(5000, np.array([94.0]), np.array([89.4]), conv=conv, **good)  # 5.1 %
+    assert is_converged(5000, np.array([93.8]), np.array([89.4]), conv=conv, **good)  # 4.9 %
+    # fallen, but the chain is shorter than 50 times the last check's estimate
+    assert not is_converged(5000, np.array([91.7]), np.array([101.0]), conv=conv, **good)
+    # R-hat and ESS still decide
+    assert not is_converged(5000, np.array([91.7]), np.array([95.2]), rhat=np.array([1.06]),
+                             ess=np.array([2000.0]), conv=conv)
