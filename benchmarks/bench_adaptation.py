@@ -9,9 +9,9 @@ convergence criteria hold (``Convergence()``: 50 tau after the transient, tau se
 R-hat < 1.05, bulk ESS >= 400), twice from the same start (one restarted Nelder-Mead
 optimum per record) with the same seed, walkers and coordinates: with the one-t
 adaptation (``adaptive``, the default until 2026-11-25) and without it (the ensemble
-moves alone), or with the variants named (``mixture``: its proposal a mixture of 5 t's;
-``scores``: its t fitted in the chain's normal scores, 200 knots; ``blocks``: the same
-with half the fitted share to block moves, ``moves.BlockMove``, the default since).
+moves alone), or with the variants named (``scores``: its t fitted in the chain's
+normal scores, 200 knots; ``blocks``: the same with half the fitted share to block
+moves, ``moves.BlockMove``, the default since).
 The two runs of a record run at the same time, one process each, so they
 share the machine alike: read the ratios.
 Writes one row per run (steps and seconds to converge, the largest autocorrelation
@@ -32,7 +32,7 @@ sys.path.insert(0, str(ROOT / "studies"))
 
 from _table import ADAPTATIONS, record_arg, write_rows  # noqa: E402
 
-VARIANTS = ("adaptive", "ensemble-only", "mixture", "scores", "blocks")
+VARIANTS = ("adaptive", "ensemble-only", "scores", "blocks")
 
 
 def _run(job):

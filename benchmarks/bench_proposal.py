@@ -1,9 +1,10 @@
 """Benchmark: how often the adaptive sampler's independence proposals would be accepted,
-fitted as one t or as a mixture of several, on a converged joint chain.
+one t fitted in the sampler's coordinates or in the chain's normal scores, on a converged
+joint chain.
 
 Run by hand after a full study whose joint chain converged (its checkpoint stays in the
 study folder; it is not committed): ``python benchmarks/bench_proposal.py
-[results/full] [--components 1 3 5 8] [--knots 0 200] [--wide W] [--proposals 400]
+[results/full] [--knots 0 200] [--wide W] [--proposals 400]
 [--fit-from 130] [--fit-to STEP] [--seed 0]``.
 
 For each proposal (fitted, like ``sampler.Adaptation``'s, to the chain's steps from
@@ -28,7 +29,6 @@ import numpy as np
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("study", nargs="?", default="results/full")
-    ap.add_argument("--components", type=int, nargs="+", default=[1, 3, 5, 8])
     ap.add_argument("--proposals", type=int, default=400)
     ap.add_argument("--fit-from", type=int, default=130, help="first step the proposals are fitted to")
     ap.add_argument("--fit-to", type=int, default=None, help="last step they are fitted to (default: the chain's)")
@@ -69,10 +69,10 @@ def main():
     wide = adapt.wide if args.wide is None else args.wide
     print(f"{chain_file}: {len(chain)} steps x {chain.shape[1]} walkers; proposals fitted to steps "
           f"{args.fit_from}-{fit_to}, paired with steps {half}-{len(chain)}")
-    for k, knots in ((k, n) for n in args.knots for k in args.components):
+    for knots in args.knots:
         t0 = time.perf_counter()
-        move = IndependenceMove.fit(fit_draws, components=k, knots=knots or None, dof=adapt.dof, scale=adapt.scale,
-                                    wide=wide, wide_scale=adapt.wide_scale)
+        move = IndependenceMove.fit(fit_draws, knots=knots or None, dof=adapt.dof, scale=adapt.scale, wide=wide,
+                                    wide_scale=adapt.wide_scale)
         t_fit = time.perf_counter() - t0
         y, _ = move._propose(np.zeros((args.proposals, d)), np.random.RandomState(args.seed))
         t0 = time.perf_counter()
@@ -83,7 +83,7 @@ def main():
         acc = np.mean([np.mean(np.exp(np.minimum(0.0, v - lwx))) if np.isfinite(v) else 0.0 for v in lwy])
         spread = np.quantile(lwx - np.median(lwx), [0.99, 0.999, 1.0])
         where = f"in normal scores ({knots} knots)" if knots else "in the sampler's coordinates"
-        print(f"  {move.components} component(s) {where}: acceptance {acc:.3f}; log weight p/q of the chain's "
+        print(f"  one t {where}: acceptance {acc:.3f}; log weight p/q of the chain's "
               f"draws above its median: {spread[0]:.1f} (99 %), {spread[1]:.1f} (99.9 %), {spread[2]:.1f} (max); "
               f"fit {t_fit:.1f} s, {1e3 * t_eval:.0f} ms an evaluation, {np.sum(~np.isfinite(ly))} proposals "
               f"outside the domain")

@@ -10,10 +10,9 @@ from bayes_inerter.executor import make_executor
 
 #: The adaptive samplers compared side by side, by name: keyword arguments of
 #: ``sampler.Adaptation`` (``adaptive``: one t in the sampler's coordinates, the default
-#: until 2026-11-25; ``mixture``: a mixture of 5 t's in its place; ``scores``: the t in
-#: normal scores; ``blocks``: that and block moves, the default since).
+#: until 2026-11-25; ``scores``: the t in normal scores; ``blocks``: that and block
+#: moves, the default since).
 ADAPTATIONS = {"adaptive": {"knots": None, "blocks": 0.0},  # one t: the default until 2026-11-25
-               "mixture": {"components": 5, "knots": None, "blocks": 0.0},
                "scores": {"knots": 200, "blocks": 0.0},
                "blocks": {"knots": 200, "blocks": 0.5}}  # the default since
 

@@ -1,7 +1,7 @@
 """How fast the joint model's chain mixes under different emcee moves, side by side.
 
     python studies/joint_mixing.py [--settings A0 A3 B2] [--steps 2500] [--seed 0]
-        [--variants default subspace] [--centres results/full] [--out results/joint-mixing]
+        [--variants default blocks] [--centres results/full] [--out results/joint-mixing]
 
 The joint model (``inference.joint``) of the paper grid's records of ``--settings`` at
 0.5, 1 and 1.5 Hz (generated with seed 0 and the default generator, as the full study
@@ -11,21 +11,20 @@ posterior means of that study's two-port fits of the same records, as the study'
 model starts) with the same seed, walkers and
 coordinates (impedance). Move sets:
 
-- ``default``: the sampler's default (DE 0.6, DE snooker 0.1, stretch 0.3);
-- ``subspace``: the same with differential evolution in random subspaces
-  (``moves.SubspaceDEMove``) in place of the full-dimensional DE;
-- ``subspace-only``: subspace DE 0.9, DE snooker 0.1;
+- ``default``: the sampler's default ensemble moves (DE 0.6, DE snooker 0.1, stretch
+  0.3), without adaptation;
 - ``adaptive``: the default moves with the fitted independence move, one t in the
   sampler's coordinates (``Adaptation(knots=None, blocks=0)``, the package's default on
-  2026-11-25 until normal scores and block moves replaced it); the first three run
-  without adaptation, as they were measured;
-- ``mixture``: the same with the independence proposal a mixture of 5 t's
-  (``Adaptation(components=5, knots=None, blocks=0)``);
+  2026-11-25 until normal scores and block moves replaced it);
 - ``scores``: the same with the independence proposal's t fitted in the chain's
   normal scores (``Adaptation(knots=200, blocks=0)``,
   :mod:`bayes_inerter.inference.marginals`);
 - ``blocks``: the same, half of the fitted share to block moves from a normal in those
   scores (``Adaptation(knots=200, blocks=0.5)``, ``moves.BlockMove``: the default since).
+
+(Move sets measured earlier and since removed with their code, differential evolution
+in random subspaces and a mixture of t's as the proposal: docs/inference.md, "Moves
+tried and not kept".)
 
 Writes ``tau.csv`` (integrated autocorrelation time per parameter and move set, emcee's
 estimator on the chain after its first fifth) and ``summary.csv`` (largest tau, which
@@ -43,22 +42,7 @@ from _table import ADAPTATIONS
 
 ROOT = Path(__file__).resolve().parents[1]
 
-VARIANTS = ("default", "subspace", "subspace-only", "adaptive", "mixture", "scores", "blocks")
-
-
-def moves_for(variant):
-    import emcee
-
-    from bayes_inerter.inference.moves import SubspaceDEMove
-    from bayes_inerter.inference.sampler import DEFAULT_MOVES
-
-    if variant in ("default", "adaptive", "mixture", "scores", "blocks"):
-        return list(DEFAULT_MOVES)
-    if variant == "subspace":
-        return [(SubspaceDEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
-    if variant == "subspace-only":
-        return [(SubspaceDEMove(), 0.9), (emcee.moves.DESnookerMove(), 0.1)]
-    raise ValueError(f"unknown move set {variant!r}; choose from {', '.join(VARIANTS)}")
+VARIANTS = ("default", "adaptive", "scores", "blocks")
 
 
 def main():
@@ -66,7 +50,7 @@ def main():
     ap.add_argument("--settings", nargs="+", default=["A0", "A3", "B2"])
     ap.add_argument("--steps", type=int, default=2500)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--variants", nargs="+", default=["default", "subspace"], choices=VARIANTS)
+    ap.add_argument("--variants", nargs="+", default=["default", "blocks"], choices=VARIANTS)
     ap.add_argument("--centres", default=None, help="a study folder whose two-port fits give the start's centres")
     ap.add_argument("--out", default=str(ROOT / "results" / "joint-mixing"))
     args = ap.parse_args()
@@ -76,7 +60,7 @@ def main():
 
     from bayes_inerter.inference.joint import JointModel
     from bayes_inerter.inference.optimize import NM_RESTARTS, find_start, local_optimum
-    from bayes_inerter.inference.sampler import Adaptation, run_sampler
+    from bayes_inerter.inference.sampler import DEFAULT_MOVES, Adaptation, run_sampler
     from bayes_inerter.records import paper_grid
 
     out = Path(args.out)
@@ -110,7 +94,7 @@ def main():
         (out / variant).mkdir(exist_ok=True)
         bar = tqdm(total=args.steps, desc=variant, unit="step")
         adaptation = Adaptation(**ADAPTATIONS[variant]) if variant in ADAPTATIONS else None
-        run = run_sampler(jm, out / variant / "chain.h5", steps=args.steps, seed=args.seed, moves=moves_for(variant),
+        run = run_sampler(jm, out / variant / "chain.h5", steps=args.steps, seed=args.seed, moves=list(DEFAULT_MOVES),
                           adaptation=adaptation, start=start, progress=lambda i, _t: bar.update(i - bar.n))
         bar.close()
         chain = run.chain(discard=run.iteration // 5)  # in theta: tau of what the user reads

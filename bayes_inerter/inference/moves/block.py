@@ -1,0 +1,108 @@
+"""Metropolis-within-Gibbs block proposals from a normal in normal scores (:class:`BlockMove`).
+
+Each walker redraws a few coordinates chosen at random from their conditional law given
+its other coordinates under a normal fitted in the draws' normal scores (an independence
+proposal per block): a coordinate the records leave to its prior (the nut stiffness on its
+plateau) crosses its whole conditional range in one step without the other coordinates
+having to be proposed well at the same time, which a proposal in all coordinates at once
+needs (measured: docs/inference.md, "Adaptation").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from emcee.moves import MHMove
+
+from ..marginals import NormalScores
+from ._draws import usable_draws
+
+__all__ = ["BlockMove"]
+
+
+class BlockMove(MHMove):
+    """Metropolis-within-Gibbs from a fitted normal law in normal scores: each walker
+    picks a block of coordinates at random (its size drawn from ``sizes``, the
+    coordinates uniformly among all) and proposes new values for them alone from the
+    conditional law of that block given the walker's other coordinates, the rest kept.
+
+    The law is a normal N(mean, cov) in z = T(x) (``scores``, ``marginals.NormalScores``),
+    the block's conditional normal widened by ``scale`` and, in a share ``wide`` of the
+    proposals, by ``wide_scale`` more. Which coordinates move does not depend on the
+    state, and the conditional law of the block given the others is the same before and
+    after the move, so the Hastings factor is the ratio of the block's proposal densities
+    (in x: with T's Jacobian for the block's coordinates) at the old and new values, and
+    the move leaves any posterior invariant.
+    """
+
+    def __init__(self, mean, cov, scores: NormalScores, *, sizes=(1, 2, 3), scale: float = 1.2,
+                 wide: float = 0.1, wide_scale: float = 3.0):
+        mean = np.asarray(mean, dtype=float)
+        cov = np.asarray(cov, dtype=float)
+        d = len(mean)
+        if mean.ndim != 1 or cov.shape != (d, d) or scores.ndim != d:
+            raise ValueError(f"mean, covariance and map do not match: {mean.shape}, {cov.shape}, {scores.ndim}")
+        sizes = tuple(int(m) for m in sizes)
+        if not sizes or min(sizes) < 1 or max(sizes) > d:
+            raise ValueError(f"block sizes must lie in 1..{d}, got {sizes!r}")
+        if not (scale > 0 and wide_scale > 0 and 0.0 <= wide < 1.0):
+            raise ValueError(f"scales must be positive and the wide share in [0, 1), got {scale}, {wide_scale}, {wide}")
+        self.mean, self.scores, self.sizes = mean, scores, sizes
+        np.linalg.cholesky(cov)  # LinAlgError if not positive definite
+        self.precision = np.linalg.inv(cov)
+        self.scale, self.wide, self.wide_scale = float(scale), float(wide), float(wide_scale)
+        super().__init__(self._propose)
+
+    @classmethod
+    def fit(cls, draws, *, knots: int | None = None, scores: NormalScores | None = None,
+            **kwargs) -> "BlockMove | None":
+        """The move fitted to ``draws`` (n, ndim): the mean and covariance of their normal
+        scores, in the map ``scores`` if given (one already fitted to the same draws, such
+        as an ``IndependenceMove``'s) or else in their map with ``knots`` knots; None
+        where they define none."""
+        if scores is None and knots is None:
+            raise ValueError("a block move needs a normal-scores map or the knots to fit one")
+        draws = usable_draws(draws)
+        if draws is None:
+            return None
+        try:
+            scores = scores if scores is not None else NormalScores.fit(draws, knots)
+            z = scores.forward(draws)[0]
+            return cls(z.mean(axis=0), np.cov(z, rowvar=False), scores, **kwargs)
+        except (ValueError, np.linalg.LinAlgError):
+            return None
+
+    def _log_q(self, w) -> np.ndarray:
+        """Log density of the block's proposal (the defensive pair of normals, up to a
+        constant) at the rows of ``w`` (n, m), whitened by its conditional law."""
+        r2 = np.sum(w ** 2, axis=1)
+        m = w.shape[1]
+        narrow = -0.5 * r2
+        if self.wide == 0.0:
+            return narrow
+        wide = -0.5 * r2 / self.wide_scale ** 2 - m * np.log(self.wide_scale)
+        return np.logaddexp(np.log1p(-self.wide) + narrow, np.log(self.wide) + wide)
+
+    def _propose(self, coords, random):
+        x = np.array(coords, dtype=float)
+        n, d = x.shape
+        z, jac_old = self.scores.forward(x)
+        znew = z.copy()
+        moved = np.zeros((n, d), dtype=bool)
+        log_q = np.zeros(n)  # log q(old block) - log q(new block), in whitened block coordinates
+        sizes = np.asarray(self.sizes)[random.randint(len(self.sizes), size=n)]
+        for i in range(n):
+            block = np.sort(random.choice(d, size=sizes[i], replace=False))
+            rest = np.setdiff1d(np.arange(d), block)
+            # the block's conditional normal given the rest, from the precision matrix
+            cov_b = np.linalg.inv(self.precision[np.ix_(block, block)])
+            mean_b = self.mean[block] - cov_b @ (self.precision[np.ix_(block, rest)] @ (z[i, rest] - self.mean[rest]))
+            chol = np.linalg.cholesky(cov_b) * self.scale
+            width = self.wide_scale if random.rand() < self.wide else 1.0
+            w_new = width * random.randn(len(block))
+            znew[i, block] = mean_b + chol @ w_new
+            w_old = np.linalg.solve(chol, z[i, block] - mean_b)
+            log_q[i] = self._log_q(w_old[None])[0] - self._log_q(w_new[None])[0]
+            moved[i, block] = True
+        q = np.where(moved, self.scores.inverse(znew), x)  # the rest kept exactly
+        _, jac_new = self.scores.forward(q)  # the rest's slopes are the same in both
+        return q, log_q + jac_old - jac_new
