@@ -103,29 +103,12 @@ def _cpu_model() -> str:
     return platform.processor() or "unknown"
 
 
-def fit_record(
-    record: Record,
-    out,
-    *,
-    model: str = "two-port",
-    m_s: float | None = None,
-    m_B: float | None = None,
-    device=None,
-    walkers: int | None = None,
-    steps: int | None = None,
-    seed: int = 0,
-    fresh: bool = False,
-    processes: int = 1,
-    likelihood: LikelihoodSettings | None = None,
-    priors: dict | None = None,
-    convergence: Convergence | None = None,
-    progress=None,
-    report=None,
-    plots: bool = True,
-    coordinates: str = "impedance",
-    adaptation: Adaptation | None = Adaptation(),
-    checkpoint_seconds: float = WRITE_SECONDS,
-) -> FitResult:
+def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | None = None, m_B: float | None = None,
+               device=None, walkers: int | None = None, steps: int | None = None, seed: int = 0, fresh: bool = False,
+               processes: int = 1, likelihood: LikelihoodSettings | None = None, priors: dict | None = None,
+               convergence: Convergence | None = None, progress=None, report=None, plots: bool = True,
+               coordinates: str = "impedance", adaptation: Adaptation | None = Adaptation(),
+               checkpoint_seconds: float = WRITE_SECONDS) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
     ``coordinates``: where the walkers move (``coordinates.COORDINATES``; the outputs are
@@ -154,65 +137,32 @@ def fit_record(
     with folder_lock(out):
         out.mkdir(parents=True, exist_ok=True)
         t0 = time.perf_counter()
-        run = run_sampler(pm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, fresh=fresh,
-                          processes=processes, convergence=convergence, progress=progress, report=report, coordinates=coords,
-                          adaptation=adaptation, checkpoint_seconds=checkpoint_seconds)
-        t_sample = time.perf_counter() - t0
-        sample = posterior_sample(pm, run)
-        rows = summary_rows(sample)
-        ended = _flag(rows, end_state_warnings(pm, sample))
-        shrink = contraction(pm, sample)
+        got = _sample_into(out, pm, nwalkers=walkers, steps=steps, seed=seed, fresh=fresh, processes=processes,
+                           convergence=convergence, progress=progress, report=report, coordinates=coords,
+                           adaptation=adaptation, checkpoint_seconds=checkpoint_seconds)
+        run, sample = got.run, got.sample
         idata, sims = to_inference_data(pm, sample, rng=np.random.default_rng(seed + 1))
-        t_post = time.perf_counter() - t0 - t_sample
-        write_summary(out / "summary.csv", rows)
+        t_post = time.perf_counter() - t0 - got.seconds
         idata.to_netcdf(str(out / "posterior.nc"))
         write_loo(out, idata)
         if plots:
             _write_plots(out, pm, sample, sims)
-        t_total = time.perf_counter() - t0
-        info = {
-            "model": model, "converged": run.converged, "reason": run.reason,
-            "checkpoint_recovered": run.recovered,
-            "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
-            "tau": dict(zip(pm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
-            "transient": int(run.transient), "warmup": int(run.warmup),
+        info = _run_info(model, pm, got, seed, {
             "m_s": pm.m_s, "m_B": pm.m_B, "masses": masses.as_dict(), "b_theory_device_file": b_theory,
-            "warnings": [dataclasses.asdict(w) for w in ended],
-            "likelihood": dataclasses.asdict(pm.likelihood),
-            "stride": pm.stride, "priors": {n: p.describe() for n, p in pm.all_priors.items()},
-            "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
-            "moves": list(run.moves),
-            "coordinates": run.coordinates.describe(),
-            "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
-            "contraction": shrink,
-            "timings_s": {"sampling": t_sample, "posterior_draws": t_post, "total": t_total,
-                          **_sampling_all_runs(out, t_sample, run, fresh or run.start_theta is not None)},
-            "versions": versions(),
-            "record_metadata": record.metadata,
-        }
+            "stride": pm.stride, "record_metadata": record.metadata})
+        info["timings_s"] = {"sampling": got.seconds, "posterior_draws": t_post, "total": time.perf_counter() - t0,
+                             **_sampling_all_runs(out, got.seconds, run, fresh or run.start_theta is not None)}
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
-        return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, idata,
-                         info["timings_s"], shrink, run.recovered, warnings=ended, masses=masses, b_theory=b_theory)
+        return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, idata,
+                         info["timings_s"], got.shrink, run.recovered, warnings=got.ended, masses=masses,
+                         b_theory=b_theory)
 
 
-def fit_joint(
-    records,
-    out,
-    *,
-    centres: list[dict] | None = None,
-    walkers: int | None = None,
-    steps: int | None = None,
-    seed: int = 0,
-    processes: int = 1,
-    likelihood: LikelihoodSettings | None = None,
-    priors: dict | None = None,
-    convergence: Convergence | None = None,
-    progress=None,
-    report=None,
-    plots: bool = True,
-    coordinates: str = "impedance",
-    adaptation: Adaptation | None = Adaptation(),
-) -> FitResult:
+def fit_joint(records, out, *, centres: list[dict] | None = None, walkers: int | None = None, steps: int | None = None,
+              seed: int = 0, processes: int = 1, likelihood: LikelihoodSettings | None = None,
+              priors: dict | None = None, convergence: Convergence | None = None, progress=None, report=None,
+              plots: bool = True, coordinates: str = "impedance",
+              adaptation: Adaptation | None = Adaptation()) -> FitResult:
     """Sample the joint posterior of several records (``joint.JointModel``: shared
     frictions and deformations, one b per flywheel setting) into ``out``: chain.h5,
     summary.csv, fit.json, b_draws.npz (``DRAWS_FILE``), corner.png (the b's), trace.png.
@@ -247,56 +197,85 @@ def fit_joint(
             with pooled_log_prob(jm, processes) as log_prob:
                 return local_optimum(jm, jm.start(given), restarts=NM_RESTARTS, log_prob=log_prob)
 
-        run = run_sampler(jm, out / "chain.h5", nwalkers=walkers, steps=steps, seed=seed, processes=processes,
-                          convergence=convergence, progress=progress, report=report, start=start, coordinates=coords,
-                          adaptation=adaptation)
-        t_sample = time.perf_counter() - t0
-        sample = posterior_sample(jm, run)
-        rows = summary_rows(sample)
-        ended = _flag(rows, end_state_warnings(jm, sample))
-        shrink = contraction(jm, sample)
-        write_summary(out / "summary.csv", rows)
+        got = _sample_into(out, jm, nwalkers=walkers, steps=steps, seed=seed, processes=processes,
+                           convergence=convergence, progress=progress, report=report, start=start,
+                           coordinates=coords, adaptation=adaptation)
+        run, sample = got.run, got.sample
         nb = len(jm.settings)
         draws = {name: sample.values[:, :, i] for i, name in enumerate(jm.names[:nb])}
         np.savez_compressed(out / DRAWS_FILE, **draws)
         if plots:
-            import matplotlib.pyplot as plt
-
-            from .plots import plot_corner, plot_trace
-
-            flat = sample.values.reshape(-1, jm.ndim)
-            truths = [rec.metadata.get("true_parameters", {}).get("b") for rec in
-                      (next(r for r, s in zip(jm.records, jm.setting_of) if s == name) for name in jm.settings)]
-            figs = {"corner.png": plot_corner(flat[:, :nb], jm.names[:nb],
-                                              truths=truths if all(t is not None for t in truths) else None,
-                                              title=f"joint model, {len(jm.records)} records: inertance per setting"),
-                    "trace.png": plot_trace(sample.theta, jm.names, burn=sample.burn, thin=sample.thin)}
-            for name, fig in figs.items():
-                fig.savefig(out / name, dpi=100)
-                plt.close(fig)
-        t_total = time.perf_counter() - t0
-        info = {
-            "model": "joint", "converged": run.converged, "reason": run.reason,
-            "checkpoint_recovered": run.recovered,
-            "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
-            "tau": dict(zip(jm.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
-            "transient": int(run.transient), "warmup": int(run.warmup),
-            "records": joint_records(jm),
-            "warnings": [dataclasses.asdict(w) for w in ended],
-            "likelihood": dataclasses.asdict(jm.likelihood),
-            "priors": {n: p.describe() for n, p in jm.all_priors.items()},
-            "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
-            "moves": list(run.moves),
-            "coordinates": run.coordinates.describe(),
-            "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
-            "contraction": shrink,
-            "timings_s": {"sampling": t_sample, "total": t_total,
-                          **_sampling_all_runs(out, t_sample, run, run.start_theta is not None)},
-            "versions": versions(),
-        }
+            _write_joint_plots(out, jm, sample)
+        info = _run_info("joint", jm, got, seed, {"records": joint_records(jm)})
+        info["timings_s"] = {"sampling": got.seconds, "total": time.perf_counter() - t0,
+                             **_sampling_all_runs(out, got.seconds, run, run.start_theta is not None)}
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
-        return FitResult(out, rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"], shrink,
-                         run.recovered, draws, warnings=ended)
+        return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"],
+                         got.shrink, run.recovered, draws, warnings=got.ended)
+
+
+@dataclass(frozen=True)
+class _Sampled:
+    """A finished run, its kept draws and what is read from them."""
+
+    run: object
+    sample: object
+    rows: list
+    ended: list
+    shrink: dict
+    seconds: float
+
+
+def _sample_into(out: Path, model, **options) -> _Sampled:
+    """Run the sampler into ``out``/chain.h5 (``options``: ``run_sampler``'s), keep its
+    draws, flag its end state and write summary.csv."""
+    t0 = time.perf_counter()
+    run = run_sampler(model, out / "chain.h5", **options)
+    seconds = time.perf_counter() - t0
+    sample = posterior_sample(model, run)
+    rows = summary_rows(sample)
+    ended = _flag(rows, end_state_warnings(model, sample))
+    write_summary(out / "summary.csv", rows)
+    return _Sampled(run, sample, rows, ended, contraction(model, sample), seconds)
+
+
+def _run_info(name: str, model, got: _Sampled, seed: int, extra: dict) -> dict:
+    """fit.json's facts of a run (``extra``: the single-record or joint ones)."""
+    run, sample = got.run, got.sample
+    return {
+        "model": name, "converged": run.converged, "reason": run.reason, "checkpoint_recovered": run.recovered,
+        "iterations": int(run.iteration), "walkers": run.sampler.nwalkers, "seed": seed,
+        "tau": dict(zip(model.names, map(float, run.tau))), "burn_in": sample.burn, "thin": sample.thin,
+        "transient": int(run.transient), "warmup": int(run.warmup), **extra,
+        "warnings": [dataclasses.asdict(w) for w in got.ended],
+        "likelihood": dataclasses.asdict(model.likelihood),
+        "priors": {n: p.describe() for n, p in model.all_priors.items()},
+        "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
+        "moves": list(run.moves),
+        "coordinates": run.coordinates.describe(),
+        "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
+        "contraction": got.shrink,
+        "versions": versions(),
+    }
+
+
+def _write_joint_plots(out: Path, jm, sample) -> None:
+    """corner.png (the b's, with the records' true b's where all have one) and trace.png."""
+    import matplotlib.pyplot as plt
+
+    from .plots import plot_corner, plot_trace
+
+    nb = len(jm.settings)
+    flat = sample.values.reshape(-1, jm.ndim)
+    truths = [rec.metadata.get("true_parameters", {}).get("b") for rec in
+              (next(r for r, s in zip(jm.records, jm.setting_of) if s == name) for name in jm.settings)]
+    figs = {"corner.png": plot_corner(flat[:, :nb], jm.names[:nb],
+                                      truths=truths if all(t is not None for t in truths) else None,
+                                      title=f"joint model, {len(jm.records)} records: inertance per setting"),
+            "trace.png": plot_trace(sample.theta, jm.names, burn=sample.burn, thin=sample.thin)}
+    for name, fig in figs.items():
+        fig.savefig(out / name, dpi=100)
+        plt.close(fig)
 
 
 def joint_records(jm) -> list[str]:
