@@ -142,8 +142,8 @@ def test_adaptation_with_components_fits_a_mixture_and_says_so():
     still = rng.normal(0.0, 1.0, size=(300, 20))
     assert Adaptation(every=400).fit(chain, still)[0].components == 1
     assert Adaptation(every=400, components=3).fit(chain, still)[0].components >= 2
-    # a checkpoint records the kernel's description: one t in the sampler's coordinates
-    # (the default until 2026-11-25) describes it as before
+    # the kernel's description (in a run's moves and fit.json): one t in the sampler's
+    # coordinates (the default until 2026-11-25) describes it as before
     assert Adaptation(knots=None, blocks=0.0).describe().startswith("IndependenceMove 0.5 (t, dof 10,")
     assert "mixture of 3 t's" in Adaptation(components=3).describe()
 
@@ -209,7 +209,7 @@ def test_a_falling_tau_counts_as_settled_but_a_growing_one_does_not():
 def test_a_checkpoint_continues_only_with_the_kernel_it_was_sampled_with(model, tmp_path):
     import h5py
 
-    from bayes_inerter.inference.checkpoint import KERNEL_ATTR, CheckpointError, twin_path
+    from bayes_inerter.inference.checkpoint import IDENTITY_ATTR, CheckpointError, twin_path
 
     path = tmp_path / "c.h5"
     short = run_sampler(model, path, nwalkers=24, seed=5, steps=20, start=model.test_start, adaptation=Adaptation())
@@ -220,9 +220,13 @@ def test_a_checkpoint_continues_only_with_the_kernel_it_was_sampled_with(model, 
     with pytest.raises(CheckpointError, match="kernel"):
         run_sampler(model, path, nwalkers=24, seed=5, steps=40, start=model.test_start, adaptation=Adaptation(every=30))
     assert run_sampler(model, path, nwalkers=24, seed=5, steps=40, start=model.test_start).iteration == 40
-    # a checkpoint written before the kernel was recorded is continued with either
+    # a checkpoint of an earlier format (no identity: written before it was data) is
+    # refused, with either kernel; --fresh starts it over
     with h5py.File(path, "a") as f:
-        del f["mcmc"].attrs[KERNEL_ATTR]
+        del f["mcmc"].attrs[IDENTITY_ATTR]
     twin_path(path).unlink()
+    for adaptation in (None, Adaptation()):
+        with pytest.raises(CheckpointError, match="older version of bayes-inerter.*--fresh"):
+            run_sampler(model, path, nwalkers=24, seed=5, steps=50, start=model.test_start, adaptation=adaptation)
     assert run_sampler(model, path, nwalkers=24, seed=5, steps=50, start=model.test_start,
-                       adaptation=None).iteration == 50
+                       adaptation=None, fresh=True).iteration == 50

@@ -43,7 +43,6 @@ uninterrupted run gives.
 
 from __future__ import annotations
 
-import hashlib
 import math
 import multiprocessing
 import signal
@@ -52,21 +51,19 @@ from dataclasses import dataclass
 import emcee
 import numpy as np
 
-from .checkpoint import KERNEL_ATTR, WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint
+from .checkpoint import WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint
 from .coordinates import Coordinates, default_coordinates
+from .identity import run_identity
 from .marginals import KNOTS
 from .model import PosteriorModel
 from .moves import BlockMove, IndependenceMove, NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, sse
 
 __all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "SamplerStatus", "run_sampler",
-           "record_digest", "check_run_options", "default_moves", "transient"]
+           "check_run_options", "default_moves", "transient"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
-
-#: The kernel a checkpoint records when the ensemble moves run alone (``adaptation=None``).
-NO_ADAPTATION = "ensemble moves alone (no adaptation)"
 
 #: Share of a chain left out as warm-up before its convergence is judged and its draws
 #: kept (:class:`Convergence`), unless its transient is longer.
@@ -305,25 +302,6 @@ def _theta_chain(sampler, coords, discard=0, thin=1):
     return chain if coords is None else coords.to_theta(chain)
 
 
-def record_digest(model: PosteriorModel, coordinates: Coordinates | None = None) -> str:
-    """Identity of the data a checkpoint belongs to (record arrays and model settings);
-    for a joint model (``model.parts``), of every record's part and the joint names; and
-    of the coordinates its walkers moved in."""
-    h = hashlib.sha256()
-    parts = getattr(model, "parts", None)
-    for part in parts or [model]:
-        rec = part.record
-        for arr in (rec.time, rec.force, rec.accel):
-            h.update(np.ascontiguousarray(arr, dtype=float).tobytes())
-        h.update(repr((part.model, part.names, part.m_s, part.m_B, part.likelihood, sorted(
-            (k, repr(v)) for k, v in part.all_priors.items()))).encode())
-    if parts:
-        h.update(repr(("joint", model.names)).encode())
-    if coordinates is not None and coordinates.kind != "physical":  # physical: as before coordinates existed
-        h.update(repr(("coordinates", coordinates.describe())).encode())
-    return h.hexdigest()[:16]
-
-
 # The log-probability for worker processes: a top-level function over a module global set
 # before the pool forks, so that only the parameter vector is pickled per call.
 _MODEL: PosteriorModel | None = None
@@ -493,22 +471,19 @@ def run_sampler(
     checkpoint = Path(checkpoint)
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
     coords = coordinates if isinstance(coordinates, Coordinates) else default_coordinates(model, coordinates)
-    digest = record_digest(model, coords)
-    kernel = adaptation.describe() if adaptation is not None else NO_ADAPTATION
-    opened = open_checkpoint(checkpoint, digest=digest, nwalkers=nwalkers, ndim=model.ndim, fresh=fresh,
-                             kernel=kernel, write_seconds=checkpoint_seconds)
+    moves = moves or default_moves(model, coordinates=coords)
+    identity = run_identity(model, coords, adaptation, moves, nwalkers)
+    kernel = adaptation.describe() if adaptation is not None else None
+    opened = open_checkpoint(checkpoint, identity=identity, fresh=fresh, write_seconds=checkpoint_seconds)
     recovered = opened.recovered if opened else ""
     if opened is None or opened.steps == 0:
-        attrs = {"bayes_inerter_digest": digest, "parameter_names": ",".join(model.names), KERNEL_ATTR: kernel}
-        backend = new_checkpoint(checkpoint, nwalkers=nwalkers, ndim=model.ndim, attrs=attrs,
-                                 write_seconds=checkpoint_seconds)
+        backend = new_checkpoint(checkpoint, identity=identity, write_seconds=checkpoint_seconds)
         done = 0
     else:
         backend, done = opened.backend, opened.steps
     if report:
         report(SamplerStatus(done, done, steps))
     _MODEL, _COORDS = model, coords
-    moves = moves or default_moves(model, coordinates=coords)
     ensemble = tuple(f"{type(m).__name__} {w:.3g}" for m, w in moves)
     pool = multiprocessing.get_context("fork").Pool(processes, initializer=_ignore_interrupt) if processes > 1 else None
     _POOL = pool
