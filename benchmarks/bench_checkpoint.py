@@ -55,11 +55,13 @@ def main():
         b.reset(WALKERS, NDIM)
         return b
 
+    shape = {"nwalkers": WALKERS, "ndim": NDIM}  # the identity's shape suffices: nothing continues these
+
     def twin(path):
-        return new_checkpoint(path, nwalkers=WALKERS, ndim=NDIM, attrs={}, write_seconds=0.0)
+        return new_checkpoint(path, identity=shape, write_seconds=0.0)
 
     def held(path):
-        return new_checkpoint(path, nwalkers=WALKERS, ndim=NDIM, attrs={}, write_seconds=WRITE_SECONDS)
+        return new_checkpoint(path, identity=shape, write_seconds=WRITE_SECONDS)
 
     rec = generate_record(paper_parameters("A3"), 1.0, rng=0, setting_name="A3")
     model = PosteriorModel(rec)

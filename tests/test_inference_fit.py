@@ -365,7 +365,7 @@ def test_kill_between_random_state_and_step_count(tmp_path, record_file, ten_ste
 def test_intact_checkpoint_continues(tmp_path, record_file, ten_steps):
     out = tmp_path / "fit"
     assert _fit(record_file, out, 5) == 0
-    (out / "chain.twin.h5").unlink()  # a checkpoint written before the twin existed has none
+    (out / "chain.twin.h5").unlink()  # a lost twin: the run continues from chain.h5 and writes it again
     assert _fit(record_file, out, 10) == 0
     np.testing.assert_array_equal(_chain(out / "chain.h5"), ten_steps)
     np.testing.assert_array_equal(read_chain(out / "chain.h5"), ten_steps)
@@ -373,9 +373,11 @@ def test_intact_checkpoint_continues(tmp_path, record_file, ten_steps):
 
 def test_steps_held_between_writes_are_counted_read_and_lost_only_to_a_kill(tmp_path):
     from bayes_inerter.inference.checkpoint import new_checkpoint, open_checkpoint
+    from bayes_inerter.inference.identity import CHECKPOINT_FORMAT
 
     path = tmp_path / "chain.h5"
-    backend = new_checkpoint(path, nwalkers=4, ndim=2, attrs={"bayes_inerter_digest": "d"}, write_seconds=3600.0)
+    identity = {"format": CHECKPOINT_FORMAT, "nwalkers": 4, "ndim": 2}
+    backend = new_checkpoint(path, identity=identity, write_seconds=3600.0)
     rng = np.random.default_rng(0)
     states = [emcee.State(rng.normal(size=(4, 2)), log_prob=rng.normal(size=4), blobs=rng.normal(size=4),
                           random_state=np.random.RandomState(k).get_state()) for k in range(8)]
@@ -390,11 +392,11 @@ def test_steps_held_between_writes_are_counted_read_and_lost_only_to_a_kill(tmp_
         backend.save_step(state, np.ones(4, dtype=bool))
     assert backend.iteration == 8 and steps_written(path) == 5
     del backend  # killed: the three steps held are lost, the five written are intact
-    opened = open_checkpoint(path, digest="d", nwalkers=4, ndim=2)
+    opened = open_checkpoint(path, identity=identity)
     assert opened.steps == 5 and not opened.recovered
     np.testing.assert_array_equal(read_chain(path), [s.coords for s in states[:5]])
     # written every step with 0 seconds, and the twin brought up to date by flush
-    backend = new_checkpoint(tmp_path / "every.h5", nwalkers=4, ndim=2, attrs={}, write_seconds=0.0)
+    backend = new_checkpoint(tmp_path / "every.h5", identity=identity, write_seconds=0.0)
     backend.grow(3, states[0].blobs)
     for k, state in enumerate(states[:3]):
         backend.save_step(state, np.ones(4, dtype=bool))
@@ -402,7 +404,7 @@ def test_steps_held_between_writes_are_counted_read_and_lost_only_to_a_kill(tmp_
     backend.flush()
     assert steps_written(tmp_path / "every.twin.h5") == 3
     with pytest.raises(ValueError, match="non-negative"):
-        new_checkpoint(tmp_path / "bad.h5", nwalkers=4, ndim=2, attrs={}, write_seconds=-1.0)
+        new_checkpoint(tmp_path / "bad.h5", identity=identity, write_seconds=-1.0)
     assert not (tmp_path / "bad.h5").exists()  # refused before any file is made
 
 

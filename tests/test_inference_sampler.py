@@ -100,7 +100,7 @@ def test_a_run_stopped_between_refits_continues_to_the_uninterrupted_chain(model
 def test_a_checkpoint_continues_only_with_the_kernel_it_was_sampled_with(model, tmp_path):
     import h5py
 
-    from bayes_inerter.inference.checkpoint import KERNEL_ATTR, CheckpointError, twin_path
+    from bayes_inerter.inference.checkpoint import IDENTITY_ATTR, CheckpointError, twin_path
 
     path = tmp_path / "c.h5"
     short = run_sampler(model, path, nwalkers=24, seed=5, steps=20, start=model.test_start, adaptation=Adaptation())
@@ -111,9 +111,13 @@ def test_a_checkpoint_continues_only_with_the_kernel_it_was_sampled_with(model, 
     with pytest.raises(CheckpointError, match="kernel"):
         run_sampler(model, path, nwalkers=24, seed=5, steps=40, start=model.test_start, adaptation=Adaptation(every=30))
     assert run_sampler(model, path, nwalkers=24, seed=5, steps=40, start=model.test_start).iteration == 40
-    # a checkpoint written before the kernel was recorded is continued with either
+    # a checkpoint of an earlier format (no identity: written before it was data) is
+    # refused, with either kernel; --fresh starts it over
     with h5py.File(path, "a") as f:
-        del f["mcmc"].attrs[KERNEL_ATTR]
+        del f["mcmc"].attrs[IDENTITY_ATTR]
     twin_path(path).unlink()
+    for adaptation in (None, Adaptation()):
+        with pytest.raises(CheckpointError, match="older version of bayes-inerter.*--fresh"):
+            run_sampler(model, path, nwalkers=24, seed=5, steps=50, start=model.test_start, adaptation=adaptation)
     assert run_sampler(model, path, nwalkers=24, seed=5, steps=50, start=model.test_start,
-                       adaptation=None).iteration == 50
+                       adaptation=None, fresh=True).iteration == 50

@@ -24,10 +24,8 @@ from .convergence import transient
 from .marginals import KNOTS
 from .moves import BlockMove, IndependenceMove
 
-__all__ = ["Adaptation", "Schedule", "NO_ADAPTATION", "STRETCH"]
+__all__ = ["Adaptation", "Schedule", "STRETCH"]
 
-#: The kernel a run records when the ensemble moves run alone (``adaptation=None``).
-NO_ADAPTATION = "ensemble moves alone (no adaptation)"
 
 #: Steps in one stretch of a run without adaptation (the moves never change there; a
 #: stretch only bounds how far the checkpoint is grown ahead).

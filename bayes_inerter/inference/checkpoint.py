@@ -1,23 +1,19 @@
-"""Crash-safe emcee checkpoints: two HDF5 files written in turn, each sealed per step.
+"""Crash-safe emcee checkpoints: opening, checking, recovering and starting them.
 
-emcee's ``HDFBackend`` writes each step in place. A process killed in the middle of such
-a write can leave the file unreadable (seen here: HDF5's 'addr overflow'), or readable
-but with the random state of step k beside the step count of step k - 1 (emcee writes
-the random state before it counts the step), so that the continued chain is no longer
-the one an uninterrupted run gives.
+A checkpoint is two HDF5 files, ``chain.h5`` and its twin ``chain.twin.h5``, written in
+turn and each sealed per write by :class:`.twin_backend.TwinBackend` (its module says
+why and how). A run that continues a checkpoint takes the longer intact file, puts the
+step count, acceptance counts and random state back to what its seal says, and copies
+it over its twin. A file that cannot be read or whose steps do not match its seal is
+never overwritten: it is moved aside to ``<name>.damaged`` (numbered if one exists) and
+the run says so. When neither file is intact the run stops with :class:`CheckpointError`.
 
-Here the steps go to ``chain.h5`` as they are taken, at most :data:`WRITE_SECONDS` apart
-(every step of a run whose steps take longer), and, every :data:`TWIN_EVERY` steps and
-when the run ends, to ``chain.twin.h5``. Each write *seals* its file in the same open:
-one attribute that holds the number of steps it vouches for, a sha256 chained over those
-steps (positions, log probabilities, blobs), the acceptance counts and the sampler's
-random state after the last of them. A kill can damage at most the one file being
-written at that moment; the other is intact, and at most ``TWIN_EVERY`` steps behind. A
-run that continues a checkpoint takes the longer intact file, puts the step count,
-acceptance counts and random state back to what its seal says, and copies it over its
-twin. A file that cannot be read or whose steps do not match its seal is never
-overwritten: it is moved aside to ``<name>.damaged`` (numbered if one exists) and the
-run says so. When neither file is intact the run stops with :class:`CheckpointError`.
+Each file holds the identity of the run that wrote it (:func:`.identity.run_identity`)
+as one JSON attribute, :data:`IDENTITY_ATTR`; a run continues only a checkpoint of its
+own identity, compared field by field (:func:`.identity.mismatch`), and refuses any
+other with a one-line :class:`CheckpointError` that names the field and the fix.
+Checkpoints of an earlier format (without that attribute: written before the identity
+was data, or before the twin file) are refused too: their run starts over (``--fresh``).
 
 This protects against the process being killed (SIGKILL, out of memory, a closed
 terminal), not against the machine losing power: the files are not fsync'ed per step.
@@ -28,240 +24,37 @@ run writes them as it stops).
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shutil
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import emcee
 import numpy as np
 
-__all__ = ["CheckpointError", "Checkpoint", "open_checkpoint", "new_checkpoint", "read_chain", "steps_written",
-           "twin_path", "WRITE_SECONDS", "check_write_seconds"]
+from .identity import mismatch
+from .twin_backend import (GROUP, WRITE_SECONDS, TwinBackend, check_write_seconds, restore_seal, sealed_steps,
+                           twin_path, write_empty)
 
-GROUP = "mcmc"
-_SEAL = "bayes_inerter_seal"
-#: Older checkpoints (before the twin file): a chained sha256 and the steps it covers.
-_OLD_SUM, _OLD_SUMMED = "bayes_inerter_chain_sha256", "bayes_inerter_summed_steps"
+__all__ = ["CheckpointError", "Checkpoint", "open_checkpoint", "new_checkpoint", "read_chain", "steps_written",
+           "twin_path", "WRITE_SECONDS", "check_write_seconds", "IDENTITY_ATTR"]
+
+#: The attribute of each file's chain group that holds its run's identity (JSON).
+IDENTITY_ATTR = "bayes_inerter_identity"
 
 
 class CheckpointError(ValueError):
-    """A checkpoint that cannot be continued (damaged, or made for another run)."""
-
-
-def twin_path(path) -> Path:
-    """The second file of a checkpoint: ``chain.h5`` -> ``chain.twin.h5``."""
-    path = Path(path)
-    return path.with_name(path.stem + ".twin" + path.suffix)
-
-
-class _Backend(emcee.backends.HDFBackend):
-    """emcee's HDF5 backend, opening the file without HDF5's advisory lock.
-
-    With the lock, anyone reading ``chain.h5`` while a run writes it (h5py, a viewer)
-    makes the run's next write fail with BlockingIOError and the run stop (seen here).
-    A reader may then see a step half-written; the writer never fails. Same logic as
-    ``HDFBackend.open`` (emcee 3.1) otherwise.
-    """
-
-    def open(self, mode="r"):
-        import h5py
-
-        if self.read_only and mode != "r":
-            raise RuntimeError("the backend is read-only")
-        f = h5py.File(self.filename, mode, locking=False)
-        if not self.dtype_set and self.name in f:
-            g = f[self.name]
-            if "chain" in g:
-                self.dtype = g["chain"].dtype
-                self.dtype_set = True
-        return f
-
-
-#: The twin file is brought up to date every this many steps (and when a run ends or
-#: stops): a kill that damages chain.h5 costs at most this many steps, which the
-#: continued run takes again, identically. Writing the twin at every step would double
-#: the checkpoint's cost for nothing a continued run needs.
-TWIN_EVERY = 10
-
-#: Steps are written to chain.h5 at most this many seconds apart (default 0.5; 0: every
-#: step). A write costs about 2 ms however many steps it carries;
-#: at every step it was about 10 % of a two-port step's 24 evaluations, and a kill loses
-#: at most this much sampling (the continued run takes it again, identically).
-WRITE_SECONDS = 0.5
-
-
-def check_write_seconds(seconds: float) -> float:
-    """``seconds`` as the interval between writes (:data:`WRITE_SECONDS`), or ValueError."""
-    if not seconds >= 0:
-        raise ValueError(f"checkpoint write interval must be a non-negative number of seconds, got {seconds}")
-    return float(seconds)
-
-
-class TwinBackend(_Backend):
-    """Writes and seals the steps in its own file in one open, at most ``write_seconds``
-    apart (every step where steps take longer), and the same steps in the twin file every
-    ``twin_every`` steps and on :meth:`flush`; reads from its own, after writing what it
-    holds."""
-
-    def __init__(self, filename, twin_every: int = TWIN_EVERY, write_seconds: float = WRITE_SECONDS, **kwargs):
-        self.write_seconds = check_write_seconds(write_seconds)
-        super().__init__(str(filename), name=GROUP, **kwargs)
-        self.twin = _Backend(str(twin_path(filename)), name=GROUP, **kwargs)
-        self.twin_every = twin_every
-        self._held = []  # steps taken and not yet written to chain.h5
-        self._last_write = time.monotonic()
-        self._pending = []  # steps written to chain.h5 and not yet to the twin
-        self._sums = {}  # file -> running sha256 over its sealed steps, read from its seal once
-        self._facts = {}  # iteration, shape, has_blobs: read from chain.h5 once, kept up to date here
-
-    # emcee's HDF5 backend opens the file for each of these, and emcee's check of every
-    # step asks four times, the progress bar once more: five opens of chain.h5 a step
-    # besides the write, about 3 ms of a two-port step's 24 evaluations of about 1 ms.
-    # This backend is the only writer of chain.h5 while a run holds it, so it answers
-    # from what it read once and what it wrote since.
-    def _fact(self, name: str, read):
-        if name not in self._facts:
-            self._facts[name] = read()
-        return self._facts[name]
-
-    @property
-    def iteration(self):
-        """Steps taken, the ones not yet written included."""
-        return self._fact("iteration", lambda: int(_Backend.iteration.fget(self))) + len(self._held)
-
-    # everything read from the file comes after the steps held are written
-    def get_value(self, name, flat=False, thin=1, discard=0):
-        self._write_held()
-        return super().get_value(name, flat=flat, thin=thin, discard=discard)
-
-    @property
-    def accepted(self):
-        self._write_held()
-        return _Backend.accepted.fget(self)
-
-    @property
-    def random_state(self):
-        self._write_held()
-        return _Backend.random_state.fget(self)
-
-    @property
-    def shape(self):
-        return self._fact("shape", lambda: tuple(int(v) for v in _Backend.shape.fget(self)))
-
-    def has_blobs(self):
-        return self._fact("has_blobs", lambda: bool(_Backend.has_blobs(self)))
-
-    def reset(self, nwalkers, ndim):  # pragma: no cover - new_checkpoint makes the files
-        self._facts = {}
-        super().reset(nwalkers, ndim)
-        self.twin.reset(nwalkers, ndim)
-
-    def grow(self, ngrow, blobs):
-        self._write_held()  # emcee grows from the file's step count
-        super().grow(ngrow, blobs)
-        self._facts.pop("has_blobs", None)  # the first growth with blobs sets it (after asking)
-        self.twin.grow(ngrow, blobs)
-
-    def save_step(self, state, accepted):
-        self._check(state, accepted)
-        row = (np.array(state.coords), np.array(state.log_prob),
-               None if state.blobs is None else np.array(state.blobs), np.asarray(accepted), state.random_state)
-        self._held.append(row)
-        if time.monotonic() - self._last_write >= self.write_seconds:
-            self._write_held()
-            if len(self._pending) >= self.twin_every:
-                self.flush()
-
-    def _write_held(self) -> None:
-        """Write the steps held to chain.h5 (sealed); the twin's turn comes later."""
-        if self._held:
-            # a write stopped part-way (Ctrl-C inside it) loses these steps, as a kill
-            # would: chain.h5 may be damaged, and the twin gets only what was written
-            rows, self._held = self._held, []
-            self._append(self.filename, rows)
-            self._pending.extend(rows)
-        self._last_write = time.monotonic()
-
-    def flush(self) -> None:
-        """Write every step held to chain.h5 and bring the twin file up to date (called
-        every ``twin_every`` steps and when a run ends or stops)."""
-        self._write_held()
-        if self._pending:
-            self._append(self.twin.filename, self._pending)
-            self._pending = []
-
-    def _append(self, filename, rows) -> None:
-        """Write ``rows`` (steps) and the seal that covers them, in one open of the file."""
-        import h5py
-
-        with h5py.File(filename, "a", locking=False) as f:
-            g = f[GROUP]
-            it = int(g.attrs["iteration"])
-            if filename not in self._sums:
-                seal = json.loads(g.attrs[_SEAL]) if _SEAL in g.attrs else None
-                if seal is None or seal["steps"] != it:  # not sealed up to here: hash from the start
-                    self._sums[filename] = _rows_hash(g, 0, it, b"")
-                else:
-                    self._sums[filename] = bytes.fromhex(seal["sha256"])
-            h = self._sums[filename]
-            need = it + len(rows)
-            sets = [(k, g[name]) for k, name in enumerate(("chain", "log_prob", "blobs")) if name in g]
-            dtypes = [ds.dtype for _, ds in sets]
-            for _, ds in sets:
-                if ds.shape[0] < need:
-                    ds.resize(need, axis=0)
-            for i, row in enumerate(rows):
-                stored = [np.asarray(row[k], dtype=dt) for (k, _), dt in zip(sets, dtypes)]
-                for (_, ds), v in zip(sets, stored):
-                    ds[it + i] = v
-                h = _step_hash(h, *stored)
-            acc = g["accepted"]
-            accepted = acc[:] + np.sum([r[3] for r in rows], axis=0).astype(acc.dtype)
-            acc[:] = accepted
-            random_state = rows[-1][4]
-            for i, v in enumerate(random_state):
-                g.attrs[f"random_state_{i}"] = v
-            g.attrs["iteration"] = need
-            g.attrs[_SEAL] = _seal_text(need, h, accepted, random_state)
-            self._sums[filename] = h
-        if filename == self.filename:
-            self._facts["iteration"] = need
-
-
-def _step_hash(h: bytes, *rows) -> bytes:
-    return hashlib.sha256(h + b"".join(np.ascontiguousarray(r).tobytes() for r in rows)).digest()
-
-
-def _rows_hash(g, start: int, stop: int, h: bytes, names=("chain", "log_prob", "blobs")) -> bytes:
-    names = [n for n in names if n in g]
-    if stop > start:
-        blocks = [g[n][start:stop] for n in names]
-        for i in range(stop - start):
-            h = _step_hash(h, *(b[i] for b in blocks))
-    return h
-
-
-def _seal_text(steps: int, h: bytes, accepted, random_state) -> str:
-    """The seal attribute: the steps it vouches for, their running sha256, the acceptance
-    counts and numpy's random state after the last of them (None before any step)."""
-    rs = None if random_state is None else [
-        str(random_state[0]), np.asarray(random_state[1]).tolist(), int(random_state[2]), int(random_state[3]),
-        float(random_state[4])]
-    return json.dumps({"steps": steps, "sha256": h.hex(), "accepted": np.asarray(accepted).tolist(),
-                       "random_state": rs})
+    """A checkpoint that cannot be continued (damaged, of an earlier format, or made for
+    another run)."""
 
 
 @dataclass(frozen=True)
 class _Inspection:
     path: Path
-    status: str  # "missing", "empty" (no chain group), "intact" or "damaged"
+    status: str  # "missing", "empty" (no chain group), "old" (an earlier format), "intact" or "damaged"
     steps: int = 0
     why: str = ""
-    attrs: dict | None = None
+    identity: dict | None = None
 
 
 def _inspect(path: Path) -> _Inspection:
@@ -274,39 +67,15 @@ def _inspect(path: Path) -> _Inspection:
             if GROUP not in f:
                 return _Inspection(path, "empty")
             g = f[GROUP]
-            attrs = dict(g.attrs)
-            if _SEAL in attrs:
-                seal = json.loads(attrs[_SEAL])
-                n = int(seal["steps"])
-                if n > g["chain"].shape[0] or _rows_hash(g, 0, n, b"").hex() != seal["sha256"]:
-                    return _Inspection(path, "damaged", why="its steps do not match their checksum")
-            elif _OLD_SUM in attrs:  # written before the twin file existed: chain and log_prob summed
-                if _rows_hash(g, 0, int(attrs[_OLD_SUMMED]), b"", ("chain", "log_prob")).hex() != attrs[_OLD_SUM]:
-                    return _Inspection(path, "damaged", why="its steps do not match their checksum")
-                n = int(attrs["iteration"])
-            else:
-                n = int(attrs["iteration"])
-            return _Inspection(path, "intact", n, attrs=attrs)
+            if IDENTITY_ATTR not in g.attrs:  # an earlier format: refused, its steps not read
+                return _Inspection(path, "old", identity={})
+            identity = json.loads(g.attrs[IDENTITY_ATTR])
+            n = sealed_steps(g)
+            if n is None:
+                return _Inspection(path, "damaged", why="its steps do not match their checksum")
+            return _Inspection(path, "intact", n, identity=identity)
     except Exception as exc:  # h5py raises OSError, KeyError, ValueError for damaged files
         return _Inspection(path, "damaged", why=f"it is unreadable or truncated ({type(exc).__name__})")
-
-
-def _restore(path: Path) -> None:
-    """Put the step count, acceptance counts and random state back to the seal's."""
-    import h5py
-
-    with h5py.File(path, "a", locking=False) as f:
-        g = f[GROUP]
-        if _SEAL not in g.attrs:
-            return
-        seal = json.loads(g.attrs[_SEAL])
-        g.attrs["iteration"] = seal["steps"]
-        g["accepted"][:] = np.asarray(seal["accepted"], dtype=g["accepted"].dtype)
-        rs = seal["random_state"]
-        if rs is not None:
-            values = [rs[0], np.asarray(rs[1], dtype=np.uint32), int(rs[2]), int(rs[3]), float(rs[4])]
-            for i, v in enumerate(values):
-                g.attrs[f"random_state_{i}"] = v
 
 
 def _copy_atomically(src: Path, dst: Path) -> None:
@@ -334,19 +103,15 @@ class Checkpoint:
     recovered: str = ""
 
 
-#: The checkpoint attribute naming the sampler's kernel (``open_checkpoint``'s ``kernel``).
-KERNEL_ATTR = "bayes_inerter_kernel"
-
-
-def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool = False,
-                    kernel: str | None = None, write_seconds: float = WRITE_SECONDS) -> Checkpoint | None:
-    """Open the checkpoint at ``path`` (and its twin) to continue it.
+def open_checkpoint(path, *, identity: dict, fresh: bool = False,
+                    write_seconds: float = WRITE_SECONDS) -> Checkpoint | None:
+    """Open the checkpoint at ``path`` (and its twin) to continue it as the run
+    ``identity`` (:func:`.identity.run_identity`).
 
     Returns None when there is nothing to continue (no files, or ``fresh``: both are
-    deleted). Raises :class:`CheckpointError` when no intact copy exists, or the intact
-    one belongs to another record, model or settings, or has another shape, or (with
-    ``kernel``) was sampled with another kernel than ``kernel`` (its :data:`KERNEL_ATTR`;
-    a checkpoint written before the attribute was kept says nothing and is continued).
+    deleted). Raises :class:`CheckpointError` when a file that can be read is of an
+    earlier format or belongs to another run (its identity differs from ``identity``:
+    the message names the first field that does), or when no intact copy exists.
     ``write_seconds`` is checked before any file is touched.
     """
     check_write_seconds(write_seconds)
@@ -356,6 +121,10 @@ def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool 
         for p in (path, twin):
             p.unlink(missing_ok=True)  # the user asked to start over
     seen = [_inspect(path), _inspect(twin)]
+    for s in seen:
+        found = mismatch(s.identity, identity) if s.status in ("old", "intact") else None
+        if found is not None:
+            raise CheckpointError(f"{s.path}: the checkpoint was written {found.what}; {found.fix}")
     intact = [s for s in seen if s.status == "intact"]
     damaged = [s for s in seen if s.status == "damaged"]
     if not intact:
@@ -366,53 +135,32 @@ def open_checkpoint(path, *, digest: str, nwalkers: int, ndim: int, fresh: bool 
                 "left as it is: move it away to keep it, or run with --fresh to start over"
             )
         return None
-    for s in intact:
-        if s.attrs.get("bayes_inerter_digest") != digest:
-            raise CheckpointError(
-                f"{s.path}: checkpoint belongs to another record, model, settings or sampler coordinates "
-                "(a chain written before the impedance coordinates continues with --coordinates physical); "
-                "use another output folder, or --fresh to start over"
-            )
-        written = s.attrs.get(KERNEL_ATTR)
-        if kernel is not None and written is not None and str(written) != kernel:
-            raise CheckpointError(
-                f"{s.path}: checkpoint was sampled with {written}; this run's kernel is {kernel}, and "
-                "continuing would change the kernel mid-chain: run with the same adaptation setting "
-                "(--no-adaptation or not), or --fresh to start over"
-            )
-        shape = (int(s.attrs["nwalkers"]), int(s.attrs["ndim"]))
-        if shape != (nwalkers, ndim):
-            raise CheckpointError(
-                f"{s.path}: checkpoint has {shape[0]} walkers and {shape[1]} parameters, this run "
-                f"{nwalkers} and {ndim}; use the same --walkers, or --fresh"
-            )
     best = max(intact, key=lambda s: s.steps)  # max keeps the first (chain.h5) on a tie
     notes = [f"{s.path.name} {s.why}: kept as {_move_aside(s.path).name}" for s in damaged]
     other = twin if best.path == path else path
     _copy_atomically(best.path, other)
     for p in (other, best.path):
-        _restore(p)
+        restore_seal(p)
     recovered = ""
     if notes:
         recovered = "; ".join(notes) + f"; continuing from {best.path.name} ({best.steps} steps)"
     return Checkpoint(TwinBackend(path, write_seconds=write_seconds), best.steps, recovered)
 
 
-def new_checkpoint(path, *, nwalkers: int, ndim: int, attrs: dict,
-                   write_seconds: float = WRITE_SECONDS) -> TwinBackend:
-    """Make both files of a new, empty checkpoint; each appears whole or not at all (none
-    for a bad ``write_seconds``)."""
+def new_checkpoint(path, *, identity: dict, write_seconds: float = WRITE_SECONDS) -> TwinBackend:
+    """Make both files of a new, empty checkpoint of the run ``identity``
+    (:func:`.identity.run_identity`: its ``nwalkers`` and ``ndim`` give the chain's
+    shape, its model's parameters the attribute ``parameter_names``); each file appears
+    whole or not at all (none for a bad ``write_seconds``)."""
     check_write_seconds(write_seconds)
     path = Path(path)
     tmp = path.with_name(path.name + ".new")
     tmp.unlink(missing_ok=True)
-    b = _Backend(str(tmp), name=GROUP)
-    b.reset(nwalkers, ndim)
-    with b.open("a") as f:
-        g = f[GROUP]
-        for k, v in attrs.items():
-            g.attrs[k] = v
-        g.attrs[_SEAL] = _seal_text(0, b"", g["accepted"][:], None)
+    attrs = {IDENTITY_ATTR: json.dumps(identity, allow_nan=False)}
+    names = (identity.get("model") or {}).get("parameters")
+    if names:
+        attrs["parameter_names"] = ",".join(names)
+    write_empty(tmp, int(identity["nwalkers"]), int(identity["ndim"]), attrs)
     _copy_atomically(tmp, twin_path(path))
     os.replace(tmp, path)
     return TwinBackend(path, write_seconds=write_seconds)
@@ -425,9 +173,12 @@ def read_chain(path) -> np.ndarray:
     import h5py
 
     path = Path(path)
-    intact = [s for s in (_inspect(path), _inspect(twin_path(path))) if s.status == "intact"]
+    seen = [_inspect(path), _inspect(twin_path(path))]
+    intact = [s for s in seen if s.status == "intact"]
     if not intact:
-        raise CheckpointError(f"{path}: no intact checkpoint there")
+        older = any(s.status == "old" for s in seen)
+        raise CheckpointError(f"{path}: no intact checkpoint there"
+                              + (" (it was written by an older version of bayes-inerter)" if older else ""))
     best = max(intact, key=lambda s: s.steps)
     with h5py.File(best.path, "r", locking=False) as f:
         return f[GROUP]["chain"][: best.steps].copy()

@@ -337,7 +337,7 @@ class Coordinates:
         return float(np.nanmax(self.impedance.sensitivity_change(theta)))
 
     def describe(self) -> str:
-        """One line naming the coordinates (stored with a checkpoint and in fit.json)."""
+        """One line naming the coordinates (in fit.json; a checkpoint stores their fields)."""
         if self.impedance is None:
             return self.kind
         imp = self.impedance

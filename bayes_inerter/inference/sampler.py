@@ -26,7 +26,6 @@ theta. The convergence rule: :mod:`.convergence`; the fitted moves: :mod:`.adapt
 from __future__ import annotations
 
 import functools
-import hashlib
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,17 +35,18 @@ import emcee
 import numpy as np
 
 from ..executor import Executor, make_executor
-from .adaptation import NO_ADAPTATION, Adaptation, Schedule
-from .checkpoint import KERNEL_ATTR, WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint
+from .adaptation import Adaptation, Schedule
+from .checkpoint import WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint
 from .convergence import WARMUP, Check, Convergence, Monitor, check_chain, is_converged, transient, why_not
 from .coordinates import Coordinates, default_coordinates
+from .identity import run_identity
 from .model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble
 from .target import Target, sse_at
 
 __all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "SamplerStatus", "sample", "run_sampler",
-           "record_digest", "check_run_options", "default_moves", "default_walkers", "transient", "WARMUP"]
+           "check_run_options", "default_moves", "default_walkers", "transient", "WARMUP"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
@@ -144,25 +144,6 @@ def _theta_chain(sampler, coords, discard=0, thin=1):
     return chain if coords is None else coords.to_theta(chain)
 
 
-def record_digest(model: PosteriorModel, coordinates: Coordinates | None = None) -> str:
-    """Identity of the data a checkpoint belongs to (record arrays and model settings);
-    for a joint model (``model.parts``), of every record's part and the joint names; and
-    of the coordinates its walkers moved in."""
-    h = hashlib.sha256()
-    parts = getattr(model, "parts", None)
-    for part in parts or [model]:
-        rec = part.record
-        for arr in (rec.time, rec.force, rec.accel):
-            h.update(np.ascontiguousarray(arr, dtype=float).tobytes())
-        h.update(repr((part.model, part.names, part.m_s, part.m_B, part.likelihood, sorted(
-            (k, repr(v)) for k, v in part.all_priors.items()))).encode())
-    if parts:
-        h.update(repr(("joint", model.names)).encode())
-    if coordinates is not None and coordinates.kind != "physical":  # physical: as before coordinates existed
-        h.update(repr(("coordinates", coordinates.describe())).encode())
-    return h.hexdigest()[:16]
-
-
 def check_run_options(ndim: int, nwalkers: int | None, steps: int | None) -> int:
     """Validate walkers and steps; return the number of walkers (default
     :func:`default_walkers`)."""
@@ -230,7 +211,8 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     coords = coordinates if isinstance(coordinates, Coordinates) else default_coordinates(model, coordinates)
     target = Target(model, coords)
     schedule = Schedule(moves or default_moves(model, coordinates=coords), adaptation)
-    backend, done, recovered = _open(Path(checkpoint), model, coords, adaptation, nwalkers, fresh, checkpoint_seconds)
+    identity = run_identity(model, coords, adaptation, schedule.base, nwalkers)
+    backend, done, recovered = _open(Path(checkpoint), identity, fresh, checkpoint_seconds)
     if report:
         report(SamplerStatus(done, done, steps))
     with make_executor(processes, state=target) as executor:
@@ -295,18 +277,13 @@ def _until_converged(stepping, backend, coords, conv: Convergence, done: int, pr
     return check()  # not reached: the last step is a check at max_steps
 
 
-def _open(checkpoint: Path, model: PosteriorModel, coords: Coordinates, adaptation: Adaptation | None,
-          nwalkers: int, fresh: bool, write_seconds: float):
-    """The checkpoint's back end, the steps it holds, and what was done to recover it."""
-    digest = record_digest(model, coords)
-    kernel = adaptation.describe() if adaptation is not None else NO_ADAPTATION
-    opened = open_checkpoint(checkpoint, digest=digest, nwalkers=nwalkers, ndim=model.ndim, fresh=fresh,
-                             kernel=kernel, write_seconds=write_seconds)
+def _open(checkpoint: Path, identity: dict, fresh: bool, write_seconds: float):
+    """The checkpoint's back end for the run ``identity`` (:mod:`.identity`), the steps it
+    holds, and what was done to recover it."""
+    opened = open_checkpoint(checkpoint, identity=identity, fresh=fresh, write_seconds=write_seconds)
     if opened is not None and opened.steps > 0:
         return opened.backend, opened.steps, opened.recovered
-    attrs = {"bayes_inerter_digest": digest, "parameter_names": ",".join(model.names), KERNEL_ATTR: kernel}
-    backend = new_checkpoint(checkpoint, nwalkers=nwalkers, ndim=model.ndim, attrs=attrs,
-                             write_seconds=write_seconds)
+    backend = new_checkpoint(checkpoint, identity=identity, write_seconds=write_seconds)
     return backend, 0, opened.recovered if opened else ""
 
 
