@@ -22,6 +22,7 @@ from scipy import signal
 
 from .. import _stiff
 from ..device import FREQUENCIES_HZ, SETTINGS, InerterParameters, paper_parameters
+from ..friction import STRIBECK_RATIO, STRIBECK_VELOCITY, make_law
 from ..models import build_network
 from ..network import Backlash, Deformation, Network, compile_network
 from ..simulate import run_piecewise_linear
@@ -66,6 +67,9 @@ class GeneratorSettings:
     tail : time simulated past the end and cut, s (keeps filter end effects out).
     network : truth network, "reduced" (default) or "full" (adds the sin(theta) nut friction).
     friction : truth friction law, "coulomb" (default), "stribeck" or "smooth".
+    stribeck_ratio, stribeck_velocity : the Stribeck law's break-away over Coulomb force
+        and its Stribeck velocity, m/s (defaults ``friction.STRIBECK_RATIO`` and
+        ``friction.STRIBECK_VELOCITY``: 1.3 and 0.01 m/s).
     backlash : half-width of a dead zone in the nut link, m (default 0: none).
     """
 
@@ -88,10 +92,12 @@ class GeneratorSettings:
     tail: float = 0.5
     network: str = "reduced"
     friction: str = "coulomb"
+    stribeck_ratio: float = STRIBECK_RATIO
+    stribeck_velocity: float = STRIBECK_VELOCITY
     backlash: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("amplitude", "fs", "duration", "k_p", "k_d", "force_gain", "accel_gain"):
+        for name in ("amplitude", "fs", "duration", "k_p", "k_d", "force_gain", "accel_gain", "stribeck_velocity"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ValueError(f"generator setting {name} must be positive, got {value!r}")
@@ -99,6 +105,8 @@ class GeneratorSettings:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ValueError(f"generator setting {name} must be non-negative, got {value!r}")
+        if not (isinstance(self.stribeck_ratio, (int, float)) and self.stribeck_ratio >= 1.0):
+            raise ValueError(f"generator setting stribeck_ratio must be at least 1, got {self.stribeck_ratio!r}")
         if not (isinstance(self.oversample, int) and self.oversample >= 1):
             raise ValueError(f"oversample must be a positive integer, got {self.oversample!r}")
         if self.antialias not in ("fir", "none"):
@@ -138,7 +146,11 @@ def _reference_motion(t, freq, amplitude, ramp):
 
 
 def _truth_network(params: InerterParameters, s: GeneratorSettings) -> Network:
-    net = build_network(s.network, params, s.friction)
+    friction = s.friction
+    if friction == "stribeck":
+        def friction(f0, c):
+            return make_law("stribeck", f0, c, stribeck_ratio=s.stribeck_ratio, stribeck_velocity=s.stribeck_velocity)
+    net = build_network(s.network, params, friction)
     if s.backlash > 0:
         blocks = list(net.blocks)
         # the nut link is the last deformation of the chain
