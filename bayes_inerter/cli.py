@@ -211,11 +211,16 @@ def cmd_inspect(args) -> int:
         path, side = write_record(args.normalise, rec)
         print(f"wrote {path} and {side} (SI units, the project's columns)")
     if args.plot:
+        import matplotlib.pyplot as plt
+
         from .plots import plot_record
 
         fig = plot_record(rec)
-        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(args.plot, dpi=120)
+        try:
+            Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
+            fig.savefig(args.plot, dpi=120)
+        finally:
+            plt.close(fig)  # main() may run again in the same process
         print(f"wrote {args.plot}")
     return EXIT_OK
 
