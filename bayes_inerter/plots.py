@@ -1,4 +1,8 @@
-"""Plots, in corner's shape: data first, keyword-only options, optional axes, return the figure."""
+"""Plots of records and of simulations against them.
+
+In corner's shape: the data first, options by keyword, ``axes=`` or ``fig=`` to draw
+into the caller's axes or figure, the figure returned; nothing is saved here (callers
+save and close). A figure made here gets its size and layout; a caller's keeps its own."""
 
 from __future__ import annotations
 
@@ -24,8 +28,14 @@ def _title(record: Record) -> str:
     return ", ".join(parts)
 
 
+def _figure(fig, **new):
+    """``fig``, or a new figure made with ``new`` (its size and layout) when None."""
+    return plt.figure(**new) if fig is None else fig
+
+
 def plot_record(record: Record, *, axes=None, label: str | None = None, color=None):
-    """Force, displacement and acceleration of a record against time, stacked."""
+    """Force, displacement and acceleration of a record against time, stacked.
+    ``axes``: three axes to draw into (as :func:`plot_records` gives each record)."""
     if axes is None:
         fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 6.5), layout="constrained")
     else:
@@ -45,18 +55,22 @@ def plot_record(record: Record, *, axes=None, label: str | None = None, color=No
     return fig
 
 
-def plot_records(records: list[Record], *, labels=None):
-    """Several records side by side, one column each (force, displacement, acceleration)."""
+def plot_records(records: list[Record], *, labels=None, fig=None):
+    """Several records side by side, one column each (force, displacement, acceleration).
+    ``fig``: draw the 3 x n panels into this (empty) figure."""
     n = len(records)
-    fig, axes = plt.subplots(3, n, sharex="col", figsize=(5.5 * n, 6.5), layout="constrained", squeeze=False)
+    fig = _figure(fig, figsize=(5.5 * n, 6.5), layout="constrained")
+    axes = fig.subplots(3, n, sharex="col", squeeze=False)
     for j, rec in enumerate(records):
         plot_record(rec, axes=axes[:, j], label=(labels[j] if labels else _title(rec)))
     return fig
 
 
-def plot_fits(time, measured, simulated: dict, *, zoom=None, title: str = ""):
-    """Measured acceleration against simulated ones (name -> (array, phi)), whole and zoomed."""
-    fig, axes = plt.subplots(2, 1, figsize=(9, 6.5), layout="constrained")
+def plot_fits(time, measured, simulated: dict, *, zoom=None, title: str = "", fig=None):
+    """Measured acceleration against simulated ones (name -> (array, phi)), whole and
+    zoomed. ``fig``: draw the two panels into this (empty) figure."""
+    fig = _figure(fig, figsize=(9, 6.5), layout="constrained")
+    axes = fig.subplots(2, 1)
     for ax, window in zip(axes, (None, zoom)):
         sel = slice(None) if window is None else (time >= window[0]) & (time <= window[1])
         ax.plot(time[sel], measured[sel], color="k", lw=1.2, label="measured (low-passed)")

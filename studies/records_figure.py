@@ -14,6 +14,8 @@ OUT = Path(__file__).resolve().parents[1] / "results" / "records"
 
 
 def main():
+    import matplotlib.pyplot as plt  # after bayes_inerter.plots, which picks the Agg backend
+
     OUT.mkdir(parents=True, exist_ok=True)
     records, labels = [], []
     for seed, (name, freq) in enumerate((("A0", 0.5), ("B2", 1.5))):
@@ -23,6 +25,7 @@ def main():
         labels.append(f"{name} at {freq:g} Hz (paper parameters, default generator)")
     fig = plot_records(records, labels=labels)
     fig.savefig(OUT / "records.png", dpi=110)
+    plt.close(fig)
 
 
 if __name__ == "__main__":

@@ -30,14 +30,18 @@ def test_generate_paper_grid(tmp_path, capsys):
 
 
 def test_inspect_valid(tmp_path, capsys):
+    import matplotlib.pyplot as plt
+
     out = tmp_path / "b2.csv"
     main(["generate", "--setting", "B2", "--freq", "1.5", "--out", str(out), *SHORT])
     capsys.readouterr()
     png = tmp_path / "b2.png"
+    before = set(plt.get_fignums())
     assert main(["inspect", str(out), "--plot", str(png)]) == 0
     text = capsys.readouterr().out
     assert "valid record" in text and "duration 1 s" in text and "rate 1000 Hz" in text
     assert "setting: B2" in text and png.exists()
+    assert set(plt.get_fignums()) == before  # the figure closed: main() may run again in the process
 
 
 def test_inspect_bad_record(tmp_path, capsys):

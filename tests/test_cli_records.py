@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from bayes_inerter.cli_progress import StepProgress
-from bayes_inerter.cli import _percent_interval, main
+from bayes_inerter.cli import main
+from bayes_inerter.cli.fit import _percent_interval
 from bayes_inerter.inference.sampler import SamplerStatus
 from bayes_inerter.lock import folder_lock
 from bayes_inerter.records import read_record

@@ -105,11 +105,11 @@ def test_joint_table_holds_b_and_the_apparent_inertance_against_their_truths():
 
 
 def test_report_names_the_settings_whose_sd_was_widened():
-    from bayes_inerter.study.report import _how_identified
+    from bayes_inerter.study.report_text import how_identified
 
     rows = inertance_table([fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1030.0, 20.0),
                             fake_fit("A2", 0.5, 2000.0, 10.0), fake_fit("A2", 1.0, 2010.0, 10.0)])
-    text = _how_identified(rows)
+    text = how_identified(rows)
     assert "Birge ratio" in text and "A1 (1.34)" in text  # sqrt(1.8)
     assert "beyond chance" not in text  # chi2 1.8 on 1 degree of freedom: p = 0.18
     assert "A2 (" not in text  # its records agree (chi2 0.5 on 1 degree of freedom)
@@ -157,27 +157,27 @@ def test_calibration_widens_b_by_the_sensors_share_of_b_plus_the_moving_mass():
 
 def test_report_on_calibration_says_what_the_generated_records_can_check():
     from bayes_inerter.records.sensitivity import SensorCalibration
-    from bayes_inerter.study.report import _calibration_text
+    from bayes_inerter.study.report_text import calibration_text
 
     fits = [fake_fit("A0", 1.0, 700.0, 2.0), fake_fit("A1", 1.0, 1000.0, 2.0)]
     for f in fits:
         f.info.update(m_s=20.0, m_B=50.0)
     rows = inertance_table(fits, calibration=SensorCalibration())
     truth = {"A0": 712.0, "A1": 1000.0}  # A0 12 kg off: 1.88 * hypot(2, 770 * 0.0056) = 8.9 kg, outside
-    exact = _calibration_text(rows, SensorCalibration(), truth, "b_cal_", (1.0, 1.0))
+    exact = calibration_text(rows, SensorCalibration(), truth, "b_cal_", (1.0, 1.0))
     assert "0.56 %" in exact and "records-alone intervals are the ones to hold" in exact and "of 2" not in exact
-    off = _calibration_text(rows, SensorCalibration(), truth, "b_cal_", (1.01, 1.0))
+    off = calibration_text(rows, SensorCalibration(), truth, "b_cal_", (1.01, 1.0))
     assert "hold the generating b for 1 of 2 settings" in off
-    assert "taken as exact" in _calibration_text(rows, SensorCalibration(0.0, 0.0), truth, "b_cal_", (1.0, 1.0))
-    assert _calibration_text(inertance_table(fits), SensorCalibration(), truth, "b_cal_") == ""  # no b_cal columns
+    assert "taken as exact" in calibration_text(rows, SensorCalibration(0.0, 0.0), truth, "b_cal_", (1.0, 1.0))
+    assert calibration_text(inertance_table(fits), SensorCalibration(), truth, "b_cal_") == ""  # no b_cal columns
 
 
 def test_report_flags_records_that_disagree_beyond_chance():
-    from bayes_inerter.study.report import _how_identified
+    from bayes_inerter.study.report_text import how_identified
 
     # 1000 +- 1 against 1010 +- 1: chi2 50 on 1 degree of freedom
     rows = inertance_table([fake_fit("A1", 0.5, 1000.0, 1.0), fake_fit("A1", 1.0, 1010.0, 1.0)])
-    assert "A1 the disagreement is beyond chance" in _how_identified(rows)
+    assert "A1 the disagreement is beyond chance" in how_identified(rows)
 
 
 def test_collect_orders_fits_by_setting_and_frequency_as_numbers(tmp_path):
@@ -200,22 +200,23 @@ def test_collect_orders_fits_by_setting_and_frequency_as_numbers(tmp_path):
 
 def test_report_says_how_records_were_combined_or_that_b_is_the_joint_models():
     from bayes_inerter.study.analysis import joint_estimate
-    from bayes_inerter.study.report import _answer_section, _combination_note
+    from bayes_inerter.study.report import _answer_section
+    from bayes_inerter.study.report_text import combination_note
 
     inert = inertance_table([fake_fit("A1", 0.5, 1000.0, 10.0), fake_fit("A1", 1.0, 1010.0, 10.0),
                              fake_fit("A2", 1.0, 2000.0, 5.0)])
-    alone = _combination_note(inert, [])
+    alone = combination_note(inert, [])
     assert "independent normals" in alone and "--no-joint" in alone
     # one record per setting and no joint model: nothing was combined, nothing to say
-    assert _combination_note(inertance_table([fake_fit("A1", 1.0, 1000.0, 10.0)]), []) == ""
+    assert combination_note(inertance_table([fake_fit("A1", 1.0, 1000.0, 10.0)]), []) == ""
     rng = np.random.default_rng(1)
     draws = {"b_A1": 1004.0 + rng.normal(0, 1.0, 4000), "b_A2": 2001.0 + rng.normal(0, 1.0, 4000)}
     joint = joint_estimate(inert, draws, converged=False)
     truth = [{"setting": "A1", "b_truth": 1004.0}, {"setting": "A2", "b_truth": 2001.0}]
-    text = _combination_note(joint, truth)
+    text = combination_note(joint, truth)
     # the product's own list and coverage (A1 1005 +- 1.88 * 7.07: holds 1004; A2 2000 +- 9.4: holds 2001)
     assert "joint model's b's" in text and "A1 1005 kg" in text and "for 2 of 2 settings" in text
-    assert "settings" not in _combination_note(joint, [{"setting": "A1"}]).split("the same records give")[1]
+    assert "settings" not in combination_note(joint, [{"setting": "A1"}]).split("the same records give")[1]
     lead = "\n".join(_answer_section(None, joint, {}, {"A1": 1004.0, "A2": 2010.0}))
     assert "Identified: the joint model" in lead and "holds the true value for 1 of 2 settings" in lead
     assert "not converged" in lead and "Birge" not in lead
@@ -278,10 +279,10 @@ def test_regression_of_joint_draws_keeps_their_correlation():
 def test_report_flags_a_posterior_mean_outside_its_own_interval():
     """A mean outside the 94 % HDI (the full study's A2 at 0.5 Hz: phi 0.9644 against
     0.9647-0.9652) says a few draws lie far from the rest: the report says so."""
-    from bayes_inerter.study.report import _outlying_text
+    from bayes_inerter.study.report_text import outlying_text
 
     rows = [{"setting": "A2", "freq_hz": 0.5, "phi_mean": 0.9644, "phi_hdi_3%": 0.9647, "phi_hdi_97%": 0.9652},
             {"setting": "A3", "freq_hz": 1.0, "phi_mean": 0.9911, "phi_hdi_3%": 0.9911, "phi_hdi_97%": 0.9912}]
-    text = _outlying_text(rows)
+    text = outlying_text(rows)
     assert "A2 at 0.5 Hz" in text and "A3" not in text and "outside its 94 % interval" in text
-    assert _outlying_text(rows[1:]) == ""
+    assert outlying_text(rows[1:]) == ""

@@ -6,8 +6,16 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
-from bayes_inerter.study.plots import plot_inertance  # noqa: E402
+from bayes_inerter.study.plots import (  # noqa: E402
+    plot_coverage,
+    plot_design,
+    plot_inertance,
+    plot_models,
+    plot_phi_map,
+    plot_ranks,
+)
 
 
 def _row(setting, b, product=None):
@@ -40,4 +48,72 @@ def test_theory_against_identification_shows_the_joint_model_where_it_ran():
     assert len(labels) == 2 and labels[0].startswith("posterior")
     product_y = fig.axes[0].containers[1].lines[0].get_ydata()
     assert product_y[0] == 750.0 and np.isnan(product_y[1])
+    plt.close(fig)
+
+
+def test_inertance_draws_into_the_given_figure():
+    fig = plt.figure()
+    got = plot_inertance([_row("A0", 752.0, product=750.0), _row("A1", 1668.0, product=1665.0)], fig=fig)
+    assert got is fig and len(fig.axes) == 3
+    assert _series(fig)[0].startswith("joint model")
+    assert [t.get_text() for t in fig.axes[2].get_xticklabels()] == ["A0", "A1"]
+    plt.close(fig)
+
+
+def test_phi_map_draws_into_the_given_axes():
+    rows = [{"setting": "A0", "freq_hz": 0.5, "phi_mean": 0.91}, {"setting": "A1", "freq_hz": 1.0, "phi_mean": 0.93}]
+    fig, (left, right) = plt.subplots(1, 2)
+    got = plot_phi_map(rows, ax=right)
+    assert got is fig
+    assert len(right.images) == 1 and not left.images
+    grid = right.images[0].get_array()
+    assert grid[0, 0] == pytest.approx(91.0) and grid[1, 1] == pytest.approx(93.0) and np.ma.is_masked(grid[0, 1])
+    assert right.get_title().startswith("fit accuracy phi")
+    plt.close(fig)
+
+
+def test_models_draw_into_the_given_figure():
+    rows = [{"record": "A1_1Hz", "model": m, "phi_mean": p, "elpd_loo": e, "elpd_se": 3.0}
+            for m, p, e in (("linear", 0.5, -900.0), ("rigid", 0.7, -300.0), ("two-port", 0.8, 10.0))]
+    fig = plt.figure()
+    got = plot_models(rows, fig=fig)
+    assert got is fig and len(fig.axes) == 2
+    phi, loo = fig.axes
+    assert [bar.get_height() for bar in phi.patches] == pytest.approx([50.0, 70.0, 80.0])
+    assert [bar.get_height() for bar in loo.patches] == pytest.approx([-910.0, -310.0, 0.0])
+    plt.close(fig)
+
+
+def test_design_draws_into_the_given_figure():
+    names = ["b", "k_n"]
+    rows = [{"setting": s, "design": d, "b": 0.9, "k_n": 0.1} for s in ("A0", "B2") for d in ("paper", "wide")]
+    fig = plt.figure()
+    got = plot_design(rows, names, fig=fig)
+    assert got is fig
+    panels = [ax for ax in fig.axes if ax.get_title()]
+    assert [ax.get_title() for ax in panels] == ["setting A0", "setting B2"]
+    assert all(ax.images[0].get_array().shape == (2, 2) for ax in panels)
+    plt.close(fig)
+
+
+def test_ranks_draw_into_the_given_figure():
+    rng = np.random.default_rng(7)
+    ranks = {n: rng.integers(0, 100, 40) for n in ("b", "f_0", "c_n")}
+    fig = plt.figure()
+    got = plot_ranks(ranks, 99, title="given", fig=fig)
+    assert got is fig and len(fig.axes) == 3
+    assert [ax.get_title() for ax in fig.axes] == ["b", "f_0", "c_n"]
+    assert all(sum(bar.get_height() for bar in ax.patches[1:]) == 40 for ax in fig.axes)  # patch 0: the band
+    plt.close(fig)
+
+
+def test_coverage_draws_into_the_given_figure():
+    rows = [{"parameter": n, "coverage_50": 0.5, "se_50": 0.05, "coverage_90": 0.9, "se_90": 0.03, "replicates": 50.0}
+            for n in ("b", "f_0")]
+    fig = plt.figure()
+    got = plot_coverage({"model-ar1": rows}, fig=fig)
+    assert got is fig and len(fig.axes) == 2
+    assert [ax.get_ylabel() for ax in fig.axes] == ["coverage of the central 50 % interval",
+                                                    "coverage of the central 90 % interval"]
+    assert fig.axes[1].get_legend().get_texts()[0].get_text() == "model-ar1 (50)"
     plt.close(fig)

@@ -63,6 +63,18 @@ def test_study_writes_tables_figures_and_report(study):
     assert "Joint model" in report and json.loads((out / "joint" / "fit.json").read_text())["iterations"] == 6
 
 
+def test_the_study_closes_its_figures_once_saved(study, tmp_path):
+    import matplotlib.pyplot as plt
+
+    from bayes_inerter.study.run import _write_figures
+
+    before = set(plt.get_fignums())
+    _write_figures(tmp_path, study.tables)
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["model_comparison.png", "phi_map.png",
+                                                              "theory_vs_identified.png"]
+    assert set(plt.get_fignums()) == before  # a study's figures do not pile up in memory
+
+
 def test_the_two_port_fits_come_first_with_each_records_seed(tmp_path):
     records = {name: (tmp_path / f"{name}.csv", name[:2], 1.0) for name in ("A0_1Hz", "A2_1Hz", "B2_1Hz")}
     plan = tiny_plan(settings=("A0", "A2", "B2"), comparison=(("A0", "A2"), (1.0,)))

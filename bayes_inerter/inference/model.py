@@ -28,10 +28,11 @@ from scipy import signal
 from ..device import TABLE_I, InerterParameters, apparent_inertance
 from ..models import FIELDS, linear_chain
 from ..network.compile import chain_state_space
-from ..records.conditioning import LOWPASS_HZ, lowpass
+from ..records.conditioning import lowpass
 from ..masses import resolve_masses
 from ..records.record import Record
-from ..simulate import SAMPLINGS, Drive, SimulationError, check_record, contacts, run_exact, simulate
+from ..simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate
+from .likelihood import LikelihoodSettings
 from .priors import DEFAULT_PRIORS, NOISE_PRIORS, SPLIT_PRIORS
 
 __all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
@@ -63,58 +64,6 @@ MODELS = {
     "rigid": ("rigid", ("b", "f1_0", "c_f1")),
     "linear": ("linear", ("b", "c_n", "k_n", "c_B", "k_B")),
 }
-
-
-@dataclass(frozen=True)
-class LikelihoodSettings:
-    """How simulated and measured accelerations are compared (all documented defaults).
-
-    Attributes
-    ----------
-    residual : "ar1" (default) or "iid".
-    cutoff : matched low-pass cut-off, Hz (default 30).
-    stride : keep every stride-th sample; None: fs / (2 cutoff), about one sample per
-        correlation length of the low-passed signal (16 at 1 kHz and 30 Hz).
-    edge : seconds left out at each end (zero-phase filter transients), default 0.25 s.
-    upsample : **assumption** on the force between samples. The record's force is
-        interpolated linearly between samples (the paper's choice) when 1 (default);
-        with q > 1 it is reconstructed at q times the rate by band-limited polyphase
-        FIR interpolation (``scipy.signal.resample_poly``), simulated there, and the
-        simulated acceleration is brought back by the same filter, at q times the cost.
-        Measured on generated records (A1 1 Hz, A0 0.5 Hz, B2 1.5 Hz) with the "mean"
-        sampling below: the residual at the true parameters is the same for q = 1, 2
-        and 4 (2.34e-3, 2.31e-3, 2.35e-3 m/s^2 rms), and a local optimum lies 2-5 nats
-        from the truth for each q (the noise's share). It mattered only with
-        "instant" sampling.
-    sampling : how the simulated acceleration is sampled (``simulate``'s option):
-        "mean" (default), its mean around each sample instant, continuous in the
-        parameters; "instant", its value at the instant, which jumps by the Coulomb
-        force over the plate mass whenever a friction switch crosses a sample instant
-        and makes the likelihood rough (tens of nats for a 0.05 % change of the
-        Coulomb force, measured on a generated A1 record at 1 Hz; with "mean" the same
-        scan is a smooth parabola peaked at the truth).
-    """
-
-    residual: str = "ar1"
-    cutoff: float = LOWPASS_HZ
-    stride: int | None = None
-    edge: float = 0.25
-    upsample: int = 1
-    sampling: str = "mean"
-
-    def __post_init__(self) -> None:
-        if self.residual not in ("ar1", "iid"):
-            raise ValueError(f"residual model must be 'ar1' or 'iid', got {self.residual!r}")
-        if not self.cutoff > 0:
-            raise ValueError(f"cut-off must be positive, got {self.cutoff}")
-        if self.stride is not None and not (isinstance(self.stride, int) and self.stride >= 1):
-            raise ValueError(f"stride must be a positive integer, got {self.stride!r}")
-        if not self.edge >= 0:
-            raise ValueError(f"edge must be non-negative, got {self.edge}")
-        if not (isinstance(self.upsample, int) and 1 <= self.upsample <= 16):
-            raise ValueError(f"upsample must be a whole number from 1 to 16, got {self.upsample!r}")
-        if self.sampling not in SAMPLINGS:
-            raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}, got {self.sampling!r}")
 
 
 def record_masses(record: Record, m_s: float | None = None, m_B: float | None = None) -> tuple[float, float]:
@@ -156,6 +105,14 @@ class PosteriorModel:
         check_record(rec.time, rec.force, rec.accel, names=("force", "accel"))
         self.m_s, self.m_B = record_masses(rec, self.m_s, self.m_B)
         self.network, self.free = MODELS[self.model]
+        self._set_parameters()
+        self.fs = rec.fs
+        self._set_data()
+        self._set_simulation()
+
+    def _set_parameters(self) -> None:
+        """The sampled parameters (``names``, split or not), their priors, and the derived
+        quantities."""
         pairs = {"f1_0", "f2_0", "c_f1", "c_f2"}
         can_split = pairs <= set(self.free)
         if self.split is None:
@@ -178,8 +135,11 @@ class PosteriorModel:
         if {"b", "k_n", "c_n"} <= set(self.free):
             self.derived_names.append("b_app")
         self._log = np.array([self.all_priors[n].log_scale for n in self.names])
-        self.fs = rec.fs
-        lk = self.likelihood
+
+    def _set_data(self) -> None:
+        """What the likelihood compares with: the low-passed measured acceleration, its
+        window (the record less ``edge`` at each end) and the grid thinned by ``stride``."""
+        rec, lk = self.record, self.likelihood
         if not lk.cutoff < self.fs / 2:
             raise ValueError(f"cut-off {lk.cutoff} Hz must be below half the sampling rate {self.fs:g} Hz")
         self.stride = lk.stride or max(1, int(self.fs / (2 * lk.cutoff)))
@@ -196,7 +156,12 @@ class PosteriorModel:
         self.observed = self.measured_lp[self.grid]
         m = self.measured_lp[window]
         self._phi_norm = float(np.linalg.norm(m - m.mean()))
-        q = lk.upsample
+
+    def _set_simulation(self) -> None:
+        """What every evaluation's simulation starts from: the drive (upsampled where
+        asked), the fixed parameters, and where the sampled ones go in ``models.FIELDS``."""
+        rec = self.record
+        q = self.likelihood.upsample
         if q > 1:
             n = len(rec.time)
             self._sim_force = signal.resample_poly(rec.force, q, 1)[: (n - 1) * q + 1]

@@ -1,4 +1,9 @@
-"""Plots of a posterior: corner, credible bands, traces, phi. Each returns the figure."""
+"""Plots of a posterior: corner, credible bands, traces, phi.
+
+In corner's shape: the data first, options by keyword, ``ax=`` (one panel) or ``fig=``
+(several) to draw into the caller's axes or figure, the figure returned; nothing is
+saved here (callers save and close). A figure made here gets its size and layout; a
+caller's keeps its own."""
 
 from __future__ import annotations
 
@@ -36,6 +41,11 @@ def _to_plot(name, x):
     return x if _linear(name) else np.log10(x)
 
 
+def _figure(fig, **new):
+    """``fig``, or a new figure made with ``new`` (its size and layout) when None."""
+    return plt.figure(**new) if fig is None else fig
+
+
 def reference_values(model, metadata: dict):
     """(truth, paper) values of the sampled quantities for the corner plot's markers,
     None where they do not apply.
@@ -67,10 +77,11 @@ def reference_values(model, metadata: dict):
     return t_out, p_out
 
 
-def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: str = ""):
+def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: str = "", fig=None):
     """Corner plot of (n, ndim) draws in SI units: b in kg, shares and rho as they are,
     the other parameters in log10. ``truths`` and ``paper`` (in the plotted scale, None
-    where unknown) are marked only where given."""
+    where unknown) are marked only where given. ``fig``: draw into this figure (empty,
+    or with ndim x ndim axes, as ``corner.corner`` takes it)."""
     import corner
 
     import logging
@@ -83,7 +94,7 @@ def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: st
     root.setLevel(logging.ERROR)
     try:
         fig = corner.corner(
-            x, labels=[_label(n) for n in names], truths=truths, truth_color="tab:blue",
+            x, fig=fig, labels=[_label(n) for n in names], truths=truths, truth_color="tab:blue",
             quantiles=[0.03, 0.5, 0.97], show_titles=True, title_fmt=".4g",
             title_kwargs={"fontsize": 8}, label_kwargs={"fontsize": 8}, plot_datapoints=False,
         )
@@ -113,18 +124,21 @@ def _reversal_time(time, accel_lp, freq):
     return time[crossings[0]] if len(crossings) else time[-1] - period
 
 
-def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, noise_sd: float | None = None, title: str = ""):
+def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, noise_sd: float | None = None, title: str = "",
+               fig=None):
     """Median, 50 % and 94 % credible bands of the simulated low-passed acceleration
     (parameter uncertainty) and, given ``noise_sd`` (the residual model's marginal sd),
     the 94 % predictive band that adds the residual's spread (normal approximation).
 
     Three panels: the measured and the median over the whole record; the residual about
     the posterior median with the bands about it (bands far thinner than the signal are
-    visible only so); a zoom on a velocity reversal. Legends sit outside the data."""
+    visible only so); a zoom on a velocity reversal. Legends sit outside the data.
+    ``fig``: draw the three panels into this (empty) figure."""
     q = np.percentile(sims, [3, 25, 50, 75, 97], axis=0)
     t_rev = _reversal_time(time, measured_lp, freq)
     span = 0.12 / (freq or 1.0)
-    fig, axes = plt.subplots(3, 1, figsize=(11, 9), layout="constrained")
+    fig = _figure(fig, figsize=(11, 9), layout="constrained")
+    axes = fig.subplots(3, 1)
     top, mid, zoom = axes
     top.plot(time, measured_lp, color="k", lw=0.8, label="measured")
     top.plot(time, q[2], color="tab:red", lw=0.8, label="posterior median")
@@ -157,15 +171,16 @@ def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, noise_sd: floa
     return fig
 
 
-def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1):
+def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1, fig=None):
     """Walker traces of every parameter after burn-in: b in kg, shares and rho as they
     are, the others in log10 (as :func:`plot_corner`).
 
     ``theta`` has shape (walkers, draws, ndim) from the kept (thinned) chain, as sampled
-    (natural logs where the prior is log-scaled)."""
+    (natural logs where the prior is log-scaled). ``fig``: draw the ndim panels into
+    this (empty) figure."""
     ndim = theta.shape[2]
-    fig, axes = plt.subplots(ndim, 1, figsize=(9, 1.3 * ndim + 1), sharex=True, layout="constrained")
-    axes = np.atleast_1d(axes)
+    fig = _figure(fig, figsize=(9, 1.3 * ndim + 1), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(ndim, 1, sharex=True))
     steps = burn + thin * np.arange(theta.shape[1])
     for i, ax in enumerate(axes):
         y = theta[:, :, i] / np.log(10) if not _linear(names[i]) else (
@@ -177,9 +192,12 @@ def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1):
     return fig
 
 
-def plot_phi(phi: np.ndarray, *, paper: float | None = None, title: str = ""):
-    """Posterior of the fit accuracy phi (eq. 5, low-passed)."""
-    fig, ax = plt.subplots(figsize=(6, 3.5), layout="constrained")
+def plot_phi(phi: np.ndarray, *, paper: float | None = None, title: str = "", ax=None):
+    """Posterior of the fit accuracy phi (eq. 5, low-passed). ``ax``: draw into these axes."""
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(6, 3.5), layout="constrained")
+    else:
+        fig = ax.figure
     ax.hist(phi.ravel() * 100, bins=50, color="tab:green", alpha=0.8)
     if paper is not None:
         ax.axvline(paper * 100, color="tab:red", ls="--", label=f"paper: {paper:.1%}")

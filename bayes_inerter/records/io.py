@@ -128,6 +128,29 @@ def read_record(path, *, columns=None, units=None) -> Record:
     except UnitError as exc:
         raise RecordError(str(exc)) from None
     path = Path(path)
+    lines = _read_lines(path)
+    header_meta, i = _header_metadata(path, lines)
+    meta = _read_metadata(path, header_meta)
+    cmap = _column_map(path, meta, given)
+    header_line = i + 1
+    delimiter = _delimiter(lines[i])
+    wanted = {q: cmap.column(q) for q in QUANTITIES}
+    header = _header(path, lines[i], header_line, delimiter, cmap, wanted)
+    used = [(q, header.index(wanted[q])) for q in QUANTITIES if wanted[q] in header]
+    data = _samples(path, lines[i + 1 :], header_line, delimiter, header, used)
+    col = {q: data[:, j] * cmap.factor(q) if cmap.factor(q) != 1.0 else data[:, j] for j, (q, _) in enumerate(used)}
+    t = col["time"]
+    _check_time(path, t, data[:, 0], header_line)
+    _check_metadata(path, meta, t)
+    meta = {k: v for k, v in meta.items() if k not in ("columns", "units")}
+    if not cmap.is_identity():
+        meta["source_columns"] = {q: d for q, d in cmap.describe().items() if q in col}
+    return Record(time=t, force=col["force"], accel=col["accel"], disp=col.get("disp"), metadata=meta)
+
+
+def _read_lines(path: Path) -> list[str]:
+    """The lines of a record's file, refused if it is missing, a folder, not UTF-8 text,
+    empty, or binary."""
     if not path.exists():
         raise RecordError(f"{path}: no such file; check the path")
     if path.is_dir():
@@ -142,8 +165,12 @@ def read_record(path, *, columns=None, units=None) -> Record:
         raise RecordError(f"{path}: the file is empty; expected a header {','.join(COLUMNS)} and samples")
     if "\x00" in text:
         raise RecordError(f"{path}: contains NUL bytes; this is not a CSV text file")
+    return text.splitlines()
 
-    lines = text.splitlines()
+
+def _header_metadata(path: Path, lines: list[str]) -> tuple[dict, int]:
+    """The ``# key: value`` lines before the header (blank lines skipped), and the index
+    of the header line."""
     header_meta: dict = {}
     i = 0
     while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
@@ -156,15 +183,16 @@ def read_record(path, *, columns=None, units=None) -> Record:
         i += 1
     if i == len(lines):
         raise RecordError(f"{path}: no header line; expected {','.join(COLUMNS)}")
-    meta = _read_metadata(path, header_meta)
-    cmap = _column_map(path, meta, given)
-    header_line = i + 1
-    delimiter = _delimiter(lines[i])
-    header = [h.strip() for h in next(csv.reader([lines[i]], delimiter=delimiter))]
+    return header_meta, i
+
+
+def _header(path: Path, line: str, header_line: int, delimiter: str, cmap: ColumnMap, wanted: dict) -> list[str]:
+    """The header's column names, refused if one repeats, one the map wants is missing, or
+    (without a column map) one is not the project's."""
+    header = [h.strip() for h in next(csv.reader([line], delimiter=delimiter))]
     dupes = sorted({h for h in header if header.count(h) > 1})
     if dupes:
         raise RecordError(f"{path}: line {header_line}: column {dupes[0]!r} appears more than once")
-    wanted = {q: cmap.column(q) for q in QUANTITIES}
     for q in QUANTITIES[:3]:
         if wanted[q] not in header:
             hint = (f"correct {q}={wanted[q]} in the column map" if q in cmap.names
@@ -184,14 +212,19 @@ def read_record(path, *, columns=None, units=None) -> Record:
                 f"{', '.join(COLUMNS + OPTIONAL_COLUMNS)} (SI units), or map a DAQ export's columns "
                 "with --columns time=NAME,force=NAME,accel=NAME[,disp=NAME] (others are then ignored)"
             )
-    used = [(q, header.index(wanted[q])) for q in QUANTITIES if wanted[q] in header]
-    # a semicolon-separated export may write decimal commas ("0,5;12,3")
-    decimal_comma = delimiter != "," and any("," in f for f in lines[i + 1].split(delimiter)) if i + 1 < len(lines) else False
+    return header
 
+
+def _samples(path: Path, rows: list[str], header_line: int, delimiter: str, header: list[str], used) -> np.ndarray:
+    """The ``used`` columns (quantity, index in the header) of the data lines, as numbers
+    in the file's units; a blank line, a wrong number of fields, a field that is not a
+    finite number, or fewer than MIN_SAMPLES rows is refused."""
+    # a semicolon-separated export may write decimal commas ("0,5;12,3")
+    decimal_comma = delimiter != "," and any("," in f for f in rows[0].split(delimiter)) if rows else False
     ncol = len(header)
-    data = np.empty((len(lines) - i - 1, len(used)))
+    data = np.empty((len(rows), len(used)))
     nrow = 0
-    for lineno, row in enumerate(csv.reader(lines[i + 1 :], delimiter=delimiter), start=header_line + 1):
+    for lineno, row in enumerate(csv.reader(rows, delimiter=delimiter), start=header_line + 1):
         if not row or (len(row) == 1 and not row[0].strip()):
             raise RecordError(f"{path}: line {lineno} is blank; remove blank lines inside the data")
         if len(row) != ncol:
@@ -214,14 +247,17 @@ def read_record(path, *, columns=None, units=None) -> Record:
     data = data[:nrow]
     if nrow < MIN_SAMPLES:
         raise RecordError(f"{path}: {nrow} samples; a record needs at least {MIN_SAMPLES}")
+    return data
 
-    col = {q: data[:, j] * cmap.factor(q) if cmap.factor(q) != 1.0 else data[:, j] for j, (q, _) in enumerate(used)}
-    t = col["time"]
+
+def _check_time(path: Path, t: np.ndarray, read: np.ndarray, header_line: int) -> None:
+    """Refuse a time column ``t`` (s; ``read``: as in the file) that is not strictly
+    increasing or not uniformly sampled."""
     dt = np.diff(t)
     if np.any(dt <= 0):
         k = int(np.argmax(dt <= 0))
         raise RecordError(
-            f"{path}: line {header_line + k + 2}: time {data[k + 1, 0]!r} is not after {data[k, 0]!r}; "
+            f"{path}: line {header_line + k + 2}: time {read[k + 1]!r} is not after {read[k]!r}; "
             "samples must be in strictly increasing time order"
         )
     h = (t[-1] - t[0]) / (len(t) - 1)
@@ -232,11 +268,6 @@ def read_record(path, *, columns=None, units=None) -> Record:
             f"{path}: line {header_line + k + 2}: sample interval {dt[k]:.6g} s differs from the "
             f"mean {h:.6g} s by {dev[k]:.2%}; resample the record uniformly"
         )
-    _check_metadata(path, meta, t)
-    meta = {k: v for k, v in meta.items() if k not in ("columns", "units")}
-    if not cmap.is_identity():
-        meta["source_columns"] = {q: d for q, d in cmap.describe().items() if q in col}
-    return Record(time=t, force=col["force"], accel=col["accel"], disp=col.get("disp"), metadata=meta)
 
 
 def write_record(path, record: Record, *, overwrite: bool = True) -> tuple[Path, Path]:

@@ -253,7 +253,7 @@ def write_calibration(out: Path, cs: CalibrationSettings, results: list[dict], v
 
     from .analysis import write_csv
     from .plots import plot_ranks
-    from .report import calibration_report
+    from .calibration_report import calibration_report
 
     ok = [r for r in results if "ranks" in r]
     failed = [r for r in results if "error" in r]
@@ -282,7 +282,7 @@ def compare_calibrations(root) -> Path | None:
     import matplotlib.pyplot as plt
 
     from .plots import plot_coverage
-    from .report import calibration_comparison
+    from .calibration_report import calibration_comparison
 
     root = Path(root)
     cases = {}

@@ -165,7 +165,7 @@ def run_design(out, *, settings=("A0", "A3", "B2"), designs=DEFAULT_DESIGNS, ric
     from ..inference.fit import check_output_folder, versions
     from .analysis import write_csv
     from .plots import plot_design
-    from .report import design_report
+    from .design_report import design_report
 
     out = Path(out)
     check_output_folder(out)

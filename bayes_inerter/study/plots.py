@@ -1,5 +1,11 @@
 """A study's figures: theory against identification (the paper's Fig. 9 with
-uncertainty), the fit accuracy as a heat map beside Table 2, and model comparison."""
+uncertainty), the fit accuracy as a heat map beside Table 2, and model comparison; and
+the design and calibration studies' figures.
+
+In corner's shape: the data first, options by keyword, ``ax=`` (one panel) or ``fig=``
+(several) to draw into the caller's axes or figure, the figure returned; nothing is
+saved here (callers save and close). A figure made here gets its size and its
+``tight_layout``; a caller's keeps its own layout."""
 
 from __future__ import annotations
 
@@ -8,16 +14,24 @@ import numpy as np
 from ..device import FREQUENCIES_HZ, SETTINGS
 from .analysis import is_joint
 
-__all__ = ["plot_inertance", "plot_phi_map", "plot_models", "plot_design", "plot_ranks"]
+__all__ = ["plot_inertance", "plot_phi_map", "plot_models", "plot_design", "plot_ranks", "plot_coverage"]
 
 
-def plot_inertance(rows: list[dict]):
-    """b per setting: theory, the paper's identified value, the posterior (median, 94 %),
-    and where the rows have them (``analysis.joint_estimate``) the records' product
-    beside the joint model's b; below, each relative to theory."""
+def _figure(fig, figsize):
+    """(``fig``, False), or (a new figure of ``figsize``, True) when None: whether this
+    function made it, and so lays it out."""
     import matplotlib.pyplot as plt
 
-    fig, (ax, rel, width) = plt.subplots(3, 1, figsize=(8, 9), sharex=True, gridspec_kw={"height_ratios": [3, 2, 2]})
+    return (plt.figure(figsize=figsize), True) if fig is None else (fig, False)
+
+
+def plot_inertance(rows: list[dict], *, fig=None):
+    """b per setting: theory, the paper's identified value, the posterior (median, 94 %),
+    and where the rows have them (``analysis.joint_estimate``) the records' product
+    beside the joint model's b; below, each relative to theory. ``fig``: draw the three
+    panels into this (empty) figure."""
+    fig, made = _figure(fig, (8, 9))
+    ax, rel, width = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2, 2]})
     x = np.arange(len(rows))
     theory = np.array([r["b_theory"] for r in rows])
     paper = np.array([r["b_paper"] for r in rows])
@@ -57,13 +71,14 @@ def plot_inertance(rows: list[dict]):
     width.set_xlabel("flywheel setting")
     width.grid(alpha=0.3)
     ax.set_title("Inertance per flywheel setting: theory against identification")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def plot_phi_map(rows: list[dict]):
-    """Posterior mean of phi per setting and frequency; each cell also shows the paper's."""
-    import matplotlib.pyplot as plt
+def plot_phi_map(rows: list[dict], *, ax=None):
+    """Posterior mean of phi per setting and frequency; each cell also shows the paper's.
+    ``ax``: draw into these axes (the colour bar takes room beside them)."""
 
     settings = [s for s in SETTINGS if any(r["setting"] == s for r in rows)]
     freqs = [f for f in FREQUENCIES_HZ if any(r["freq_hz"] == f for r in rows)]
@@ -71,7 +86,11 @@ def plot_phi_map(rows: list[dict]):
     for r in rows:
         if r["setting"] in settings and r["freq_hz"] in freqs:
             grid[freqs.index(r["freq_hz"]), settings.index(r["setting"])] = 100 * r["phi_mean"]
-    fig, ax = plt.subplots(figsize=(1.1 * len(settings) + 2.5, 0.9 * len(freqs) + 1.8))
+    if ax is None:
+        fig, made = _figure(None, (1.1 * len(settings) + 2.5, 0.9 * len(freqs) + 1.8))
+        ax = fig.subplots()
+    else:
+        fig, made = ax.figure, False
     papers = [100 * SETTINGS[s].fit_paper[f] for s in settings for f in freqs if SETTINGS[s].fit_paper.get(f)]
     shown = np.concatenate([grid[np.isfinite(grid)], papers]) if papers or np.isfinite(grid).any() else np.array([0.0])
     lo, hi = float(np.min(shown)), float(np.max(shown))
@@ -88,17 +107,18 @@ def plot_phi_map(rows: list[dict]):
     ax.set_yticks(range(len(freqs)), [f"{f:g} Hz" for f in freqs])
     ax.set_title("fit accuracy phi (%): posterior mean, (paper's Table 2)")
     fig.colorbar(im, ax=ax, label="phi (%)")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def plot_models(rows: list[dict]):
-    """Per compared record: phi and LOO (elpd, relative to the best) of each model."""
-    import matplotlib.pyplot as plt
-
+def plot_models(rows: list[dict], *, fig=None):
+    """Per compared record: phi and LOO (elpd, relative to the best) of each model.
+    ``fig``: draw the two panels into this (empty) figure."""
     records = sorted({r["record"] for r in rows})
     models = ["linear", "rigid", "two-port"]
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    fig, made = _figure(fig, (10, 4))
+    a1, a2 = fig.subplots(1, 2)
     width = 0.8 / len(records)
     for k, rec in enumerate(records):
         sub = {r["model"]: r for r in rows if r["record"] == rec}
@@ -122,19 +142,18 @@ def plot_models(rows: list[dict]):
     a2.set_ylabel("elpd_loo - best model's (nats; higher is better)")
     a1.set_title("fit accuracy")
     a2.set_title("LOO: expected log predictive density")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def plot_design(rows: list[dict], names: list[str]):
+def plot_design(rows: list[dict], names: list[str], *, fig=None):
     """Laplace contraction of each parameter (columns) under each design (rows), one
-    panel per flywheel setting."""
-    import matplotlib.pyplot as plt
-
+    panel per flywheel setting. ``fig``: draw the panels into this (empty) figure."""
     settings = list(dict.fromkeys(r["setting"] for r in rows))
     designs = list(dict.fromkeys(r["design"] for r in rows))
-    fig, axes = plt.subplots(1, len(settings), figsize=(0.55 * len(names) * len(settings) + 4, 0.42 * len(designs) + 2),
-                             sharey=True, squeeze=False)
+    fig, made = _figure(fig, (0.55 * len(names) * len(settings) + 4, 0.42 * len(designs) + 2))
+    axes = fig.subplots(1, len(settings), sharey=True, squeeze=False)
     for ax, s in zip(axes[0], settings):
         grid = np.array([[next(r[n] for r in rows if r["setting"] == s and r["design"] == d) for n in names]
                          for d in designs])
@@ -148,20 +167,22 @@ def plot_design(rows: list[dict], names: list[str]):
     axes[0, 0].set_yticks(range(len(designs)), designs, fontsize=8)
     fig.colorbar(im, ax=axes[0, -1], label="contraction (Laplace)")
     fig.suptitle("What each experiment would identify: 1 - var(posterior) / var(prior)", fontsize=10)
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def plot_ranks(ranks: dict, L: int, *, bins: int = 10, title: str = ""):
+def plot_ranks(ranks: dict, L: int, *, bins: int = 10, title: str = "", fig=None):
     """SBC rank histograms, one panel per parameter, with the band a uniform histogram
-    stays inside 99 % of the time (per bin, binomial)."""
-    import matplotlib.pyplot as plt
+    stays inside 99 % of the time (per bin, binomial). ``fig``: draw the panels into
+    this (empty) figure."""
     from scipy import stats
 
     names = list(ranks)
     cols = min(4, len(names))
     rows = -(-len(names) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.4 * rows + 0.6), squeeze=False)
+    fig, made = _figure(fig, (3.2 * cols, 2.4 * rows + 0.6))
+    axes = fig.subplots(rows, cols, squeeze=False)
     for ax, name in zip(axes.flat, names):
         r = np.asarray(ranks[name])
         n = len(r)
@@ -174,19 +195,20 @@ def plot_ranks(ranks: dict, L: int, *, bins: int = 10, title: str = ""):
     for ax in list(axes.flat)[len(names):]:
         ax.axis("off")
     fig.suptitle(title + "\ngrey: 99 % band of a uniform histogram", fontsize=9)
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def plot_coverage(cases: dict):
+def plot_coverage(cases: dict, *, fig=None):
     """Coverage of the 50 % and 90 % intervals per parameter, one marker per calibration
-    case, with bars of 2 binomial se (at the nominal level) around each."""
-    import matplotlib.pyplot as plt
-
+    case, with bars of 2 binomial se (at the nominal level) around each. ``fig``: draw
+    the two panels into this (empty) figure."""
     names = []
     for rows in cases.values():
         names += [r["parameter"] for r in rows if r["parameter"] not in names]
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2), sharey=False)
+    fig, made = _figure(fig, (12, 4.2))
+    axes = fig.subplots(1, 2, sharey=False)
     width = 0.8 / max(len(cases), 1)
     for ax, q in zip(axes, (50, 90)):
         for j, (case, rows) in enumerate(cases.items()):
@@ -202,5 +224,6 @@ def plot_coverage(cases: dict):
         ax.set_title(f"{q} % intervals (bars: 2 binomial se)")
         ax.grid(alpha=0.3)
     axes[1].legend(fontsize=8, loc="lower left")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig

@@ -154,10 +154,7 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
 
 def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_jobs, on_joint_step) -> StudyResult:
     """:func:`run_study`'s work, with the folder locked."""
-    import matplotlib.pyplot as plt
-
     from ..inference.fit import versions as fit_versions  # one list of versions for fits and studies
-    from .plots import plot_inertance, plot_models, plot_phi_map
     from .report import write_report
 
     t0 = time.perf_counter()
@@ -171,12 +168,35 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
     fits = collect(out / "fits")
     joint = run_joint(plan, out, fits, records, processes=processes, progress=on_joint_step) if plan.joint else None
     t_joint = time.perf_counter()
+    truth_b, truth_app = _truths(plan)
+    tables, files = _tables(plan, fits, joint, truth_b, truth_app)
+    for key, name in files.items():
+        write_csv(out / name, tables[key])
+    _write_figures(out, tables)
+    versions = fit_versions()
+    report = write_report(out, plan, tables, outcomes, versions, truth_b, truth_app)
+    t3 = time.perf_counter()
+    seconds = {"records": t1 - t0, "fits": t2 - t1, "joint": t_joint - t2, "analysis_and_report": t3 - t_joint,
+               "total": t3 - t0}
+    _write_study_json(out, plan, versions, seconds, processes, scheduler, outcomes)
+    return StudyResult(out, outcomes, tables, report, seconds)
+
+
+def _truths(plan: StudyPlan):
+    """(b, b_app) per setting of the generated records, which are made with the paper's
+    parameters; (None, None) for a user's records, which have no truth."""
+    if plan.records_dir:
+        return None, None
+    truth = {s: paper_parameters(s) for s in plan.settings}
+    return ({s: p.b for s, p in truth.items()},
+            {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()})
+
+
+def _tables(plan: StudyPlan, fits: list, joint, truth_b, truth_app) -> tuple[dict, dict]:
+    """The study's tables by name, and the CSV file each one is written to (``joint_info``
+    is for the report only)."""
     cal = plan.calibration
     inert = inertance_table(fits, calibration=cal)  # each setting's records combined (product of normals)
-    # generated records are made with the paper's parameters; a user's records have no truth
-    truth = None if plan.records_dir else {s: paper_parameters(s) for s in plan.settings}
-    truth_b = None if truth is None else {s: p.b for s, p in truth.items()}
-    truth_app = None if truth is None else {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()}
     tables = {"records": record_table(fits), "phi": phi_table(fits), "models": model_comparison(fits),
               "contraction": contraction_table(fits)}
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
@@ -193,20 +213,29 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
             draws = np.column_stack([np.ravel(joint.draws[f"b_{r['setting']}"]) for r in inert])
     tables["inertance"] = inert
     tables["regression"] = flywheel_regression(inert, truth_b=truth_b, calibration=cal, draws=draws)
-    for key, name in files.items():
-        write_csv(out / name, tables[key])
-    figures = {"theory_vs_identified.png": (plot_inertance, inert), "phi_map.png": (plot_phi_map, tables["phi"]),
-               "model_comparison.png": (plot_models, tables["models"])}
+    return tables, files
+
+
+def _write_figures(out: Path, tables: dict) -> None:
+    """The study's figures beside its tables, each closed once saved."""
+    import matplotlib.pyplot as plt
+
+    from .plots import plot_inertance, plot_models, plot_phi_map
+
+    figures = {"theory_vs_identified.png": (plot_inertance, tables["inertance"]),
+               "phi_map.png": (plot_phi_map, tables["phi"]), "model_comparison.png": (plot_models, tables["models"])}
     for name, (plot, rows) in figures.items():
         if rows:
             fig = plot(rows)
-            fig.savefig(out / name, dpi=110)
-            plt.close(fig)
-    versions = fit_versions()
-    report = write_report(out, plan, tables, outcomes, versions, truth_b, truth_app)
-    t3 = time.perf_counter()
-    seconds = {"records": t1 - t0, "fits": t2 - t1, "joint": t_joint - t2, "analysis_and_report": t3 - t_joint,
-               "total": t3 - t0}
+            try:
+                fig.savefig(out / name, dpi=110)
+            finally:
+                plt.close(fig)
+
+
+def _write_study_json(out: Path, plan: StudyPlan, versions: dict, seconds: dict, processes, scheduler,
+                      outcomes: list) -> None:
+    """study.json: the plan, versions, timings and outcomes, and every run into the folder."""
     this_run = _run_entry(datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), seconds,
                           processes, outcomes)
     info = {"plan": dataclasses.asdict(plan), "versions": versions, "seconds": seconds,
@@ -216,7 +245,6 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
             # takes seconds, and must not hide the time the sampling took
             "runs": _earlier_runs(out / "study.json") + [this_run]}
     (out / "study.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
-    return StudyResult(out, outcomes, tables, report, seconds)
 
 
 def _earlier_runs(path: Path) -> list:

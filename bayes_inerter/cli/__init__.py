@@ -1,0 +1,97 @@
+"""The command line: ``bayes-inerter COMMAND ...``.
+
+Exit status: 0 success; 1 bad input or a failed run (one-line error, no traceback);
+2 usage error (argparse); 130 interrupted; 141 the output's reader closed the pipe.
+
+Here: how a command runs (its exit status, the one-line error, Ctrl-C). The options are
+in :mod:`.parser`; the commands in :mod:`.records` (``generate``, ``inspect``,
+``demo``), :mod:`.fit` and :mod:`.study` (``study``, ``report``), which take what they
+need from here when they run.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from .fit import cmd_fit
+from .parser import CHECKPOINT_SECONDS, FIT_COORDINATES, RECORD_CHECKS, build_parser  # noqa: F401  (tests' names)
+from .records import cmd_demo, cmd_generate, cmd_inspect
+from .study import cmd_report, cmd_study
+
+__all__ = ["main"]
+
+EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 130, 141
+
+
+class CliError(Exception):
+    """An error reported as one line on stderr with exit status 1."""
+
+
+#: Set by Ctrl-C (:func:`_on_sigint`) for the rest of the command.
+_INTERRUPTED = False
+
+
+def _on_sigint(signum, frame):
+    """Ctrl-C: remembered, then raised as KeyboardInterrupt. Python drops an exception
+    raised while it runs a weakref callback or a ``__del__`` ("Exception ignored in ..."):
+    a fit on two processes, interrupted there, once ran on to its last step and exit
+    status 0. The commands' per-step callbacks raise it again (:func:`_check_interrupt`)."""
+    global _INTERRUPTED
+    _INTERRUPTED = True
+    raise KeyboardInterrupt
+
+
+def _check_interrupt() -> None:
+    """Raise KeyboardInterrupt if Ctrl-C came, even if its first raise was dropped."""
+    if _INTERRUPTED:
+        raise KeyboardInterrupt
+
+
+def main(argv=None) -> int:
+    import signal
+    import threading
+
+    global _INTERRUPTED
+    # the commands looked up as main runs: a test puts its own in their place
+    parser = build_parser({"demo": cmd_demo, "generate": cmd_generate, "fit": cmd_fit, "study": cmd_study,
+                           "report": cmd_report, "inspect": cmd_inspect})
+    args = parser.parse_args(argv)
+    _INTERRUPTED = False
+    # Ctrl-C's own handler, where Python's default one is in place (not where SIGINT is
+    # ignored, as in a background job, nor off the main thread); restored on the way out
+    previous = signal.getsignal(signal.SIGINT)
+    ours = previous is signal.default_int_handler and threading.current_thread() is threading.main_thread()
+    if ours:
+        signal.signal(signal.SIGINT, _on_sigint)
+    import warnings
+
+    import numpy as np
+
+    # library warnings that mean nothing to a user (arviz's FutureWarning on import,
+    # numpy's on an overflow the code handles); the commands say what matters in words
+    try:
+        import logging
+
+        logging.getLogger("arviz").setLevel(logging.ERROR)  # shape warnings of short chains, said in words
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.filterwarnings("ignore", category=FutureWarning)
+            warnings.filterwarnings("ignore", category=RuntimeWarning)
+            code = args.func(args)
+        if _INTERRUPTED:  # came where it could only be dropped, and nothing asked again
+            raise KeyboardInterrupt
+        return code
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:  # the reader went away (| head): nothing more to say, to anyone
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_PIPE
+    except (CliError, ValueError, OSError, RuntimeError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_FAIL
+    finally:
+        if ours:
+            signal.signal(signal.SIGINT, previous)
+

@@ -1,0 +1,70 @@
+"""The ``fit`` command: one record's posterior, and what it says in a few lines."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+__all__ = ["cmd_fit"]
+
+
+def _percent_interval(lo: float, hi: float) -> str:
+    """'lo % to hi %' with the fewest decimals (2 to 8) that tell the two apart."""
+    for d in range(2, 9):
+        a, b = f"{lo * 100:.{d}f}", f"{hi * 100:.{d}f}"
+        if a != b:
+            break
+    return f"{a} % to {b} %"
+
+
+def cmd_fit(args) -> int:
+    import os
+
+    from ..cli_progress import StepProgress
+    from ..inference import fit_record
+    from ..inference.coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
+    from ..inference.model import LikelihoodSettings
+    from ..inference.sampler import Adaptation
+    from . import EXIT_OK, _check_interrupt
+    from .records import load_record
+
+    # refused here, before the output folder is touched
+    rec, device, masses = load_record(args, need_masses=True)
+    print(f"masses: {masses.describe()}", flush=True)
+    bar = StepProgress("sampling", total=args.steps, check_interrupt=_check_interrupt)
+    processes = args.processes or min(2, os.cpu_count() or 1)
+    try:
+        result = fit_record(
+            rec, args.out, model=args.model, m_s=args.m_s, m_B=args.m_b, device=device, walkers=args.walkers,
+            steps=args.steps, seed=args.seed, fresh=args.fresh, processes=processes,
+            likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=bar.step,
+            report=bar.status, coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
+            checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots,
+        )
+    finally:
+        bar.close()
+    if result.recovered:
+        print(f"note: checkpoint damaged, recovered: {result.recovered}")
+    b = result.row("b")
+    print(f"b = {b['mean']:.6g} kg (94 % HDI {b['hdi_3%']:.6g} to {b['hdi_97%']:.6g}), "
+          f"{result.iterations} steps")
+    if result.b_theory is not None:
+        print(f"theory (device file geometry): b = {result.b_theory:.6g} kg "
+              f"({(b['mean'] - result.b_theory) / result.b_theory:+.1%} identified against it)")
+    phi = result.row("phi")
+    print(f"phi = {phi['mean']:.2%} (94 % HDI {_percent_interval(phi['hdi_3%'], phi['hdi_97%'])})")
+    for w in result.warnings:
+        print(f"warning: {w.message}")
+    edge = json.loads((Path(args.out) / "fit.json").read_text()).get("coordinates_domain_edge")
+    if edge is not None and edge > EDGE_WARNING:
+        print(f"warning: the posterior reaches |dZ/dZ_theta - 1| = {edge:.2f}, near the edge of the impedance "
+              f"coordinates' domain ({MAX_SENSITIVITY_CHANGE:g}), which may cut it; compare with "
+              "--coordinates unconstrained")
+    if result.converged:
+        print("converged")
+    else:
+        print(f"warning: {result.reason}; do not trust these intervals yet "
+              "(run again with more --steps, or without --steps)")
+    figures = "" if args.no_plots else "corner.png, bands.png, trace.png, phi.png, "
+    print(f"wrote {args.out}/summary.csv, posterior.nc, loo.json, chain.h5 (and its twin), {figures}fit.json")
+    return EXIT_OK

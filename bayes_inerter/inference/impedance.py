@@ -1,0 +1,236 @@
+"""The impedance coordinates' map (``coordinates``): a record's driving-point impedance
+at its drive frequency walked instead of the inertance (and the viscous sum).
+
+**Domain** (an assumption of these coordinates, not of the model). The map is one to
+one only where the nut and the bearing pass the inerter's impedance on to the drive
+nearly as it is. Where the nut is soft beside the inerter's own impedance (c_n and
+k_n / omega small against omega b) it hides the inertance: M rises with b and falls
+again, and two b give one M. Where a soft bearing resonates near omega, M has a pole in
+b. The impedance coordinates therefore cover the part of the prior where the rotation
+node's sensitivity G = dZ / dZ_theta stays within |G - 1| < 1/2 for every inertance
+(then dM / db lies between 1/2 and 3/2, and the 2 x 2 determinant where C is walked too
+exceeds 1/4), with M and C positive: **the prior restricted to that domain**, an
+assumption of these coordinates. It cuts off much of the default prior box of the
+unidentified deformations (at B2 and 1.5 Hz, a bearing stiffness k_B below 1.1e7 N/m
+leaves it, 6 x below the paper's; c_n below half the paper's), none of the paper's
+devices: they have |G - 1| <= 0.19 at 0.5-1.5 Hz (the largest at B2, 1.5 Hz, where
+omega b is 9 % of the nut's damping c_n), and the full study's posteriors stay well
+inside (``fit.json`` records the largest |G - 1| over the kept draws; the command line
+warns above ``EDGE_WARNING``). The sampler sees -inf outside; start walkers drawn
+outside are drawn again, and a start outside is refused. The
+"unconstrained" and "physical" coordinates cover the whole prior. The maps are exact
+to rounding inside the domain (round trips and Jacobians are tested against finite
+differences across the prior box).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["ImpedanceMap", "driving_point", "MAX_SENSITIVITY_CHANGE", "EDGE_WARNING"]
+
+_NEWTON_ITERATIONS = 30
+_NEWTON_RTOL = 1e-13
+#: The domain: |G - 1| below this for every inertance (see module docstring).
+MAX_SENSITIVITY_CHANGE = 0.5
+#: A posterior whose draws reach |G - 1| above this may be cut by the domain: warn.
+EDGE_WARNING = 0.4
+
+
+def driving_point(omega, m_B, m_s, b, c_f1, c_f2, c_n, k_n, c_B, k_B):
+    """Driving-point impedance Z = F / v (complex, N s/m) of the reduced network's linear
+    part at omega (rad/s), and G = dZ / dZ_theta, the sensitivity to the impedance
+    jw b + c_f2 of the rotation node. Plate m_B with c_f1; bearing c_B + k_B / jw;
+    screw m_s; nut c_n + k_n / jw; inertance b with c_f2 (the paper's Fig. 5 with the
+    Coulomb terms off). Works on scalars and on arrays alike."""
+    jw = 1j * omega
+    z_th = jw * b + c_f2
+    z_n = c_n + k_n / jw
+    z_nb = 1.0 / (1.0 / z_n + 1.0 / z_th)
+    z_s = jw * m_s + z_nb
+    z_b = c_B + k_B / jw
+    z_p = 1.0 / (1.0 / z_b + 1.0 / z_s)
+    z = jw * m_B + c_f1 + z_p
+    g = (z_p / z_s) ** 2 * (z_nb / z_th) ** 2
+    return z, g
+
+
+def _blank(x, bad):
+    """x with the rows flagged in ``bad`` (leading axes) set to NaN."""
+    if np.ndim(bad):
+        x[bad] = np.nan
+    elif bad:
+        x[...] = np.nan
+    return x
+
+
+@dataclass(frozen=True)
+class ImpedanceMap:
+    """Which entries of theta the impedance coordinates replace, and where the rest of
+    the network's linear part comes from.
+
+    Attributes
+    ----------
+    omega : reference angular frequency, rad/s.
+    m_B : plate mass, kg.
+    b_index : positions of log b (one per inertance: one record, or one per setting).
+    m_s : screw mass of each inertance's setting, kg.
+    damping : also walk C = Re Z instead of log c_f (one inertance, viscous sum and
+        share sampled: the single-record two-port model).
+    source : for c_f, c_share, c_f1, c_f2, c_n, k_n, c_B, k_B: (index in theta, log
+        scale) or a fixed value (kg, N s/m, N/m). c_f and c_share, when present, give
+        c_f1 = c_f c_share and c_f2 = c_f (1 - c_share).
+    """
+
+    omega: float
+    m_B: float
+    b_index: tuple
+    m_s: tuple
+    damping: bool
+    source: dict = field(default_factory=dict)
+
+    def _get(self, v, name):
+        src = self.source[name]
+        if isinstance(src, tuple):
+            i, log = src
+            return np.exp(v[..., i]) if log else v[..., i]
+        return src
+
+    def _viscous(self, v):
+        """(c_f1, c_f2, the plate's share or None) at v."""
+        if "c_f" in self.source:
+            c = self._get(v, "c_f")
+            s = self._get(v, "c_share")
+            return c * s, c * (1.0 - s), s
+        return self._get(v, "c_f1"), self._get(v, "c_f2"), None
+
+    def _network(self, v):
+        return [self._get(v, n) for n in ("c_n", "k_n", "c_B", "k_B")]
+
+    @staticmethod
+    def _inside(g):
+        """Whether a point whose rotation node has sensitivity g is in the domain."""
+        return np.abs(g - 1.0) < MAX_SENSITIVITY_CHANGE
+
+    def sensitivity_change(self, theta):
+        """max over the inertances of |G - 1| at theta (any leading axes): how near the
+        domain's edge (``MAX_SENSITIVITY_CHANGE``) a point lies."""
+        theta = np.asarray(theta, dtype=float)
+        c_n, k_n, c_B, k_B = self._network(theta)
+        c1, c2, _ = self._viscous(theta)
+        worst = np.zeros(theta.shape[:-1])
+        for i, m_s in zip(self.b_index, self.m_s):
+            _, g = driving_point(self.omega, self.m_B, m_s, np.exp(theta[..., i]), c1, c2, c_n, k_n, c_B, k_B)
+            worst = np.maximum(worst, np.abs(g - 1.0))
+        return worst
+
+    def forward(self, theta):
+        """u's impedance entries from theta (other entries copied); NaN rows outside the
+        domain."""
+        theta = np.asarray(theta, dtype=float)
+        u = theta.copy()
+        c_n, k_n, c_B, k_B = self._network(theta)
+        c1, c2, s = self._viscous(theta)
+        inside = np.ones(theta.shape[:-1], dtype=bool)
+        with np.errstate(all="ignore"):
+            for i, m_s in zip(self.b_index, self.m_s):
+                z, g = driving_point(self.omega, self.m_B, m_s, np.exp(theta[..., i]), c1, c2, c_n, k_n, c_B, k_B)
+                inside &= self._inside(g) & (z.imag > 0) & (z.real > 0 if self.damping else True)
+                u[..., i] = np.log(z.imag / self.omega)
+                if self.damping:
+                    u[..., self.source["c_f"][0]] = np.log(z.real)
+        return _blank(u, ~inside)
+
+    def inverse(self, u):
+        """theta from u (entries outside the map copied); NaN rows where the solution is
+        not in the domain (or there is none)."""
+        th = np.array(u, dtype=float)
+        c_n, k_n, c_B, k_B = self._network(th)
+        jw = 1j * self.omega
+        z_n, z_b = c_n + k_n / jw, c_B + k_B / jw
+        bad = np.zeros(th.shape[:-1], dtype=bool)
+        with np.errstate(all="ignore"):
+            if self.damping:
+                i_b, i_c = self.b_index[0], self.source["c_f"][0]
+                b, c_f = self._solve_damping(np.exp(th[..., i_b]), np.exp(th[..., i_c]), th, z_n, z_b)
+                bad |= ~((b > 0) & (c_f > 0) & np.isfinite(b) & np.isfinite(c_f))
+                th[..., i_b], th[..., i_c] = np.log(b), np.log(c_f)
+            else:
+                c1, c2, _ = self._viscous(th)
+                for i, m_s in zip(self.b_index, self.m_s):
+                    b = self._solve_inertance(np.exp(th[..., i]), m_s, c1, c2, z_n, z_b)
+                    bad |= ~((b > 0) & np.isfinite(b))
+                    th[..., i] = np.log(b)
+            c1, c2, s = self._viscous(th)
+            for i, m_s in zip(self.b_index, self.m_s):
+                _, g = driving_point(self.omega, self.m_B, m_s, np.exp(th[..., i]), c1, c2, c_n, k_n, c_B, k_B)
+                bad |= ~self._inside(g)
+        return _blank(th, bad)
+
+    def _solve_damping(self, M, C, th, z_n, z_b):
+        """(b, c_f) with Im Z / omega = M and Re Z = C: one real unknown, c_f, by Newton
+        (its derivative is -1 to within the nut and bearing corrections); b then follows
+        in closed form from the rotation node's impedance."""
+        w, jw = self.omega, 1j * self.omega
+        m_s = self.m_s[0]
+        target = C + jw * M
+        s = self._get(th, "c_share")
+        c_f = C
+        for _ in range(_NEWTON_ITERATIONS):
+            w_p = target - jw * self.m_B - s * c_f
+            z_s = 1.0 / (1.0 / w_p - 1.0 / z_b)
+            z_nb = z_s - jw * m_s
+            z_th = 1.0 / (1.0 / z_nb - 1.0 / z_n)
+            g = z_th.real - (1.0 - s) * c_f
+            dg = (-s * (z_th / z_nb) ** 2 * (z_s / w_p) ** 2).real - (1.0 - s)
+            step = g / dg
+            c_f = c_f - step
+            if np.all(np.abs(step) <= _NEWTON_RTOL * np.abs(c_f)):
+                break
+        w_p = target - jw * self.m_B - s * c_f
+        z_s = 1.0 / (1.0 / w_p - 1.0 / z_b)
+        z_th = 1.0 / (1.0 / (z_s - jw * m_s) - 1.0 / z_n)
+        converged = np.abs(z_th.real - (1.0 - s) * c_f) <= 1e-9 * np.abs(target)
+        return np.where(converged, z_th.imag / w, np.nan), c_f
+
+    def _solve_inertance(self, M, m_s, c1, c2, z_n, z_b):
+        """b with Im Z / omega = M, by Newton (d(Im Z / omega) / db = Re G, about 1)."""
+        w, jw = self.omega, 1j * self.omega
+
+        def residual(b):  # (Im Z / omega - M, its derivative in b)
+            z_th = jw * b + c2
+            z_nb = 1.0 / (1.0 / z_n + 1.0 / z_th)
+            z_s = jw * m_s + z_nb
+            z_p = 1.0 / (1.0 / z_b + 1.0 / z_s)
+            return z_p.imag / w + self.m_B - M, ((z_p / z_s) ** 2 * (z_nb / z_th) ** 2).real
+
+        b = np.maximum(M - self.m_B - m_s, 1e-3 * M)
+        for _ in range(_NEWTON_ITERATIONS):
+            f, g = residual(b)
+            step = f / g
+            b = np.maximum(b - step, 0.1 * b)
+            if np.all(np.abs(step) <= _NEWTON_RTOL * np.abs(b)):
+                break
+        converged = np.abs(residual(b)[0]) <= 1e-9 * np.abs(M)
+        return np.where(converged, b, np.nan)
+
+    def log_jacobian(self, theta):
+        """log |det d theta_map / d u_map| at theta (the map's entries only; the others
+        enter the impedance as constants, so the full Jacobian is block triangular)."""
+        c_n, k_n, c_B, k_B = self._network(theta)
+        c1, c2, s = self._viscous(theta)
+        total = 0.0
+        with np.errstate(all="ignore"):
+            for i, m_s in zip(self.b_index, self.m_s):
+                b = np.exp(theta[..., i])
+                z, g = driving_point(self.omega, self.m_B, m_s, b, c1, c2, c_n, k_n, c_B, k_B)
+                M = z.imag / self.omega
+                if self.damping:
+                    c_f = np.exp(theta[..., self.source["c_f"][0]])
+                    det = s * g.real + (1.0 - s) * np.abs(g) ** 2
+                    total = total + np.log(M * z.real / (b * c_f)) - np.log(np.abs(det))
+                else:
+                    total = total + np.log(M / b) - np.log(np.abs(g.real))
+        return total
