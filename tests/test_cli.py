@@ -21,6 +21,16 @@ def test_generate_one_record(tmp_path, capsys):
     assert read_record(coloured).metadata["generator"]["noise_corner"] == 20.0
 
 
+@pytest.mark.slow
+def test_generate_a_paper_like_record(tmp_path, capsys):
+    out = tmp_path / "a1.csv"
+    assert main(["generate", "--truth", "paper-like", "--setting", "A1", "--freq", "1.5", "--out", str(out),
+                 "--duration", "1.0", "--ramp", "0.3"]) == 0
+    meta = read_record(out).metadata
+    assert meta["truth"] == "paper-like" and meta["generator"]["duration"] == 1.0
+    assert meta["generator"]["friction"] == "stribeck" and meta["generator"]["backlash"] > 0
+
+
 def test_generate_paper_grid(tmp_path, capsys):
     out = tmp_path / "grid"
     assert main(["generate", "--paper-grid", "--out", str(out), "--duration", "0.3", "--ramp", "0.1"]) == 0
@@ -64,6 +74,8 @@ def test_inspect_bad_record(tmp_path, capsys):
         (["generate", "--paper-grid", "--out", "x.csv"], "writes a folder"),
         (["generate", "--setting", "A1", "--freq", "1", "--out", "x.csv", "--noise-corner", "700"],
          "noise_corner must lie between"),
+        (["generate", "--truth", "paper-like", "--setting", "A1", "--freq", "0.7", "--out", "x.csv"],
+         "a paper-like record is one of the paper's settings at 0.5, 1 or 1.5 Hz"),
     ],
 )
 def test_generate_bad_input(tmp_path, monkeypatch, capsys, argv, message):

@@ -98,6 +98,10 @@ def _add_generate(sub) -> argparse.ArgumentParser:
     p.add_argument("--freq", type=_positive_float, help="drive frequency, Hz")
     p.add_argument("--paper-grid", action="store_true", help="all 27 records of the paper into --out (a folder)")
     p.add_argument("--out", required=True, help="record file (.csv), or folder with --paper-grid")
+    p.add_argument("--truth", choices=("model", "paper-like"), default="model",
+                   help="model: the device as the generator settings below say (default); paper-like: a richer "
+                        "device drawn per record (records.paper_like: full network, Stribeck, backlash, "
+                        "calibration errors, coloured noise; --amplitude, --fs, --duration, --ramp still apply)")
     _add_generator_options(p)
     return p
 

@@ -20,6 +20,18 @@ def _settings_from(args):
     )
 
 
+def _paper_like(settings):
+    """The paper-like device, with the record's length and rate from ``settings``."""
+    import dataclasses
+
+    from ..records.generator import GeneratorSettings
+    from ..records.paper_like import PaperLike
+
+    base = dataclasses.replace(GeneratorSettings(), amplitude=settings.amplitude, fs=settings.fs,
+                               duration=settings.duration, ramp=settings.ramp)
+    return PaperLike(base=base)
+
+
 def _progress(iterable, total, desc):
     from tqdm import tqdm
 
@@ -29,15 +41,19 @@ def _progress(iterable, total, desc):
 def cmd_generate(args) -> int:
     from ..device import FREQUENCIES_HZ, SETTINGS, paper_parameters
     from ..records import generate_record, paper_grid, write_record
+    from ..records.paper_like import paper_like_grid, paper_like_record
     from . import EXIT_OK, CliError
 
     settings = _settings_from(args)
+    device = _paper_like(settings) if args.truth == "paper-like" else None
     out = Path(args.out)
     if args.paper_grid:
         if out.suffix.lower() == ".csv":
             raise CliError(f"--paper-grid writes a folder of records; {out} looks like a file name")
         total = len(SETTINGS) * len(FREQUENCIES_HZ)
-        for name, freq, rec in _progress(paper_grid(settings=settings, seed=args.seed), total, "generating"):
+        grid = (paper_grid(settings=settings, seed=args.seed) if device is None else
+                paper_like_grid(seed=args.seed, device=device))
+        for name, freq, rec in _progress(grid, total, "generating"):
             path, _ = write_record(out / f"{name}_{freq:g}Hz.csv", rec)
             print(f"wrote {path}")
         return EXIT_OK
@@ -45,10 +61,14 @@ def cmd_generate(args) -> int:
         raise CliError("give --setting and --freq for one record, or --paper-grid for all 27")
     if out.suffix.lower() != ".csv":
         raise CliError(f"--out must name a .csv file for one record, got {out}")
-    rec = generate_record(
-        paper_parameters(args.setting), args.freq, settings=settings, rng=args.seed,
-        setting_name=args.setting.upper(),
-    )
+    if device is not None:
+        try:
+            rec = paper_like_record(args.setting.upper(), args.freq, seed=args.seed, device=device)
+        except ValueError as exc:
+            raise CliError(f"{exc}: a paper-like record is one of the paper's settings at 0.5, 1 or 1.5 Hz") from None
+    else:
+        rec = generate_record(paper_parameters(args.setting), args.freq, settings=settings, rng=args.seed,
+                              setting_name=args.setting.upper())
     path, side = write_record(out, rec)
     print(f"wrote {path} ({len(rec.time)} samples, {rec.duration:g} s at {rec.fs:g} Hz) and {side}")
     return EXIT_OK
