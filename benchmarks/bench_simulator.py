@@ -18,10 +18,9 @@ from conftest import inverse_dynamics_force  # noqa: E402
 from reference import hybrid_reference  # noqa: E402
 
 from bayes_inerter import paper_parameters, simulate  # noqa: E402
-from bayes_inerter._stiff import run_stiff  # noqa: E402
 from bayes_inerter.models import build_network  # noqa: E402
 from bayes_inerter.network import compile_network  # noqa: E402
-from bayes_inerter.simulate import _contacts, run_piecewise_linear  # noqa: E402
+from bayes_inerter.simulate import contacts, run_piecewise_linear  # noqa: E402
 
 
 def timed(fn, repeats):
@@ -52,16 +51,13 @@ def main():
     A, B = compiled.state_space()
     h = t[1] - t[0]
     print(f"record: {args.setting}, {args.freq} Hz, {args.duration} s at {1 / h:.0f} Hz "
-          f"({len(t)} samples); contacts: {len(_contacts(compiled)[0])}")
+          f"({len(t)} samples); contacts: {len(contacts(compiled.coulomb_bounds, compiled.masses)[0])}")
 
     simulate(p, t, f)  # compile the kernel
     a, t_api = timed(lambda: simulate(p, t, f), args.repeats)
     _, t_kernel = timed(lambda: run_piecewise_linear(compiled, A, B, f, h), args.repeats)
 
-    A0, B0 = compiled.state_space(viscous=False)
-    (a_radau, _), t_radau = timed(
-        lambda: run_stiff(compiled, A0, B0, t, f, v_eps=1e-4, rtol=1e-6), 3
-    )
+    a_radau, t_radau = timed(lambda: simulate(p, t, f, method="stiff", v_eps=1e-4, rtol=1e-6), 3)
     print(f"exact kernel, simulate():         median {t_api * 1e3:8.3f} ms")
     print(f"exact kernel, without API checks: median {t_kernel * 1e3:8.3f} ms")
     print(f"scipy Radau rtol 1e-6, tanh 1e-4: median {t_radau * 1e3:8.1f} ms")

@@ -71,7 +71,7 @@ def main():
         f2p = next(f for f in fits if f["model"] == "two-port")
         summ = {r.split(",")[0]: float(r.split(",")[1]) for r in
                 (f2p["_dir"] / "summary.csv").read_text().splitlines()[1:]}
-        theta = np.array([np.log(summ[n]) if lg else summ[n] for n, lg in zip(model.names, model._log)])
+        theta = np.array([np.log(summ[n]) if lg else summ[n] for n, lg in zip(model.names, [model.all_priors[n].log_scale for n in model.names])])
         params = model.parameters(theta)
         t_lp = median_time(lambda: model.log_prob(theta))
         t_sim = median_time(lambda: simulate(params, rec.time, rec.force, sampling="mean"))
