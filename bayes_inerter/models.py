@@ -25,9 +25,9 @@ from numba import njit
 
 from .device import DEFAULT_GEOMETRY, InerterParameters, paper_parameters
 from .friction import FrictionLaw, make_law
-from .network import Deformation, Friction, Inerter, Mass, Network, cascade, compile_network
+from .network import Backlash, Deformation, Friction, Inerter, Mass, Network, cascade, compile_network
 
-__all__ = ["NETWORKS", "build_network", "lead_angle", "NUT_SHARE", "FIELDS", "LinearChain", "linear_chain"]
+__all__ = ["NETWORKS", "build_network", "with_backlash", "lead_angle", "NUT_SHARE", "FIELDS", "LinearChain", "linear_chain"]
 
 #: The parameters in :class:`InerterParameters`' order (the vectors of :class:`LinearChain`).
 FIELDS = tuple(f.name for f in dataclasses.fields(InerterParameters))
@@ -140,6 +140,15 @@ def build_network(name: str, params: InerterParameters, friction="coulomb", **op
             f"unknown network {name!r}; choose one of {', '.join(NETWORKS)}"
         ) from None
     return builder(params, friction, **options)
+
+
+def with_backlash(net: Network, gap: float) -> Network:
+    """``net`` with a dead zone of half-width ``gap`` (m) in its nut link, the last
+    deformation of the chain (:class:`.network.Backlash`)."""
+    blocks = list(net.blocks)
+    j = max(i for i, b in enumerate(blocks) if isinstance(b, Deformation))
+    blocks[j] = dataclasses.replace(blocks[j], backlash=Backlash(gap))
+    return Network(tuple(blocks), net.name + "+backlash")
 
 
 @dataclass(frozen=True)

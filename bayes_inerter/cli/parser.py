@@ -62,6 +62,10 @@ def _add_generator_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--seed", type=int, default=0, help="noise seed (%(default)s)")
 
 
+#: ``inference.model.MODELS``, written out so that the parser does not import numpy's
+#: world before it is needed; a test keeps the two equal.
+FIT_MODELS = ("two-port", "rigid", "linear", "two-port-stribeck", "two-port-backlash", "two-port-rich")
+
 #: ``records.checks.CHECKS``, written out so that the parser does not import numpy's
 #: world before it is needed; a test keeps the two equal.
 RECORD_CHECKS = ("time-unit", "flat", "clipped", "accel-vs-disp", "apparent-mass")
@@ -111,7 +115,9 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("record", help="record CSV file")
     p.add_argument("--out", required=True, help="output folder (a checkpoint there is continued)")
     _add_record_options(p)
-    p.add_argument("--model", choices=("two-port", "rigid", "linear"), default="two-port", help="model (%(default)s)")
+    p.add_argument("--model", choices=FIT_MODELS, default="two-port",
+                   help="model (%(default)s); two-port-stribeck, -backlash and -rich add Stribeck friction, nut "
+                        "backlash or both (docs/inference.md)")
     p.add_argument("--walkers", type=_positive_int, help="walkers (default 2 x parameters + 2)")
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
     p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")

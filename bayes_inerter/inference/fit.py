@@ -158,14 +158,15 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                          b_theory=b_theory)
 
 
-def fit_joint(records, out, *, centres: list[dict] | None = None, walkers: int | None = None, steps: int | None = None,
-              seed: int = 0, processes: int = 1, likelihood: LikelihoodSettings | None = None,
+def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | None = None, walkers: int | None = None,
+              steps: int | None = None, seed: int = 0, processes: int = 1, likelihood: LikelihoodSettings | None = None,
               priors: dict | None = None, convergence: Convergence | None = None, progress=None, report=None,
               plots: bool = True, coordinates: str = "impedance",
               adaptation: Adaptation | None = Adaptation()) -> FitResult:
     """Sample the joint posterior of several records (``joint.JointModel``: shared
     frictions and deformations, one b per flywheel setting) into ``out``: chain.h5,
     summary.csv, fit.json, b_draws.npz (``DRAWS_FILE``), corner.png (the b's), trace.png.
+    ``model``: each record's model (``JointModel.model``).
 
     ``centres``: one dict of single-record posterior centres (sampled values by name) per
     record; the run starts from the joint optimum that Nelder-Mead, restarted while it
@@ -180,7 +181,7 @@ def fit_joint(records, out, *, centres: list[dict] | None = None, walkers: int |
     from .optimize import NM_RESTARTS, find_start, local_optimum
 
     out = Path(out)
-    jm = JointModel(tuple(records), priors=priors or {}, likelihood=likelihood or LikelihoodSettings())
+    jm = JointModel(tuple(records), priors=priors or {}, likelihood=likelihood or LikelihoodSettings(), model=model)
     check_run_options(jm.ndim, walkers, steps)
     coords = default_coordinates(jm, coordinates)
     check_output_folder(out)
@@ -206,7 +207,7 @@ def fit_joint(records, out, *, centres: list[dict] | None = None, walkers: int |
         np.savez_compressed(out / DRAWS_FILE, **draws)
         if plots:
             _write_joint_plots(out, jm, sample)
-        info = _run_info("joint", jm, got, seed, {"records": joint_records(jm)})
+        info = _run_info("joint", jm, got, seed, {"records": joint_records(jm), "record_model": model})
         info["timings_s"] = {"sampling": got.seconds, "total": time.perf_counter() - t0,
                              **_sampling_all_runs(out, got.seconds, run, run.start_theta is not None)}
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")

@@ -57,12 +57,15 @@ class JointModel:
     """Log-posterior of several records of one device (see module docstring).
 
     ``records`` are :class:`Record` objects whose metadata name their flywheel
-    ``setting`` (the grid's records do; a user's need it).
+    ``setting`` (the grid's records do; a user's need it). ``model``: the single-record
+    model every record is fitted with (``model.MODELS``, the two-port model or a richer
+    one; a richer one's effects are the device's, shared by every record).
     """
 
     records: tuple
     priors: dict = field(default_factory=dict)
     likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
+    model: str = "two-port"
 
     def __post_init__(self) -> None:
         self.records = tuple(self.records)
@@ -79,7 +82,9 @@ class JointModel:
         self.freq_of = freqs
         self.settings = [s for s in SETTINGS if s in settings]
         self.frequencies = sorted(set(freqs))
-        parts = [PosteriorModel(rec, "two-port", priors=self.priors, likelihood=self.likelihood)
+        if not self.model.startswith("two-port"):
+            raise ValueError(f"the joint model shares the two-port model's parameters; got model {self.model!r}")
+        parts = [PosteriorModel(rec, self.model, priors=self.priors, likelihood=self.likelihood)
                  for rec in self.records]
         self.parts = parts
         first = parts[0]

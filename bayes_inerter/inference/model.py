@@ -31,7 +31,8 @@ from ..network.compile import chain_state_space
 from ..records.conditioning import lowpass
 from ..masses import resolve_masses
 from ..records.record import Record
-from ..simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate
+from ..simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate, simulate_network
+from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
 from .likelihood import LikelihoodSettings
 from .priors import DEFAULT_PRIORS, NOISE_PRIORS, SPLIT_PRIORS
 
@@ -59,10 +60,12 @@ def _misfit(sim, grid, observed, w0, w1, measured):
 
 #: The nested models: network and the parameters each one frees (the rest fixed).
 #: In ``rigid`` one body carries one friction: f1_0 and c_f1 are the totals (f2 = 0).
+#: The richer models add effects the paper's model lacks (:mod:`.effects`).
 MODELS = {
     "two-port": ("reduced", PHYSICAL),
     "rigid": ("rigid", ("b", "f1_0", "c_f1")),
     "linear": ("linear", ("b", "c_n", "k_n", "c_B", "k_B")),
+    **{name: ("reduced", PHYSICAL + extra) for name, extra in EFFECTS.items()},
 }
 
 
@@ -119,11 +122,12 @@ class PosteriorModel:
             self.split = can_split
         if self.split and not can_split:
             raise ValueError(f"the {self.model} model has no friction pair to split")
-        known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(NOISE_PRIORS)
+        known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(NOISE_PRIORS) | set(EFFECT_PRIORS)
         unknown = set(self.priors) - known
         if unknown:
             raise ValueError(f"priors given for unknown parameters: {', '.join(sorted(unknown))}")
-        self.all_priors = {**DEFAULT_PRIORS, **SPLIT_PRIORS, **NOISE_PRIORS, **self.priors}
+        self.all_priors = {**DEFAULT_PRIORS, **SPLIT_PRIORS, **NOISE_PRIORS, **EFFECT_PRIORS, **self.priors}
+        self.effect_names = [n for n in self.free if n in EFFECT_PRIORS]
         if self.split:
             sampled = [n for n in self.free if n not in pairs]
             sampled[1:1] = ["f_0", "f_share", "c_f", "c_share"]
@@ -176,10 +180,10 @@ class PosteriorModel:
         self.fixed = fixed
         # The evaluation's short way (see simulate_lp): the network's arrays straight from
         # the parameters, with no network built; where there is none, simulate().
-        self._chain = linear_chain(self.network) if q == 1 else None
+        self._chain = linear_chain(self.network) if q == 1 and not self.effect_names else None
         self._fixed_vector = np.array([float(fixed[f]) for f in FIELDS])
         pos = {n: i for i, n in enumerate(self.names)}
-        direct = [n for n in self.free if n in pos]
+        direct = [n for n in self.free if n in pos and n in FIELDS]
         self._direct = (np.array([FIELDS.index(n) for n in direct], dtype=int),
                         np.array([pos[n] for n in direct], dtype=int))
         self._split_at = [pos[n] for n in ("f_0", "f_share", "c_f", "c_share")] if self.split else None
@@ -235,12 +239,22 @@ class PosteriorModel:
         return vals
 
     def parameters(self, theta) -> InerterParameters:
-        """The network's parameters at theta."""
+        """The network's parameters at theta (the effects apart: :meth:`effects`)."""
         vals = dict(zip(self.names, map(float, self.to_values(theta))))
-        return InerterParameters(**{**self.fixed, **self.physical(vals)})
+        phys = {n: v for n, v in self.physical(vals).items() if n in FIELDS}
+        return InerterParameters(**{**self.fixed, **phys})
 
-    def to_theta(self, params: InerterParameters, sigma: float, rho: float = 0.0) -> np.ndarray:
-        phys = {n: getattr(params, n) for n in self.free}
+    def effects(self, theta) -> dict:
+        """The richer models' effects at theta (``effects.EFFECTS``; empty for the others)."""
+        vals = dict(zip(self.names, map(float, self.to_values(theta))))
+        return {n: vals[n] for n in self.effect_names}
+
+    def to_theta(self, params: InerterParameters, sigma: float, rho: float = 0.0,
+                 effects: dict | None = None) -> np.ndarray:
+        """theta at ``params`` and noise (``effects``: the richer models' effects, by
+        default ``effects.NO_EFFECT``'s)."""
+        phys = {n: getattr(params, n) for n in self.free if n in FIELDS}
+        phys.update({n: {**NO_EFFECT, **(effects or {})}[n] for n in self.effect_names})
         vals = self.sampled_from_physical({**phys, "sigma": sigma, "rho": rho})
         theta = [math.log(vals[n]) if lg else vals[n] for n, lg in zip(self.names, self._log)]
         return np.array(theta, dtype=float)
@@ -276,6 +290,9 @@ class PosteriorModel:
         building and compiling a network at every evaluation (about a quarter of a 10 s
         record's evaluation before)."""
         lk = self.likelihood
+        if self.effect_names:
+            net = effect_network(self.network, self.parameters(theta), self.effects(theta))
+            return simulate_network(net, self._drive, sampling=lk.sampling)
         if self._chain is None:
             return simulate(self.parameters(theta), self._drive, network=self.network, sampling=lk.sampling)
         masses, link_c, link_k, viscous, bounds = self._chain.arrays(self.field_vector(theta))

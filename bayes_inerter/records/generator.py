@@ -23,8 +23,8 @@ from scipy import signal
 from .. import _stiff
 from ..device import FREQUENCIES_HZ, SETTINGS, InerterParameters, paper_parameters
 from ..friction import STRIBECK_RATIO, STRIBECK_VELOCITY, make_law
-from ..models import build_network
-from ..network import Backlash, Deformation, Network, compile_network
+from ..models import build_network, with_backlash
+from ..network import Network, compile_network
 from ..simulate import run_piecewise_linear
 from .record import Record
 
@@ -151,13 +151,7 @@ def _truth_network(params: InerterParameters, s: GeneratorSettings) -> Network:
         def friction(f0, c):
             return make_law("stribeck", f0, c, stribeck_ratio=s.stribeck_ratio, stribeck_velocity=s.stribeck_velocity)
     net = build_network(s.network, params, friction)
-    if s.backlash > 0:
-        blocks = list(net.blocks)
-        # the nut link is the last deformation of the chain
-        j = max(i for i, b in enumerate(blocks) if isinstance(b, Deformation))
-        blocks[j] = dataclasses.replace(blocks[j], backlash=Backlash(s.backlash))
-        net = Network(tuple(blocks), net.name + "+backlash")
-    return net
+    return with_backlash(net, s.backlash) if s.backlash > 0 else net
 
 
 #: Records are simulated and filtered in pieces of this many seconds of internal time,
