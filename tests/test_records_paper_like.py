@@ -51,3 +51,7 @@ def test_a_paper_like_record_keeps_the_papers_b_and_says_what_it_is():
     assert rec.metadata["generator"]["friction"] == "stribeck" and rec.metadata["generator"]["network"] == "full"
     again = paper_like_record("A1", 1.5, seed=2, device=dev)
     np.testing.assert_array_equal(rec.accel, again.accel)
+    # one seed, one laboratory: the same device at another frequency, with its own noise
+    other = paper_like_record("A1", 1.0, seed=2, device=dev).metadata["generator"]
+    for key in ("stribeck_ratio", "stribeck_velocity", "backlash", "force_gain", "accel_gain"):
+        assert other[key] == rec.metadata["generator"][key]

@@ -15,10 +15,11 @@ experiments (``studies/paper_like_phi.py`` measures that; ``results/paper-like/`
   (:class:`.sensitivity.SensorCalibration`'s defaults);
 - coloured sensor noise (a second-order low-pass at ``noise_corner``).
 
-Each record's effect sizes are drawn from the ranges below with the record's own seed,
-so a grid is a sample of devices, not one device; the true b per setting stays the
-paper's identified one (:func:`..device.paper_parameters`), so a study can be held
-against it.
+One seed is one laboratory: its device's effect sizes (and its pair of sensors) are
+drawn once from the ranges below and shared by every record made with that seed, as
+one ball screw and one pair of sensors serve all nine flywheel settings; each record
+has its own noise. The true b per setting stays the paper's identified one
+(:func:`..device.paper_parameters`), so a study can be held against it.
 """
 
 from __future__ import annotations
@@ -86,15 +87,16 @@ class PaperLike:
 
 def paper_like_record(name: str, freq: float, *, seed: int = 0, device: PaperLike | None = None,
                       frequencies=FREQUENCIES_HZ, names=tuple(SETTINGS)) -> Record:
-    """The paper-like record of setting ``name`` at ``freq``: its effect sizes and its
-    noise from the record's own stream, spawned from ``seed`` in the grid's order (as
+    """The paper-like record of setting ``name`` at ``freq``: the device drawn from the
+    first stream spawned from ``seed`` (the same for every record of that seed), the
+    noise from the record's own stream, spawned after it in the grid's order (as
     :func:`.generator.paper_record`), so each record can be made alone."""
     names, frequencies = list(names), list(frequencies)
     if name not in names or freq not in frequencies:
         raise ValueError(f"no setting {name!r} at {freq:g} Hz in the grid")
-    seeds = np.random.SeedSequence(seed).spawn(len(names) * len(frequencies))
-    rng = np.random.default_rng(seeds[names.index(name) * len(frequencies) + frequencies.index(freq)])
-    settings = (device or PaperLike()).draw(rng)
+    seeds = np.random.SeedSequence(seed).spawn(1 + len(names) * len(frequencies))
+    settings = (device or PaperLike()).draw(np.random.default_rng(seeds[0]))
+    rng = np.random.default_rng(seeds[1 + names.index(name) * len(frequencies) + frequencies.index(freq)])
     rec = generate_record(paper_parameters(name), freq, settings=settings, rng=rng, setting_name=name)
     rec.metadata["truth"] = "paper-like"
     return rec
