@@ -16,8 +16,9 @@ optimum the sampler would start from (``optimize.find_start``, then
 ``optimize.laplace_covariance``), in log b: the intervals are exp(mu +- z sd) at 50 % and
 94 %. ``--mcmc N`` also runs the default sampler (``fit_record``) on the first N
 replicates' single records, to check the approximation against the posterior itself.
-Methods whose name ends in ``+sensors`` add the sensors' calibration uncertainty
-(``records.sensitivity.SensorCalibration``'s defaults) to the interval.
+Methods whose name has ``+sensors`` add the sensors' calibration uncertainty
+(``records.sensitivity.SensorCalibration``'s defaults) to the interval, ``+discrepancy``
+the harmonic model discrepancy's share (``inference.discrepancy``).
 
 Writes replicates.csv (one row per replicate and method), coverage.csv (per method:
 replicates, coverage of the 50 % and 94 % intervals with binomial standard errors, median
@@ -36,6 +37,7 @@ import numpy as np
 
 from bayes_inerter.device import FREQUENCIES_HZ, SETTINGS
 from bayes_inerter.executor import make_executor
+from bayes_inerter.inference.discrepancy import harmonic_discrepancy
 from bayes_inerter.inference.joint import JointModel
 from bayes_inerter.inference.model import PosteriorModel
 from bayes_inerter.inference.optimize import NM_RESTARTS, find_start, laplace_covariance, local_optimum
@@ -44,7 +46,8 @@ from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 from bayes_inerter.records.sensitivity import SensorCalibration
 
 Z50, Z94 = 0.6744897501960817, 1.8807936081512509  # normal quantiles of 0.75 and 0.97
-METHODS = ("two-port", "two-port+sensors", "two-port-stribeck", "two-port-backlash", "two-port-rich", "joint")
+METHODS = ("two-port", "two-port+sensors", "two-port+discrepancy", "two-port+discrepancy+sensors",
+           "two-port-stribeck", "two-port-backlash", "two-port-rich", "two-port-rich+discrepancy", "joint")
 
 
 def _laplace_b(model, theta, name: str) -> tuple[float, float]:
@@ -54,10 +57,12 @@ def _laplace_b(model, theta, name: str) -> tuple[float, float]:
     return float(theta[i]), float(math.sqrt(max(cov[i, i], 0.0)))
 
 
-def _single(rec, model_name: str, rng) -> dict:
+def _single(rec, model_name: str, rng, discrepancy: bool) -> dict:
     pm = PosteriorModel(rec, model_name)
     theta, _ = find_start(pm, rng)
     mu, sd = _laplace_b(pm, theta, "b")
+    if discrepancy:
+        sd = math.hypot(sd, harmonic_discrepancy(pm, theta).sd_log_b)
     return {"mu": mu, "sd": sd, "phi": pm.log_prob(theta)[1]}
 
 
@@ -92,7 +97,8 @@ def replicate(job) -> list[dict]:
         if method == "joint":
             got = _joint(list(recs.values()), setting, fit_rng)
         else:
-            got = _single(rec, method.removesuffix("+sensors"), fit_rng)
+            model_name = method.split("+")[0]
+            got = _single(rec, model_name, fit_rng, "+discrepancy" in method)
         sd = got["sd"]
         if method.endswith("+sensors"):
             cal = SensorCalibration()
