@@ -5,7 +5,7 @@
 
 Two methods, chosen by ``method="auto"``:
 
-- ``"exact"`` (event-driven kernel, ``_kernel.py``): for networks whose frictions are all
+- ``"exact"`` (event-driven kernel, ``_kernel/``): for networks whose frictions are all
   Coulomb plus viscous (set-valued sign, true stick-slip) and whose links have no dead
   zone. Exact for the linear part at any stiffness, switch instants located to
   h / 2^20. Fast: this is the likelihood's simulator.

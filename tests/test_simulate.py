@@ -10,7 +10,7 @@ from scipy import signal
 from scipy.linalg import expm
 
 from bayes_inerter import SimulationError, paper_parameters, simulate, simulate_network
-from bayes_inerter._kernel import _levels, _tables
+from bayes_inerter._kernel._compiled import levels, tables
 from bayes_inerter.models import NETWORKS, build_network
 from bayes_inerter.network import accel_response, compile_network
 from bayes_inerter.simulate import Drive, mean_acceleration
@@ -132,8 +132,8 @@ def test_tables_match_scipy_expm():
     p = paper_parameters("A1")
     A, _ = compile_network(build_network("reduced", p)).state_space()
     h = 1e-3
-    J = _levels(A, h)
-    F = _tables(A, h, J)
+    J = levels(A, h)
+    F = tables(A, h, J)
     for j in (0, 3, 10, J):
         E = expm(A * h / 2**j)
         np.testing.assert_allclose(F[j] + np.eye(len(A)), E, rtol=1e-9, atol=1e-12)
