@@ -180,6 +180,7 @@ class Stribeck(FrictionLaw):
         dlevel = dlevel * np.where(x > 0, x ** (self.delta - 1), 0.0) * np.sign(v) / self.v_s
         return t * level + self.c * v, (1 - t * t) / v_eps * level + t * dlevel + self.c
 
+    @functools.lru_cache(maxsize=64)  # noqa: B019 (frozen, hashable; a likelihood asks again and again)
     def piecewise(self, segments: int = STRIBECK_SEGMENTS) -> PiecewiseLinear:
         """The law in ``segments`` linear pieces (2 to 8; default ``STRIBECK_SEGMENTS``).
 
@@ -320,8 +321,8 @@ class PiecewiseLinear(FrictionLaw):
     def total(laws) -> PiecewiseLinear | None:
         """The sum of laws on one node as one piecewise-linear law, or None if one has none."""
         forms = [law.piecewise() for law in laws]
-        if any(form is None for form in forms):
-            return None
+        if any(form is None for form in forms) or len(forms) == 1:
+            return forms[0] if len(forms) == 1 else None
         speeds = tuple(sorted({v for form in forms for v in form.speeds}))
         forces = tuple(float(sum(form._parts(v)[1] for form in forms)) for v in speeds)
         return PiecewiseLinear(speeds, forces, sum(f.c for f in forms), sum(f.f_s for f in forms))

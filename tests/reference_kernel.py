@@ -5,52 +5,95 @@ and scipy, to check the generated kernels against (to rounding: the exponentials
 from scipy's ``expm``, not from the kernel's tables):
 
 - the augmented state z = [x, u, du, w] (state, inputs, their slopes over the sample
-  interval, each contact's Coulomb force) moves as z' = A_S z within a mode S (which
-  contacts stick; a stuck node's velocity row is zero);
-- each contact has a guard that must stay within a band: a sliding contact's velocity
-  within [0, inf) or (-inf, 0] (its sign), a stuck contact's holding force within
-  [-f0, f0];
+  interval, each contact's constant force, each link's offset) moves as z' = A_S z within
+  a mode S: which piece of its friction law each contact slides in, or that it sticks
+  (its node's row is then zero); which links are closed;
+- each element has a guard that must stay within a band: a sliding contact's velocity
+  within its piece's speeds (signed), a stuck contact's holding force within +-f_s, a
+  link's deflection within its gap (open) or beyond it on its side (closed);
 - a sample interval is walked in dyadic steps of h / 2^J; a step whose guard leaves its
   band at its end, or whose cubic Hermite interpolant (values and rates at both ends)
-  leaves it in between, is bisected down to one tick, and the contacts switch at the
-  tick after the crossing; then the interval goes on in the new mode.
+  leaves it in between, is bisected down to one tick, and the elements switch at the
+  tick after the crossing (contacts first, then links); then the interval goes on in
+  the new mode.
 """
 
 import numpy as np
 from scipy.linalg import expm
 
+from bayes_inerter.friction import Coulomb, PiecewiseLinear
+from bayes_inerter.network.compile import chain_state_space
+
 MIN_LEVELS = 20
 
 
 class Contact:
-    """A Coulomb contact at ``node``: bound f0 (N), node mass (kg), column of its force in z."""
+    """A contact at ``node`` with a piecewise-linear law; its force is z[wcol]."""
 
-    def __init__(self, node, f0, mass, wcol):
-        self.node, self.f0, self.mass, self.wcol = node, f0, mass, wcol
-        self.stuck, self.sign = False, 1.0
+    def __init__(self, node, mass, wcol, law: PiecewiseLinear):
+        self.node, self.mass, self.wcol, self.law = node, mass, wcol, law
+        self.speeds, self.a, self.slopes = law.segments()
+        self.stuck, self.sign, self.piece = False, 1.0, 0
+
+    def state(self):
+        return "stuck" if self.stuck else self.piece
 
     def band(self):
         if self.stuck:
-            return -self.f0, self.f0
-        return (0.0, np.inf) if self.sign > 0 else (-np.inf, 0.0)
+            return -self.law.f_s, self.law.f_s
+        lo, hi = self.speeds[self.piece], np.append(self.speeds, np.inf)[self.piece + 1]
+        return (lo, hi) if self.sign > 0 else (-hi, -lo)
 
-    def slide(self, z, sign):
-        self.stuck, self.sign = False, sign
-        z[self.wcol] = sign * self.f0
+    def slide(self, z, sign, piece):
+        self.stuck, self.sign, self.piece = False, sign, piece
+        z[self.wcol] = sign * self.a[piece]
 
     def switch(self, z, holding):
-        """The switch due at z (holding: the holding force at z): break away, stick or reverse."""
+        """The switch due at z (holding(contact, z): the holding force at z): break away,
+        stick, reverse, or move to the piece of its speed."""
         if self.stuck:
             r = holding(self, z)
-            if abs(r) > self.f0:
-                self.slide(z, np.sign(r))
+            if abs(r) > self.law.f_s:
+                self.slide(z, np.sign(r), 0)
         elif self.sign * z[self.node] < 0.0:
             z[self.node] = 0.0
             r = holding(self, z)
-            if abs(r) <= self.f0:
+            if abs(r) <= self.law.f_s:
                 self.stuck = True
             else:
-                self.slide(z, np.sign(r))
+                self.slide(z, np.sign(r), 0)
+        else:
+            speed = self.sign * z[self.node]
+            piece = int(np.searchsorted(self.speeds, speed, side="right") - 1)
+            # on a knot it stays in its piece (the bands are closed)
+            if speed == self.speeds[piece] and piece == self.piece + 1:
+                piece = self.piece
+            self.slide(z, self.sign, piece)
+
+
+class Link:
+    """A link with a dead zone: deflection z[col], half-width gap, offset z[wcol]; ``part``
+    is what closing it adds to the augmented matrix."""
+
+    def __init__(self, col, gap, wcol, part):
+        self.col, self.gap, self.wcol, self.part = col, gap, wcol, part
+        self.closed, self.side = False, 1.0
+
+    def state(self):
+        return self.closed
+
+    def band(self):
+        if not self.closed:
+            return -self.gap, self.gap
+        return (self.gap, np.inf) if self.side > 0 else (-np.inf, -self.gap)
+
+    def switch(self, z):
+        d = z[self.col]
+        if not self.closed and abs(d) > self.gap:
+            self.closed, self.side = True, np.sign(d)
+            z[self.wcol] = self.side * self.gap
+        elif self.closed and self.side * d < self.gap:
+            self.closed, z[self.wcol] = False, 0.0
 
 
 def hermite_range(y0, d0, y1, d1):
@@ -68,34 +111,71 @@ def hermite_range(y0, d0, y1, d1):
 
 
 class Reference:
-    """x' = A x + B u with Coulomb contacts at ``nodes`` (bounds f0, masses), sampled at h."""
+    """x' = A x + B u (A with every link closed) with friction contacts at ``nodes`` (their
+    piecewise-linear laws and masses) and dead zones in the links ``gaps`` ({link index:
+    half-width}) of the chain ``compiled``, sampled at h."""
 
-    def __init__(self, A, B, nodes, f0, mass, h):
+    def __init__(self, A, B, nodes, laws, mass, h, *, compiled=None, gaps=None):
         n, n_in = A.shape[0], B.reshape(A.shape[0], -1).shape[1]
         self.n, self.n_in, self.h = n, n_in, h
         wcol = n + 2 * n_in
-        self.contacts = [Contact(int(nodes[i]), f0[i], mass[i], wcol + i) for i in range(len(nodes))]
-        m = wcol + len(self.contacts)
-        self.Abar = np.zeros((m, m))
-        self.Abar[:n, :n] = A
+        gaps = gaps or {}
+        m = wcol + len(nodes) + len(gaps)
+        self.contacts = [Contact(int(nodes[i]), mass[i], wcol + i, laws[i]) for i in range(len(nodes))]
+        self.links = []
+        for q, (j, gap) in enumerate(sorted(gaps.items())):
+            part = self._link_part(compiled, j, n, m)
+            part[:n, wcol + len(nodes) + q] = -part[:n, compiled.n_nodes + j]  # the spring acts on d - offset
+            self.links.append(Link(compiled.n_nodes + j, gap, wcol + len(nodes) + q, part))
+        self.Abar = np.zeros((m, m))  # every link open, every contact at its law's slope c
+        self.Abar[:n, :n] = A - sum((lk.part[:n, :n] for lk in self.links), np.zeros_like(A))
         self.Abar[:n, n:n + n_in] = B.reshape(n, -1)
         self.Abar[n:n + n_in, n + n_in:wcol] = np.eye(n_in)
         for c in self.contacts:
             self.Abar[c.node, c.wcol] = -1.0 / c.mass
-        norm = np.abs(self.Abar).sum(axis=1).max() * h
         self.J = MIN_LEVELS
-        while norm / 2.0**self.J > 1.0 / 16.0:
+        while self._envelope() * h / 2.0**self.J > 1.0 / 16.0:
             self.J += 1
-        self._exp = {}
+        self._exp, self._mat = {}, {}
+
+    @classmethod
+    def coulomb(cls, A, B, nodes, f0, mass, h):
+        return cls(A, B, nodes, [Coulomb(f, 0.0).piecewise() for f in f0], mass, h)
+
+    @staticmethod
+    def _link_part(compiled, j, n, m):
+        c, k = np.zeros_like(compiled.link_c), np.zeros_like(compiled.link_k)
+        c[j], k[j] = compiled.link_c[j], compiled.link_k[j]
+        position = n == compiled.n_states(position=True)
+        part = np.zeros((m, m))
+        part[:n, :n] = (chain_state_space(compiled.masses, c, k, position=position)[0]
+                        - chain_state_space(compiled.masses, 0 * c, 0 * k, position=position)[0])
+        return part
+
+    def _envelope(self):
+        """A bound on every mode's matrix norm (row sums), as the kernel takes it."""
+        E = np.abs(self.Abar) + sum((np.abs(lk.part) for lk in self.links), np.zeros_like(self.Abar))
+        for c in self.contacts:
+            E[c.node, c.node] += np.max(np.abs(c.slopes - c.law.c)) / c.mass
+        return E.sum(axis=1).max()
 
     def mode(self):
-        return tuple(c.stuck for c in self.contacts)
+        return tuple(e.state() for e in self.contacts + self.links)
 
-    def matrix(self):
-        """A_S: the stuck contacts' velocity rows zeroed."""
-        As = self.Abar.copy()
+    def matrix(self, stuck_rows=True):
+        """A_S: the closed links' parts in, each sliding contact's piece slope, the stuck
+        contacts' rows zeroed (unless not ``stuck_rows``)."""
+        key = (self.mode(), stuck_rows)
+        if key not in self._mat:
+            self._mat[key] = self._matrix(stuck_rows)
+        return self._mat[key]
+
+    def _matrix(self, stuck_rows):
+        As = self.Abar + sum((lk.part for lk in self.links if lk.closed), np.zeros_like(self.Abar))
         for c in self.contacts:
-            if c.stuck:
+            if not c.stuck:
+                As[c.node, c.node] -= (c.slopes[c.piece] - c.law.c) / c.mass
+            elif stuck_rows:
                 As[c.node] = 0.0
         return As
 
@@ -107,23 +187,25 @@ class Reference:
 
     def holding(self, contact, z):
         """The force that holds the contact's node at rest: its mass times its acceleration
-        without its own Coulomb force."""
-        row = self.Abar[contact.node].copy()
-        row[contact.wcol] = 0.0
+        without the contacts' forces."""
+        row = self.matrix(stuck_rows=False)[contact.node].copy()
+        row[[c.wcol for c in self.contacts]] = 0.0
         return contact.mass * row @ z
 
-    def guard(self, contact, z):
-        """The contact's guard value at z and its rate."""
+    def guard(self, element, z):
+        """The element's guard value at z and its rate."""
         As = self.matrix()
-        if contact.stuck:
-            return self.holding(contact, z), self.holding(contact, As @ z)
-        return z[contact.node], As[contact.node] @ z
+        if isinstance(element, Link):
+            return z[element.col], As[element.col] @ z
+        if element.stuck:
+            return self.holding(element, z), self.holding(element, As @ z)
+        return z[element.node], As[element.node] @ z
 
     def crossed(self, za, zb, ticks):
         T = ticks * self.h / 2.0**self.J
-        for c in self.contacts:
-            lo, hi = c.band()
-            (va, da), (vb, db) = self.guard(c, za), self.guard(c, zb)
+        for e in self.contacts + self.links:
+            lo, hi = e.band()
+            (va, da), (vb, db) = self.guard(e, za), self.guard(e, zb)
             cmin, cmax = hermite_range(va, T * da, vb, T * db)
             if not lo <= vb <= hi or cmin < lo or cmax > hi:
                 return True
@@ -151,13 +233,31 @@ class Reference:
             pos += advanced + 1
             z = zb.copy()
             before = self.mode()
-            for c in self.contacts:
-                c.switch(z, self.holding)
+            self.switch_all(z)
             stats[0] += self.mode() != before
             events += 1
             if events > max_events:
                 return None
         return z
+
+    def switch_all(self, z):
+        """The contacts switch (their holding forces in the mode before any switch), then
+        the links."""
+        As = self.matrix(stuck_rows=False)
+        rows = {id(c): As[c.node].copy() for c in self.contacts}  # (copies: the cache keeps As)
+        for c in self.contacts:
+            rows[id(c)][[d.wcol for d in self.contacts]] = 0.0
+        for c in self.contacts:
+            c.switch(z, lambda contact, zz: contact.mass * rows[id(contact)] @ zz)
+        for lk in self.links:
+            lk.switch(z)
+
+    def start(self, z):
+        for c in self.contacts:  # at rest: stuck, if it can be; else in piece 0, then its own
+            c.stuck = z[c.node] == 0.0
+            if not c.stuck:
+                c.slide(z, np.sign(z[c.node]), 0)
+        self.switch_all(z)
 
     def run(self, inputs, z_init=None, out_node=0, max_events=200):
         """(accel, vel, states, ok, stats) as the kernel returns them."""
@@ -167,11 +267,7 @@ class Reference:
         z = np.zeros(self.Abar.shape[0])
         z[:n] = 0.0 if z_init is None else z_init
         z[n:n + n_in] = inputs[0]
-        for c in self.contacts:  # at rest: stuck, if it can be
-            c.stuck = z[c.node] == 0.0
-            if not c.stuck:
-                c.slide(z, np.sign(z[c.node]))
-            c.switch(z, self.holding)
+        self.start(z)
         accel, vel, states = np.full(K, np.nan), np.full(K, np.nan), np.zeros((K, n))
         stats = np.zeros(2, dtype=int)
         for k in range(K):

@@ -3,10 +3,11 @@
 
 import numpy as np
 import pytest
-from conftest import inverse_dynamics_force
+from conftest import inverse_dynamics_force, with_backlash
 from reference_kernel import Reference
 
-from bayes_inerter import _kernel, paper_parameters
+from bayes_inerter import _kernel, _piecewise, paper_parameters
+from bayes_inerter.friction import Coulomb, PiecewiseLinear
 from bayes_inerter.models import build_network
 from bayes_inerter.network import compile_network
 from bayes_inerter.simulate import _augmented, _contacts
@@ -46,7 +47,7 @@ def test_generated_kernel_follows_the_plain_reference(network, setting, freq, sc
     A, B, nodes, f0, mass, inputs, h = network_arrays(network, setting, freq, scale=scale)
     accel, vel, states, status, stats = generated(kernel_arguments(network, setting, freq, scale=scale, store=True))(
         *kernel_arguments(network, setting, freq, scale=scale, store=True))
-    r_accel, r_vel, r_states, ok, r_stats = Reference(A, B, nodes, f0, mass, h).run(inputs)
+    r_accel, r_vel, r_states, ok, r_stats = Reference.coulomb(A, B, nodes, f0, mass, h).run(inputs)
     assert status == _kernel.STATUS_OK and ok
     # the same switches, located on the same ticks: the outputs agree to rounding
     assert stats[0] == r_stats[0]
@@ -73,7 +74,7 @@ def test_generated_kernel_gives_up_where_the_reference_does():
     args = kernel_arguments("reduced", "A0", 0.5, scale=0.9, max_events=0, duration=0.8)
     accel, _, _, status, _ = generated(args)(*args)
     A, B, nodes, f0, mass, inputs, h = network_arrays("reduced", "A0", 0.5, scale=0.9, duration=0.8)
-    r_accel, _, _, ok, _ = Reference(A, B, nodes, f0, mass, h).run(inputs, max_events=0)
+    r_accel, _, _, ok, _ = Reference.coulomb(A, B, nodes, f0, mass, h).run(inputs, max_events=0)
     assert status == _kernel.STATUS_TOO_MANY_EVENTS and not ok
     np.testing.assert_array_equal(np.isnan(accel), np.isnan(r_accel))
     assert np.isnan(accel[-1]) and not np.isnan(accel[0])
@@ -87,3 +88,53 @@ def test_kernels_are_kept_per_shape():
     assert _kernel.kernel_for(args[1], args[2], list(args[3]), args[9]) is fn
     assert _kernel.kernel_for(args[1], args[2], args[3][:1], args[9]) is not fn
     assert _kernel.kernel_for(args[1], args[2], args[3], args[9], (args[0] != 0).tobytes()) is not fn
+
+
+def rich_case(network, setting, freq, friction, gap, *, duration=1.0, scale=1.0):
+    """A network with piecewise-linear laws and a dead zone, its kernel's shape and arrays,
+    and the plain reference for it."""
+    p = paper_parameters(setting)
+    t, f = inverse_dynamics_force(p, freq, duration=duration, ramp=0.4)
+    net = build_network(network, p, friction)
+    compiled = compile_network(with_backlash(net, gap) if gap else net)
+    A, B = compiled.state_space(viscous=True)
+    h = float(t[1] - t[0])
+    shape, arrays = _piecewise.network_arrays(compiled, A, B, h)
+    laws = [PiecewiseLinear.total(node) if node else None for node in compiled.laws]
+    nodes = [i for i, law in enumerate(laws) if law is not None and law.f_s > 0]
+    gaps = {j: g for j, g in enumerate(compiled.link_gap) if g > 0}
+    ref = Reference(A, B.reshape(-1, 1), nodes, [laws[i] for i in nodes], compiled.masses[nodes], h,
+                    compiled=compiled, gaps=gaps)
+    return shape, arrays, ref, (scale * f).reshape(-1, 1)
+
+
+RICH_CASES = [("reduced", "A1", 1.0, "stribeck", 2e-5), ("reduced", "A3", 1.0, "coulomb", 2e-5),
+              ("rigid", "A2", 1.0, "stribeck", 0.0), ("reduced", "B2", 1.5, "stribeck", 0.0)]
+
+
+@pytest.mark.parametrize("network, setting, freq, friction, gap", RICH_CASES)
+def test_rich_kernel_follows_the_plain_reference(network, setting, freq, friction, gap):
+    """Piecewise-linear laws (Stribeck in 4 pieces) and a dead zone in the nut link."""
+    shape, arrays, ref, inputs = rich_case(network, setting, freq, friction, gap)
+    accel, vel, states, status, stats = _kernel.rich_kernel_for(shape)(arrays, inputs, np.zeros(shape.n), True, 200)
+    r_accel, r_vel, r_states, ok, r_stats = ref.run(inputs)
+    assert status == _kernel.STATUS_OK and ok
+    assert stats[0] == r_stats[0] > 0
+    assert rel_error(accel, r_accel) < 1e-9
+    assert rel_error(vel, r_vel) < 1e-9
+    np.testing.assert_allclose(states, r_states, rtol=1e-8, atol=1e-12 * np.abs(r_states).max())
+    if gap:  # the gap was entered and left
+        assert np.any(np.abs(states[:, shape.links[0]]) < gap) and np.any(np.abs(states[:, shape.links[0]]) > gap)
+
+
+def test_rich_kernel_on_coulomb_laws_is_the_coulomb_kernel():
+    """Coulomb laws given as one-piece piecewise-linear laws take the general kernel for
+    piecewise-linear laws: it must give the Coulomb kernel's simulation, to rounding."""
+    args = kernel_arguments("reduced", "A0", 0.5, scale=0.9, store=True)
+    coulomb = generated(args)(*args)
+    shape, arrays, _, inputs = rich_case("reduced", "A0", 0.5, lambda f0, c: Coulomb(f0, c).piecewise(), 0.0,
+                                         duration=2.0, scale=0.9)
+    rich = _kernel.rich_kernel_for(shape)(arrays, inputs, np.zeros(shape.n), True, 200)
+    assert rich[4][0] == coulomb[4][0] > 0
+    assert rel_error(rich[0], coulomb[0]) < 1e-10
+    np.testing.assert_allclose(rich[2], coulomb[2], rtol=1e-9, atol=1e-13 * np.abs(coulomb[2]).max())

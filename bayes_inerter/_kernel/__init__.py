@@ -28,8 +28,20 @@ in the new mode. Times are integers in units of h / 2^J, so the remainder of an 
 is a product over the binary digits of what is left. The linear part is exact to
 rounding; events are located to h / 2^J (about 1 ns for 1 kHz records).
 
+Piecewise-linear laws and dead zones (``_rich``, ``rich_kernel_for``): a contact whose
+friction is linear in the speed between knots, sgn(v) (a_s + c_s |v|) in piece s, set-
+valued at rest with a static bound f_s, and a link with a gap (no force inside +-g, its
+spring and damper on d -+ g outside) keep the network linear between events, with the
+piece's force a_s and the link's offset g in w and the piece's slope c_s in the matrix.
+The guards become bands: a sliding contact's velocity stays within its piece's speeds
+(leaving it: the next piece, or zero: stick or reverse), a stuck one's holding force
+within +-f_s, a link's deflection within the gap or beyond it on its side (open, close).
+Every element-state combination is a mode, so there are many; each one's tables are
+made when it is first entered.
+
 Layout: ``_compiled`` (the helpers every kernel shares: levels, tables, the Hermite
-range, the switching rules), ``templates`` and ``generate`` (the one generator of a
+range, the Coulomb contacts' switching rules), ``_rich`` (the same for piecewise-linear
+contacts and dead zones), ``templates`` and ``generate`` (the one generator of a
 network's specialised kernel: the templates are the algorithm, ``generate`` writes out
 their arithmetic), ``cache`` (the generated modules on disk). The
 same algorithm written plainly, without speed tricks, is ``tests/reference_kernel.py``.
@@ -39,9 +51,10 @@ from __future__ import annotations
 
 from . import cache
 from ._compiled import STATUS_OK, STATUS_TOO_MANY_EVENTS
-from .generate import Shape, kernel_source
+from ._rich import Net
+from .generate import RichShape, Shape, kernel_source
 
-__all__ = ["kernel_for", "STATUS_OK", "STATUS_TOO_MANY_EVENTS"]
+__all__ = ["kernel_for", "rich_kernel_for", "Net", "RichShape", "STATUS_OK", "STATUS_TOO_MANY_EVENTS"]
 
 _SPECIALISED: dict = {}
 
@@ -66,4 +79,14 @@ def kernel_for(n: int, n_in: int, node, out_node: int, nonzero: bytes | None = N
     fn = _SPECIALISED.get(shape)
     if fn is None:
         fn = _SPECIALISED[shape] = cache.load(kernel_source(shape))
+    return fn
+
+
+def rich_kernel_for(shape: RichShape):
+    """The kernel for a network with piecewise-linear contacts and dead zones (see
+    ``_rich``), specialised to ``shape``. It takes ``(net, inputs, z_init, store,
+    max_events)``, net a :class:`Net`, and returns what ``kernel_for``'s kernels return."""
+    fn = _SPECIALISED.get(shape)
+    if fn is None:
+        fn = _SPECIALISED[shape] = cache.load(kernel_source(shape), header=cache.RICH_HEADER)
     return fn

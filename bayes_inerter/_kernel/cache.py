@@ -7,7 +7,7 @@ machine compiles each network's kernel (seconds), later processes load it (tens 
 The folder is ``$BAYES_INERTER_KERNEL_DIR``, else ``~/.cache/bayes-inerter/kernels``, else
 one in the temporary directory; where none can be written the module is compiled in
 memory. Files are named by a hash of their source and of the compiled helpers'
-(``_compiled.py``), so a changed kernel never meets an old cache.
+(``_compiled.py``, ``_rich.py``), so a changed kernel never meets an old cache.
 """
 
 from __future__ import annotations
@@ -31,6 +31,14 @@ HEADER = (
     "from bayes_inerter._kernel._compiled import (HERMITE_SLACK, STATUS_OK, STATUS_TOO_MANY_EVENTS, cubic_range,\n"
     "                                             setup, start, switch)\n\n"
 )
+#: The header of a kernel for piecewise-linear laws and dead zones: its setup, start and
+#: switch are ``_rich``'s.
+RICH_HEADER = (
+    "import numpy as np\n"
+    "from numba import njit\n"
+    "from bayes_inerter._kernel._compiled import HERMITE_SLACK, STATUS_OK, STATUS_TOO_MANY_EVENTS, cubic_range\n"
+    "from bayes_inerter._kernel._rich import setup, start, switch\n\n"
+)
 
 
 def kernel_dirs():
@@ -42,16 +50,16 @@ def kernel_dirs():
 
 
 def _helpers() -> bytes:
-    return (Path(__file__).parent / "_compiled.py").read_bytes()
+    return b"".join((Path(__file__).parent / name).read_bytes() for name in ("_compiled.py", "_rich.py"))
 
 
-def load(source: str, name: str = "kernel"):
-    """Compile the generated ``source`` (see ``generate``) and return its function
-    ``name``: from a module written to the first folder that can be written, else in
-    memory."""
-    digest = hashlib.sha256(_helpers() + HEADER.encode() + source.encode()).hexdigest()[:20]
+def load(source: str, name: str = "kernel", header: str = HEADER):
+    """Compile the generated ``source`` (see ``generate``) after ``header`` (its imports)
+    and return its function ``name``: from a module written to the first folder that can
+    be written, else in memory."""
+    digest = hashlib.sha256(_helpers() + header.encode() + source.encode()).hexdigest()[:20]
     module_name = f"bayes_inerter_kernel_{digest}"
-    text = HEADER + "_jit = njit(cache=True)\n\n\n" + source
+    text = header + "_jit = njit(cache=True)\n\n\n" + source
     for folder in kernel_dirs():
         path = folder / f"{module_name}.py"
         try:
@@ -68,5 +76,5 @@ def load(source: str, name: str = "kernel"):
         spec.loader.exec_module(module)
         return getattr(module, name)
     namespace: dict = {"njit": njit}
-    exec(compile(HEADER + "_jit = njit\n\n\n" + source, module_name, "exec"), namespace)
+    exec(compile(header + "_jit = njit\n\n\n" + source, module_name, "exec"), namespace)
     return namespace[name]

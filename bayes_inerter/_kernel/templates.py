@@ -10,7 +10,10 @@ leaves to it; ``crossed`` its guard test; ``kernel`` the loop over the samples.
 
 A contact's guard is its velocity while it slides (it must keep its sign) and its holding
 force while it sticks (it must stay within +-bound); the state z is the augmented one of
-the package docstring, a mode the bit mask of the stuck contacts.
+the package docstring, a mode the bit mask of the stuck contacts. For piecewise-linear
+laws and dead zones (``_rich``) every guard, a link's deflection too, has a band
+[lo, hi] instead (``CROSSED_BAND``, ``CLEAR_BAND``), and a mode numbers every element's
+state; the templates above are the same for both.
 """
 
 CROSSED = """\
@@ -19,7 +22,7 @@ def crossed(mode, T{guard_args}):
     # True when some guard is (or may have been) crossed between the two ends of a step:
     # the end's value, then a cheap bound on the Hermite cubic through both ends, and
     # the cubic's exact range only where that bound fails (near the switches)
-    $crossed_contacts
+    $crossed_guards
     return False
 """
 
@@ -43,13 +46,13 @@ else:  # sliding: its velocity keeps its sign
 
 EVENTS = """\
 @_jit
-def events(F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events):
+def events({events_params}):
     # One sample interval from z the careful way: dyadic steps, each checked by crossed;
     # where a guard is crossed, bisection for the first tick after the crossing, the
     # contacts switched there, and on in the new mode. z, va, da, sgn in and out.
     wcol = {wcol}
     $load(z)
-    $load_signs
+    $load_switch_state
     $event_locals
     FULL = np.int64(1) << J
     pos = np.int64(0)
@@ -94,9 +97,9 @@ def events(F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events
         # the contacts switch at y, and the interval goes on from there
         $copy(y, z)
         $store(z)
-        new_mode = switch(z, mode, {nc}, node, R, f0, sgn, wcol)
+        new_mode = {switch_call}
         $load(z)
-        $load_signs
+        $load_switch_state
         if new_mode != mode:
             stats[0] += 1
             mode = new_mode
@@ -113,25 +116,25 @@ def events(F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events
 
 KERNEL = """\
 @_jit
-def kernel(Abar, n_, n_in_, node, f0, mass, inputs, h, z_init, out_node_, store, max_events):
+def kernel({kernel_params}):
     n = {n}
     n_in = {n_in}
     m = {m}
     K = inputs.shape[0]
-    J, F, VD, RD, OUT, R = setup(Abar, n, n_in, node, mass, h, out_node_)
+    $setup
     accel = np.full(K, np.nan)
     vel = np.full(K, np.nan)
     stats = np.zeros(2, dtype=np.int64)
     states = np.zeros((K if store else 0, n))
-    z, sgn, mode = start(z_init, inputs, n, n_in, m, node, R, f0)
+    $start
     $load(z)
     accel[0] = {output}
     vel[0] = z{out_node}
     if store:
         states[0] = z[:n]
-    va = np.empty({nc_or_1})
-    da = np.empty({nc_or_1})
-    $contact_locals
+    va = np.empty({guards_or_1})
+    da = np.empty({guards_or_1})
+    $guard_locals
     $table_locals
     cur = -1
     acon = -1
@@ -160,12 +163,12 @@ def kernel(Abar, n_, n_in_, node, f0, mass, inputs, h, z_init, out_node_, store,
         else:
             $store(z)
             $store_guards
-            mode, ok = events(F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events)
+            mode, ok = events({events_args})
             if not ok:
                 return accel, vel, states, STATUS_TOO_MANY_EVENTS, stats
             $load(z)
             $load_guards
-            $load_signs
+            $load_switch_state
         $output_sample
         vel[k + 1] = z{out_node}
         if store:
@@ -189,10 +192,33 @@ else:
 """
 
 GUARD = """\
-if (mode >> {i}) & 1:  # stuck: the holding force and its rate
+if {stuck}:  # stuck: the holding force and its rate
     {val}{i} = {r}
     {der}{i} = {rd}
 else:  # sliding: the velocity and the acceleration
     {val}{i} = {v}
     {der}{i} = {vd}
+"""
+
+# -- piecewise-linear laws and dead zones (see ``_rich``): every guard has a band --------
+
+CROSSED_BAND = """\
+if vb{e} < lo{e} or vb{e} > hi{e}:  # the guard has left its band
+    return True
+slack = HERMITE_SLACK * T * (abs(da{e}) + abs(db{e}))
+if not (min(va{e}, vb{e}) - slack > lo{e} and max(va{e}, vb{e}) + slack < hi{e}):
+    least, most = cubic_range(va{e}, T * da{e}, vb{e}, T * db{e})
+    if least < lo{e} or most > hi{e}:
+        return True
+"""
+
+CLEAR_BAND = """\
+slack = HERMITE_SLACK * h * (abs(da{e}) + abs(db{e}))
+if min(va{e}, vb{e}) - slack <= lo{e} or max(va{e}, vb{e}) + slack >= hi{e}:
+    clear = False
+"""
+
+GUARD_LINK = """\
+{val}{e} = {d}  # a link's deflection and its rate
+{der}{e} = {vd}
 """
