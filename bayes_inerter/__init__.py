@@ -14,7 +14,7 @@ from .device import (
     setting,
     theoretical_inertance,
 )
-from .friction import Coulomb, Smooth, Stribeck, make_law
+from .friction import Coulomb, PiecewiseLinear, Smooth, Stribeck, make_law
 from .models import NETWORKS, build_network
 from .simulate import SimulationError, simulate, simulate_network
 
@@ -31,6 +31,7 @@ __all__ = [
     "setting",
     "theoretical_inertance",
     "Coulomb",
+    "PiecewiseLinear",
     "Smooth",
     "Stribeck",
     "make_law",

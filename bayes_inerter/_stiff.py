@@ -8,7 +8,9 @@ Backlash in a link of half-width g (**assumption** on its form): the spring acts
 dead-zone deflection ``d - g sgn(d)`` when |d| > g and not at all inside the gap; the
 damper acts on the relative velocity scaled by a contact factor that rises linearly from
 0 at |d| = g to 1 at |d| = (1 + BACKLASH_RAMP) g, so that closing the gap is not an
-infinite impulse.
+infinite impulse. (The exact kernel takes the plain dead zone, the damper acting in full
+from |d| = g on: a finite jump of the link force, which its events handle; the two
+differ where the gap closes, see docs/simulator.md.)
 """
 
 from __future__ import annotations

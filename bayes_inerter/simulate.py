@@ -5,13 +5,16 @@
 
 Two methods, chosen by ``method="auto"``:
 
-- ``"exact"`` (event-driven kernel, ``_kernel.py``): for networks whose frictions are all
-  Coulomb plus viscous (set-valued sign, true stick-slip) and whose links have no dead
-  zone. Exact for the linear part at any stiffness, switch instants located to
-  h / 2^20. Fast: this is the likelihood's simulator.
-- ``"stiff"`` (``_stiff.py``, scipy's Radau): any friction law and backlash; set-valued
-  signs are regularised as tanh(v / v_eps). Slower by orders of magnitude: for
-  generating richer "truth" records and for reference checks.
+- ``"exact"`` (event-driven kernel, ``_kernel/``): for networks whose friction laws are
+  piecewise linear in the speed (set-valued sign, true stick-slip): Coulomb plus viscous,
+  Stribeck in its piecewise-linear form (``Stribeck.piecewise``, ``STRIBECK_SEGMENTS``
+  pieces), ``PiecewiseLinear``; and links with backlash as plain dead zones (see
+  ``_piecewise``). Exact for the linear part at any stiffness, switch instants located
+  to h / 2^20. Fast: with Coulomb laws and no backlash, this is the likelihood's
+  simulator.
+- ``"stiff"`` (``_stiff.py``, scipy's Radau): any friction law (Stribeck as it is, the
+  smooth law) and backlash with its damper ramped in; set-valued signs are regularised
+  as tanh(v / v_eps). Slower by orders of magnitude: for reference checks.
 
 Between samples the force is interpolated linearly. The output is the acceleration of
 the driven terminal, sampled in one of two ways (``sampling``):
@@ -37,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from . import _kernel, _stiff
+from . import _kernel, _piecewise, _stiff
 from .device import InerterParameters, validate_parameters
 from .models import build_network
 from .network import CompiledNetwork, Network, compile_network
@@ -187,18 +190,24 @@ def run_piecewise_linear(
     max_events: int = MAX_EVENTS_PER_STEP,
     sampling: str = "instant",
 ):
-    """Run the exact kernel on x' = A x + B u(t) plus the network's Coulomb contacts.
+    """Run the exact kernel on x' = A x + B u(t) plus the network's contacts and dead zones.
 
-    ``A`` (n, n) and ``B`` (n, n_in) must include the viscous parts; ``inputs`` (K, n_in)
-    are interpolated linearly. Returns (acceleration of node 0, sampled as ``sampling``
-    says, and the states (K, n) or an empty array).
+    ``A`` (n, n) and ``B`` (n, n_in) must include the viscous parts and every link closed;
+    ``inputs`` (K, n_in) are interpolated linearly. Returns (acceleration of node 0,
+    sampled as ``sampling`` says, and the states (K, n) or an empty array).
     """
     _check_sampling(sampling)
-    if not compiled.all_coulomb:
-        raise ValueError("the exact kernel needs Coulomb laws only and no backlash")
-    nodes, f0, mass = _contacts(compiled)
-    return run_exact(A, B, nodes, f0, mass, inputs, h, x0=x0, store=store, max_events=max_events,
-                     sampling=sampling)
+    if compiled.all_coulomb:
+        nodes, f0, mass = _contacts(compiled)
+        return run_exact(A, B, nodes, f0, mass, inputs, h, x0=x0, store=store, max_events=max_events,
+                         sampling=sampling)
+    if not _piecewise.applies(compiled):
+        raise ValueError("the exact kernel needs Coulomb laws or other piecewise-linear ones (Stribeck, "
+                         "PiecewiseLinear); the smooth law runs on method='stiff'")
+    shape, net = _piecewise.network_arrays(compiled, np.asarray(A, dtype=float), B, float(h))
+    out = _kernel.rich_kernel_for(shape)(net, _inputs(inputs, shape.n_in), _initial(x0, shape.n), store,
+                                         int(max_events))
+    return _outputs(out, h, max_events, sampling)
 
 
 def run_exact(A, B, nodes, f0, mass, inputs, h, *, x0=None, store=False, max_events=MAX_EVENTS_PER_STEP,
@@ -211,14 +220,26 @@ def run_exact(A, B, nodes, f0, mass, inputs, h, *, x0=None, store=False, max_eve
     n_in = B.shape[1]
     nodes = np.asarray(nodes, dtype=np.int64)
     Abar = _augmented(np.ascontiguousarray(A, dtype=float), B, nodes, np.asarray(mass, dtype=float))
+    z0 = _initial(x0, n)
+    kernel = _kernel.kernel_for(n, n_in, nodes, 0, (Abar != 0).tobytes())
+    out = kernel(Abar, n, n_in, nodes, f0, mass, _inputs(inputs, n_in), float(h), z0, 0, store, int(max_events))
+    return _outputs(out, h, max_events, sampling)
+
+
+def _initial(x0, n):
     z0 = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float)
     if z0.shape != (n,):
         raise ValueError(f"initial state must have shape ({n},), got {z0.shape}")
-    kernel = _kernel.kernel_for(n, n_in, nodes, 0, (Abar != 0).tobytes())
-    accel, vel, states, status, _ = kernel(
-        Abar, n, n_in, nodes, f0, mass, np.ascontiguousarray(inputs, dtype=float).reshape(-1, n_in),
-        float(h), z0, 0, store, int(max_events),
-    )
+    return z0
+
+
+def _inputs(inputs, n_in):
+    return np.ascontiguousarray(inputs, dtype=float).reshape(-1, n_in)
+
+
+def _outputs(out, h, max_events, sampling):
+    """(accel, states) from a kernel's results, or SimulationError where it gave up."""
+    accel, vel, states, status, _ = out
     if status != _kernel.STATUS_OK:
         raise SimulationError(
             f"more than {max_events} friction switches within one sample interval; "
@@ -275,7 +296,7 @@ def simulate_network(
     t, f, h = drive.time, drive.force, drive.h
     compiled = network if isinstance(network, CompiledNetwork) else compile_network(network)
     if method == "auto":
-        method = "exact" if compiled.all_coulomb else "stiff"
+        method = "exact" if compiled.all_coulomb or _piecewise.applies(compiled) else "stiff"
     if method == "exact":
         A, B = compiled.state_space(viscous=True)
         accel, _ = run_piecewise_linear(compiled, A, B, f, h, x0=x0, sampling=sampling)
@@ -307,7 +328,8 @@ def simulate(
     network : "reduced" (Fig. 5, default), "full" (Fig. 4), "linear" or "rigid".
     friction : "coulomb" (eq. 3, set-valued sign; default), "stribeck" or "smooth", or a
         callable mapping (Coulomb N, viscous N s/m) to a friction law.
-    method : "auto" (exact kernel when it applies), "exact" or "stiff".
+    method : "auto" (exact kernel when it applies: every law but the smooth one), "exact"
+        or "stiff".
     x0 : initial state; default at rest.
     options : passed to the network builder (``theta``, ``nut_share`` for "full"), to
         the stiff method (``v_eps``, ``rtol``), or ``sampling`` ("instant" or "mean",

@@ -23,3 +23,16 @@ def inverse_dynamics_force(params, freq, *, amplitude=0.01, duration=3.0, fs=100
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+def with_backlash(network, gap):
+    """The network with a dead zone of half-width ``gap`` (m) in its last link (the nut),
+    as the record generator puts one."""
+    import dataclasses
+
+    from bayes_inerter.network import Backlash, Deformation, Network
+
+    blocks = list(network.blocks)
+    j = max(i for i, b in enumerate(blocks) if isinstance(b, Deformation))
+    blocks[j] = dataclasses.replace(blocks[j], backlash=Backlash(gap))
+    return Network(tuple(blocks), network.name + "+backlash")

@@ -184,3 +184,143 @@ def hybrid_reference(compiled, time, force, *, rtol=1e-10):
                 break
         accel[k + 1] = deriv(t0, t1, u0, u1)(t1, x)[0]
     return accel
+
+
+class _Hybrid:
+    """The hybrid system with piecewise-linear friction and dead zones, written out again
+    for :func:`hybrid_reference_rich`: its right-hand side in each mode, from the network's
+    arrays (not the kernel's matrices), and the events that end a mode."""
+
+    def __init__(self, compiled):
+        from bayes_inerter.friction import PiecewiseLinear
+        from bayes_inerter.network.compile import chain_state_space
+
+        self.c = compiled
+        self.N = compiled.n_nodes
+        self.gaps = [j for j, g in enumerate(compiled.link_gap) if g > 0]
+        c, k = compiled.link_c.copy(), compiled.link_k.copy()
+        c[self.gaps], k[self.gaps] = 0.0, 0.0  # the gap links' forces are added by hand
+        self.A, self.B = chain_state_space(compiled.masses, c, k, compiled.viscous)
+        self.laws = {i: PiecewiseLinear.total(laws) for i, laws in enumerate(compiled.laws) if laws}
+        self.pieces = {i: law.segments() for i, law in self.laws.items()}
+        self.stuck = {i: True for i in self.laws}
+        self.sign = {i: 1.0 for i in self.laws}
+        self.piece = {i: 0 for i in self.laws}
+        self.closed = {j: False for j in self.gaps}
+        self.side = {j: 1.0 for j in self.gaps}
+
+    def rhs(self, x, u, free=None):
+        """x' at state x and force u; the contact ``free`` neither sticks nor rubs."""
+        dx = self.A @ x + self.B * u
+        m = self.c.masses
+        for j in self.gaps:
+            if self.closed[j]:
+                T = self.c.link_c[j] * (x[j] - x[j + 1]) + self.c.link_k[j] * (x[self.N + j] - self.side[j] * self.c.link_gap[j])
+                dx[j] -= T / m[j]
+                dx[j + 1] += T / m[j + 1]
+        for i, law in self.laws.items():
+            if i == free:
+                continue
+            if self.stuck[i]:
+                dx[i] = 0.0
+            else:
+                _, a, slopes = self.pieces[i]
+                s = self.piece[i]
+                dx[i] -= (self.sign[i] * a[s] + (slopes[s] - law.c) * x[i]) / m[i]
+        return dx
+
+    def holding(self, i, x, u):
+        return self.c.masses[i] * self.rhs(x, u, free=i)[i]
+
+    def events(self, u_of):
+        """(event functions, what each one means)."""
+        funcs, meaning = [], []
+
+        def add(fn, direction, what):
+            fn.terminal, fn.direction = True, direction
+            funcs.append(fn)
+            meaning.append(what)
+
+        for i, law in self.laws.items():
+            speeds = np.append(self.pieces[i][0], np.inf)
+            s, sg = self.piece[i], self.sign[i]
+            if self.stuck[i]:
+                for side in (1.0, -1.0):
+                    add(lambda t, y, i=i, side=side, f_s=law.f_s: f_s - side * self.holding(i, y, u_of(t)), -1,
+                        ("break", i, side))
+            else:
+                add(lambda t, y, i=i, sg=sg, v=speeds[s]: sg * y[i] - v, -1, ("down", i))
+                if np.isfinite(speeds[s + 1]):
+                    add(lambda t, y, i=i, sg=sg, v=speeds[s + 1]: sg * y[i] - v, 1, ("up", i))
+        for j in self.gaps:
+            g, col = self.c.link_gap[j], self.N + j
+            if self.closed[j]:
+                add(lambda t, y, col=col, sd=self.side[j], g=g: sd * y[col] - g, -1, ("open", j))
+            else:
+                add(lambda t, y, col=col, g=g: y[col] - g, 1, ("close", j, 1.0))
+                add(lambda t, y, col=col, g=g: y[col] + g, -1, ("close", j, -1.0))
+        return funcs, meaning
+
+    def switch(self, what, x, u):
+        kind, e = what[0], what[1]
+        if kind == "break":
+            self.stuck[e], self.sign[e], self.piece[e] = False, what[2], 0
+        elif kind == "down" and self.piece[e] > 0:
+            self.piece[e] -= 1
+        elif kind == "down":  # the velocity reached zero: stick or reverse
+            x[e] = 0.0
+            r = self.holding(e, x, u)
+            if abs(r) <= self.laws[e].f_s:
+                self.stuck[e] = True
+            else:
+                self.sign[e], self.piece[e] = np.sign(r), 0
+        elif kind == "up":
+            self.piece[e] += 1
+        elif kind == "close":
+            self.closed[e], self.side[e] = True, what[2]
+        else:
+            self.closed[e] = False
+        self.settle(x, u)
+
+    def settle(self, x, u):
+        """A stuck contact whose holding force a switch has taken beyond its bound (a link
+        closing on it, say) breaks away at once: no event shows a force that jumps."""
+        for i, law in self.laws.items():
+            if self.stuck[i]:
+                r = self.holding(i, x, u)
+                if abs(r) > law.f_s:
+                    self.stuck[i], self.sign[i], self.piece[i] = False, np.sign(r), 0
+
+
+def hybrid_reference_rich(compiled, time, force, *, rtol=1e-10):
+    """Acceleration of node 0 by scipy's Radau in each mode, with scipy's event location,
+    for piecewise-linear friction laws and dead zones (links with ``Backlash``): an
+    implementation of the same hybrid system as the kernel that shares none of its code
+    (the right-hand side is formed from the network's arrays, the switching rules are
+    written out again). Integrates one sample interval at a time."""
+    from scipy.integrate import solve_ivp
+
+    hyb = _Hybrid(compiled)
+    x = np.zeros(2 * hyb.N - 1)
+    accel = np.zeros(len(time))
+    hyb.settle(x, force[0])  # at rest: break away at once where the force is too large
+    accel[0] = hyb.rhs(x, force[0])[0]
+    for k in range(len(time) - 1):
+        t0, t1, u0, u1 = time[k], time[k + 1], force[k], force[k + 1]
+
+        def u_of(t, t0=t0, t1=t1, u0=u0, u1=u1):
+            return u0 + (u1 - u0) * (t - t0) / (t1 - t0)
+
+        tt = t0
+        for _ in range(200):
+            funcs, meaning = hyb.events(u_of)
+            sol = solve_ivp(lambda t, y: hyb.rhs(y, u_of(t)), (tt, t1), x, method="Radau", rtol=rtol, atol=1e-14,
+                            events=funcs or None)
+            x, tt = sol.y[:, -1].copy(), sol.t[-1]
+            if sol.status == 1:
+                fired = [q for q, te in enumerate(sol.t_events) if len(te)]
+                hyb.switch(meaning[fired[0]], x, u_of(tt))
+            if tt >= t1:
+                break
+        accel[k + 1] = hyb.rhs(x, u1)[0]
+    return accel

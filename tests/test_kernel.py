@@ -1,57 +1,88 @@
-"""The specialised kernels (``_kernel.kernel_for``) against the general ``run_kernel``."""
+"""The generated kernels (``_kernel.kernel_for``) against the plain reference kernel
+(``tests/reference_kernel.py``): the same algorithm written without speed tricks."""
 
 import numpy as np
 import pytest
-from conftest import inverse_dynamics_force
+from conftest import inverse_dynamics_force, with_backlash
+from reference_kernel import Reference
 
-from bayes_inerter import _kernel, paper_parameters
+from bayes_inerter import _kernel, _piecewise, paper_parameters
+from bayes_inerter.friction import Coulomb, PiecewiseLinear
 from bayes_inerter.models import build_network
 from bayes_inerter.network import compile_network
 from bayes_inerter.simulate import _augmented, _contacts
 
+CASES = [("reduced", "A3", 1.0, 1.0), ("reduced", "A0", 0.5, 0.9), ("reduced", "B2", 1.5, 1.0),
+         ("full", "A3", 1.0, 1.0), ("rigid", "A2", 1.0, 0.95), ("linear", "A1", 1.0, 1.0)]
 
-def kernel_arguments(network, setting, freq, *, scale=1.0, store=False, max_events=200):
-    """run_kernel's arguments for a network driven as simulate drives it."""
+
+def network_arrays(network, setting, freq, *, scale=1.0, duration=2.0):
+    """The state space, contacts and force record of a network driven as simulate drives it."""
     p = paper_parameters(setting)
-    t, f = inverse_dynamics_force(p, freq, duration=2.0, ramp=0.4)
+    t, f = inverse_dynamics_force(p, freq, duration=duration, ramp=0.4)
     compiled = compile_network(build_network(network, p))
     A, B = compiled.state_space(viscous=True)
-    nodes, f0, mass = _contacts(compiled)
+    return A, B.reshape(-1, 1), *_contacts(compiled), (scale * f).reshape(-1, 1), float(t[1] - t[0])
+
+
+def kernel_arguments(network, setting, freq, *, scale=1.0, store=False, max_events=200, duration=2.0):
+    """The kernel's arguments for a network driven as simulate drives it."""
+    A, B, nodes, f0, mass, inputs, h = network_arrays(network, setting, freq, scale=scale, duration=duration)
     n = A.shape[0]
-    Abar = _augmented(A, B.reshape(n, 1), nodes, mass)
-    return (Abar, n, 1, nodes, f0, mass, (scale * f).reshape(-1, 1), float(t[1] - t[0]), np.zeros(n), 0,
-            store, max_events)
+    Abar = _augmented(A, B, nodes, mass)
+    return (Abar, n, 1, nodes, f0, mass, inputs, h, np.zeros(n), 0, store, max_events)
 
 
-@pytest.mark.parametrize(
-    "network, setting, freq, scale",
-    [("reduced", "A3", 1.0, 1.0), ("reduced", "A0", 0.5, 0.9), ("reduced", "B2", 1.5, 1.0),
-     ("full", "A3", 1.0, 1.0), ("rigid", "A2", 1.0, 0.95), ("linear", "A1", 1.0, 1.0)],
-)
-@pytest.mark.parametrize("store", [False, True])
-def test_specialised_kernel_equals_general_bit_for_bit(network, setting, freq, scale, store):
-    args = kernel_arguments(network, setting, freq, scale=scale, store=store)
-    general = _kernel.run_kernel(*args)
-    for pattern in (None, (args[0] != 0).tobytes()):  # dense, and the matrix's zeros left out
-        special = _kernel.kernel_for(args[1], args[2], args[3], args[9], pattern)(*args)
-        for a, b in zip(general[:3], special[:3]):
-            np.testing.assert_array_equal(a, b)
-        assert general[3] == special[3] == _kernel.STATUS_OK
-        np.testing.assert_array_equal(general[4], special[4])
+def generated(args, dense=False):
+    return _kernel.kernel_for(args[1], args[2], args[3], args[9], None if dense else (args[0] != 0).tobytes())
+
+
+def rel_error(a, ref):
+    """Relative L2 error normalised as in the paper's eq. (5)."""
+    return np.linalg.norm(a - ref) / np.linalg.norm(ref - ref.mean())
+
+
+@pytest.mark.parametrize("network, setting, freq, scale", CASES)
+def test_generated_kernel_follows_the_plain_reference(network, setting, freq, scale):
+    A, B, nodes, f0, mass, inputs, h = network_arrays(network, setting, freq, scale=scale)
+    accel, vel, states, status, stats = generated(kernel_arguments(network, setting, freq, scale=scale, store=True))(
+        *kernel_arguments(network, setting, freq, scale=scale, store=True))
+    r_accel, r_vel, r_states, ok, r_stats = Reference.coulomb(A, B, nodes, f0, mass, h).run(inputs)
+    assert status == _kernel.STATUS_OK and ok
+    # the same switches, located on the same ticks: the outputs agree to rounding
+    assert stats[0] == r_stats[0]
+    assert rel_error(accel, r_accel) < 1e-9
+    assert rel_error(vel, r_vel) < 1e-9
+    np.testing.assert_allclose(states, r_states, rtol=1e-8, atol=1e-12 * np.abs(r_states).max())
     if network != "linear":
-        assert general[4][0] > 0  # the contacts switched: the rare path ran too
+        assert stats[0] > 0  # the contacts switched: the rare path ran too
 
 
-def test_specialised_kernel_gives_up_where_the_general_does():
-    args = kernel_arguments("reduced", "A0", 0.5, scale=0.9, max_events=0)
-    general = _kernel.run_kernel(*args)
-    special = _kernel.kernel_for(args[1], args[2], args[3], args[9])(*args)
-    assert general[3] == special[3] == _kernel.STATUS_TOO_MANY_EVENTS
-    np.testing.assert_array_equal(general[0], special[0])
-    assert np.isnan(special[0][-1])
+@pytest.mark.parametrize("network, setting, freq, scale", CASES)
+@pytest.mark.parametrize("store", [False, True])
+def test_dense_and_sparse_kernels_agree_bit_for_bit(network, setting, freq, scale, store):
+    args = kernel_arguments(network, setting, freq, scale=scale, store=store)
+    dense, sparse = generated(args, dense=True)(*args), generated(args)(*args)
+    for a, b in zip(dense[:3], sparse[:3]):
+        np.testing.assert_array_equal(a, b)
+    assert dense[3] == sparse[3] == _kernel.STATUS_OK
+    np.testing.assert_array_equal(dense[4], sparse[4])
+    assert sparse[2].shape == ((len(args[6]) if store else 0), args[1])
 
 
-def test_specialised_kernels_are_kept_per_shape():
+def test_generated_kernel_gives_up_where_the_reference_does():
+    args = kernel_arguments("reduced", "A0", 0.5, scale=0.9, max_events=0, duration=0.8)
+    accel, _, _, status, _ = generated(args)(*args)
+    A, B, nodes, f0, mass, inputs, h = network_arrays("reduced", "A0", 0.5, scale=0.9, duration=0.8)
+    r_accel, _, _, ok, _ = Reference.coulomb(A, B, nodes, f0, mass, h).run(inputs, max_events=0)
+    assert status == _kernel.STATUS_TOO_MANY_EVENTS and not ok
+    np.testing.assert_array_equal(np.isnan(accel), np.isnan(r_accel))
+    assert np.isnan(accel[-1]) and not np.isnan(accel[0])
+    done = ~np.isnan(accel)
+    np.testing.assert_allclose(accel[done], r_accel[done], rtol=1e-9, atol=1e-9 * np.abs(r_accel[done]).max())
+
+
+def test_kernels_are_kept_per_shape():
     args = kernel_arguments("reduced", "A3", 1.0)
     fn = _kernel.kernel_for(args[1], args[2], args[3], args[9])
     assert _kernel.kernel_for(args[1], args[2], list(args[3]), args[9]) is fn
@@ -59,30 +90,51 @@ def test_specialised_kernels_are_kept_per_shape():
     assert _kernel.kernel_for(args[1], args[2], args[3], args[9], (args[0] != 0).tobytes()) is not fn
 
 
-def test_sparse_kernel_leaves_out_only_zero_terms():
-    args = kernel_arguments("reduced", "A3", 1.0)
-    src = _kernel._specialised_source(args[1], args[2], tuple(args[3]), args[9], (args[0] != 0).tobytes())
-    dense = _kernel._specialised_source(args[1], args[2], tuple(args[3]), args[9])
-    assert src.count(" * ") < dense.count(" * ")
-    # every guard coefficient it reads is one the matrix can make nonzero
-    nz = args[0] != 0
-    for i, node in enumerate(args[3]):
-        for j in range(nz.shape[1]):
-            if f"vd{i}_{j} = VD" in src:
-                assert nz[node, j]
-            if f"VD[mode, {i}, {j}]" in src:  # the rare path's reads (``events``)
-                assert nz[node, j]
-    assert "VD[mode, 0, " in src and "VD[mode, 0, " in dense
-    assert src.count("VD[mode, ") < dense.count("VD[mode, ")
+def rich_case(network, setting, freq, friction, gap, *, duration=1.0, scale=1.0):
+    """A network with piecewise-linear laws and a dead zone, its kernel's shape and arrays,
+    and the plain reference for it."""
+    p = paper_parameters(setting)
+    t, f = inverse_dynamics_force(p, freq, duration=duration, ramp=0.4)
+    net = build_network(network, p, friction)
+    compiled = compile_network(with_backlash(net, gap) if gap else net)
+    A, B = compiled.state_space(viscous=True)
+    h = float(t[1] - t[0])
+    shape, arrays = _piecewise.network_arrays(compiled, A, B, h)
+    laws = [PiecewiseLinear.total(node) if node else None for node in compiled.laws]
+    nodes = [i for i, law in enumerate(laws) if law is not None and law.f_s > 0]
+    gaps = {j: g for j, g in enumerate(compiled.link_gap) if g > 0}
+    ref = Reference(A, B.reshape(-1, 1), nodes, [laws[i] for i in nodes], compiled.masses[nodes], h,
+                    compiled=compiled, gaps=gaps)
+    return shape, arrays, ref, (scale * f).reshape(-1, 1)
 
 
-@pytest.mark.slow
-def test_kernel_compiled_in_memory_where_no_folder_can_be_written(monkeypatch, tmp_path):
-    blocked = tmp_path / "file"
-    blocked.write_text("not a folder")
-    monkeypatch.setattr(_kernel, "_kernel_dirs", lambda: iter([blocked / "kernels"]))
-    monkeypatch.setattr(_kernel, "_SPECIALISED", {})
-    args = kernel_arguments("rigid", "A2", 1.0, scale=0.95)
-    special = _kernel.kernel_for(args[1], args[2], args[3], args[9])(*args)
-    np.testing.assert_array_equal(special[0], _kernel.run_kernel(*args)[0])
-    assert not (blocked.parent / "kernels").exists()
+RICH_CASES = [("reduced", "A1", 1.0, "stribeck", 2e-5), ("reduced", "A3", 1.0, "coulomb", 2e-5),
+              ("rigid", "A2", 1.0, "stribeck", 0.0), ("reduced", "B2", 1.5, "stribeck", 0.0)]
+
+
+@pytest.mark.parametrize("network, setting, freq, friction, gap", RICH_CASES)
+def test_rich_kernel_follows_the_plain_reference(network, setting, freq, friction, gap):
+    """Piecewise-linear laws (Stribeck in 4 pieces) and a dead zone in the nut link."""
+    shape, arrays, ref, inputs = rich_case(network, setting, freq, friction, gap)
+    accel, vel, states, status, stats = _kernel.rich_kernel_for(shape)(arrays, inputs, np.zeros(shape.n), True, 200)
+    r_accel, r_vel, r_states, ok, r_stats = ref.run(inputs)
+    assert status == _kernel.STATUS_OK and ok
+    assert stats[0] == r_stats[0] > 0
+    assert rel_error(accel, r_accel) < 1e-9
+    assert rel_error(vel, r_vel) < 1e-9
+    np.testing.assert_allclose(states, r_states, rtol=1e-8, atol=1e-12 * np.abs(r_states).max())
+    if gap:  # the gap was entered and left
+        assert np.any(np.abs(states[:, shape.links[0]]) < gap) and np.any(np.abs(states[:, shape.links[0]]) > gap)
+
+
+def test_rich_kernel_on_coulomb_laws_is_the_coulomb_kernel():
+    """Coulomb laws given as one-piece piecewise-linear laws take the general kernel for
+    piecewise-linear laws: it must give the Coulomb kernel's simulation, to rounding."""
+    args = kernel_arguments("reduced", "A0", 0.5, scale=0.9, store=True)
+    coulomb = generated(args)(*args)
+    shape, arrays, _, inputs = rich_case("reduced", "A0", 0.5, lambda f0, c: Coulomb(f0, c).piecewise(), 0.0,
+                                         duration=2.0, scale=0.9)
+    rich = _kernel.rich_kernel_for(shape)(arrays, inputs, np.zeros(shape.n), True, 200)
+    assert rich[4][0] == coulomb[4][0] > 0
+    assert rel_error(rich[0], coulomb[0]) < 1e-10
+    np.testing.assert_allclose(rich[2], coulomb[2], rtol=1e-9, atol=1e-13 * np.abs(coulomb[2]).max())

@@ -130,7 +130,7 @@ class Deformation(Block):
     ----------
     c : damping, N s/m (>= 0).
     k : stiffness, N/m (>= 0); c + k > 0.
-    backlash : optional dead zone (see :class:`Backlash`), simulated by the general solver.
+    backlash : optional dead zone (see :class:`Backlash`), simulated by the exact kernel.
     """
 
     c: float

@@ -59,7 +59,9 @@ class CompiledNetwork:
 
     @property
     def all_coulomb(self) -> bool:
-        """True when the event-driven kernel applies: Coulomb laws only, no dead zone."""
+        """True when the Coulomb kernel (the likelihood's) applies: Coulomb laws only, no
+        dead zone. Other piecewise-linear laws and dead zones take the exact kernel's
+        general form (``simulate``)."""
         laws_ok = all(law.is_coulomb for node in self.laws for law in node)
         return laws_ok and not np.any(self.link_gap > 0)
 
