@@ -25,6 +25,7 @@ from ..device import FREQUENCIES_HZ, SETTINGS, InerterParameters, paper_paramete
 from ..friction import STRIBECK_RATIO, STRIBECK_VELOCITY, make_law
 from ..models import build_network, with_backlash
 from ..network import Network, compile_network
+from .._piecewise import applies as piecewise_applies
 from ..simulate import run_piecewise_linear
 from .record import Record
 
@@ -71,6 +72,10 @@ class GeneratorSettings:
         and its Stribeck velocity, m/s (defaults ``friction.STRIBECK_RATIO`` and
         ``friction.STRIBECK_VELOCITY``: 1.3 and 0.01 m/s).
     backlash : half-width of a dead zone in the nut link, m (default 0: none).
+    exact : simulate Stribeck friction (in its piecewise-linear form,
+        ``friction.STRIBECK_SEGMENTS`` pieces) and backlash (a plain dead zone) on the
+        exact kernel (default True); False: on the general stiff solver, regularised
+        (``_stiff``: tanh sign, backlash ramp), as before. The smooth law always runs there.
     """
 
     amplitude: float = 0.01
@@ -95,6 +100,7 @@ class GeneratorSettings:
     stribeck_ratio: float = STRIBECK_RATIO
     stribeck_velocity: float = STRIBECK_VELOCITY
     backlash: float = 0.0
+    exact: bool = True
 
     def __post_init__(self) -> None:
         for name in ("amplitude", "fs", "duration", "k_p", "k_d", "force_gain", "accel_gain", "stribeck_velocity"):
@@ -168,7 +174,7 @@ def _servo_system(params, s: GeneratorSettings):
     """The device's compiled network with the servo closed around node 0."""
     compiled = compile_network(_truth_network(params, s))
     inv_m0 = 1.0 / compiled.masses[0]
-    exact = compiled.all_coulomb
+    exact = compiled.all_coulomb or (s.exact and piecewise_applies(compiled))
     A, B1 = compiled.state_space(viscous=exact, position=True)
     n = A.shape[0]
     pos = n - 1
