@@ -55,9 +55,9 @@ class PaperLike:
     base : every other generator setting.
     """
 
-    ratio: tuple[float, float] = (1.2, 1.8)
-    velocity: tuple[float, float] = (2e-3, 2e-2)
-    backlash: tuple[float, float] = (5e-6, 40e-6)
+    ratio: tuple[float, float] = (1.15, 1.35)
+    velocity: tuple[float, float] = (5e-3, 2e-2)
+    backlash: tuple[float, float] = (1e-6, 4e-6)
     noise_corner: float = 50.0
     force_noise: float = 2.0
     accel_noise: float = 0.01
