@@ -20,6 +20,10 @@ from pathlib import Path
 
 from ..device import FREQUENCIES_HZ, SETTINGS
 from ..inference.model import MODELS
+
+#: The models the study's comparison fits beside the two-port model: the paper's nested
+#: ones (the richer models are a choice: ``compare_models``).
+COMPARE_MODELS = ("rigid", "linear")
 from ..records.generator import GeneratorSettings
 from ..records.sensitivity import SensorCalibration
 
@@ -59,8 +63,11 @@ class StudyPlan:
         each needs ``setting`` (or ``m_s``) and ``drive_frequency_hz`` in its metadata.
     generator : how generated records are made; ``seed`` seeds their noise.
     steps : steps per chain; None runs each until converged.
-    comparison : (settings, frequencies) of the records also fitted with the rigid and
-        linear models.
+    comparison : (settings, frequencies) of the records also fitted with the
+        ``compare_models``.
+    compare_models : the models fitted beside the two-port one in the comparison
+        (default :data:`COMPARE_MODELS`, the paper's nested rigid and linear models; any
+        of ``inference.model.MODELS``).
     walkers : walkers per chain (None: the package's default).
     joint : also sample the joint model (shared frictions and deformations, one b per
         setting) on all the two-port records, started from their single-record
@@ -85,6 +92,7 @@ class StudyPlan:
     steps: int | None = None
     walkers: int | None = None
     comparison: tuple = ((), ())
+    compare_models: tuple = COMPARE_MODELS
     joint: bool = False
     joint_steps: int | None = None
     calibration: SensorCalibration = field(default_factory=SensorCalibration)
@@ -95,6 +103,9 @@ class StudyPlan:
         unknown = [s for s in self.settings if s not in SETTINGS]
         if unknown:
             raise ValueError(f"unknown flywheel settings {unknown}; choose from {', '.join(SETTINGS)}")
+        odd = [m for m in self.compare_models if m not in MODELS or m == "two-port"]
+        if odd:
+            raise ValueError(f"comparison models must be other models of {', '.join(MODELS)}; got {odd}")
         for name in ("steps", "joint_steps"):
             value = getattr(self, name)
             if value is not None and not (isinstance(value, int) and value >= 1):
@@ -110,7 +121,7 @@ class StudyPlan:
         for i, (name, (path, setting, freq)) in enumerate(sorted(records.items())):
             models = ["two-port"]
             if setting in comp_settings and freq in comp_freqs:
-                models += [m for m in MODELS if m != "two-port"]
+                models += list(self.compare_models)
             for model in models:
                 jobs.append(FitJob(str(path), str(out / "fits" / model / name), model, self.steps,
                                    self.walkers, self.seed + i))
