@@ -142,6 +142,29 @@ def coverage(rows: list[dict]) -> list[dict]:
     return out
 
 
+_NUMBERS = ("b_true", "b_centre", "sd_log_b", "lo50", "hi50", "lo94", "hi94", "phi")
+
+
+def _read(path: Path) -> list[dict]:
+    """Rows written by an earlier run (numbers as numbers), or none."""
+    if not path.exists():
+        return []
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    for r in rows:
+        r.update({k: float(r[k]) for k in _NUMBERS}, covered50=int(r["covered50"]), covered94=int(r["covered94"]))
+    return rows
+
+
+def _append(path: Path, rows: list[dict]) -> None:
+    new = not path.exists()
+    with open(path, "a", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        if new:
+            w.writeheader()
+        w.writerows(rows)
+
+
 def _write(path: Path, rows: list[dict]) -> None:
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -187,15 +210,20 @@ def main() -> None:
         sys.exit(f"error: unknown methods {', '.join(sorted(unknown))}; choose from {', '.join(METHODS)}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    rows = []
+    partial = out / "replicates.partial.csv"  # each replicate's rows as it ends: a rerun goes on from them
+    rows = _read(partial)
+    done = {int(r["replicate"]) for r in rows}
+    todo = [(k, args) for k in range(args.replicates) if k not in done]
     t0 = time.perf_counter()
     with make_executor(args.processes) as ex:
-        for n, got in enumerate(ex.as_completed(replicate, [(k, args) for k in range(args.replicates)]), 1):
+        for n, got in enumerate(ex.as_completed(replicate, todo), len(done) + 1):
             if not got.ok:
-                sys.exit(f"error: replicate {got.index}: {got.error}")
+                sys.exit(f"error: replicate {todo[got.index][0]}: {got.error}")
+            _append(partial, got.value)
             rows.extend(got.value)
             print(f"{n}/{args.replicates} replicates ({time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
-    rows.sort(key=lambda r: (r["replicate"], args.methods.index(r["method"])))
+    rows = [r for r in rows if int(r["replicate"]) < args.replicates and r["method"] in args.methods]
+    rows.sort(key=lambda r: (int(r["replicate"]), args.methods.index(r["method"])))
     _write(out / "replicates.csv", rows)
     table = coverage(rows)
     _write(out / "coverage.csv", table)

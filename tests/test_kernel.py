@@ -13,7 +13,14 @@ from bayes_inerter.network import compile_network
 from bayes_inerter.simulate import _augmented, _contacts
 
 CASES = [("reduced", "A3", 1.0, 1.0), ("reduced", "A0", 0.5, 0.9), ("reduced", "B2", 1.5, 1.0),
-         ("full", "A3", 1.0, 1.0), ("rigid", "A2", 1.0, 0.95), ("linear", "A1", 1.0, 1.0)]
+         # the full network's kernel and its plain reference take a minute on a busy
+         # machine: with the slow tests (bash test.sh --all)
+         pytest.param("full", "A3", 1.0, 1.0, marks=pytest.mark.slow), ("rigid", "A2", 1.0, 0.95),
+         ("linear", "A1", 1.0, 1.0)]
+#: The dense/sparse comparison compiles a dense kernel per case: one case in the quick
+#: subset, the others with the slow tests.
+DENSE_CASES = [CASES[0]] + [pytest.param(*(c.values if hasattr(c, "values") else c), marks=pytest.mark.slow)
+                            for c in CASES[1:]]
 
 
 def network_arrays(network, setting, freq, *, scale=1.0, duration=2.0):
@@ -58,7 +65,7 @@ def test_generated_kernel_follows_the_plain_reference(network, setting, freq, sc
         assert stats[0] > 0  # the contacts switched: the rare path ran too
 
 
-@pytest.mark.parametrize("network, setting, freq, scale", CASES)
+@pytest.mark.parametrize("network, setting, freq, scale", DENSE_CASES)
 @pytest.mark.parametrize("store", [False, True])
 def test_dense_and_sparse_kernels_agree_bit_for_bit(network, setting, freq, scale, store):
     args = kernel_arguments(network, setting, freq, scale=scale, store=store)
