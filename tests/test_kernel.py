@@ -115,8 +115,11 @@ def rich_case(network, setting, freq, friction, gap, *, duration=1.0, scale=1.0)
     return shape, arrays, ref, (scale * f).reshape(-1, 1)
 
 
-RICH_CASES = [("reduced", "A1", 1.0, "stribeck", 2e-5), ("reduced", "A3", 1.0, "coulomb", 2e-5),
-              ("rigid", "A2", 1.0, "stribeck", 0.0), ("reduced", "B2", 1.5, "stribeck", 0.0)]
+#: Stribeck with backlash stays in the quick subset; the other cases (each a compile and
+#: a slow plain reference) run with the slow tests.
+RICH_CASES = [("reduced", "A1", 1.0, "stribeck", 2e-5)] + [
+    pytest.param(*c, marks=pytest.mark.slow) for c in
+    (("reduced", "A3", 1.0, "coulomb", 2e-5), ("rigid", "A2", 1.0, "stribeck", 0.0), ("reduced", "B2", 1.5, "stribeck", 0.0))]
 
 
 @pytest.mark.parametrize("network, setting, freq, friction, gap", RICH_CASES)
@@ -134,6 +137,7 @@ def test_rich_kernel_follows_the_plain_reference(network, setting, freq, frictio
         assert np.any(np.abs(states[:, shape.links[0]]) < gap) and np.any(np.abs(states[:, shape.links[0]]) > gap)
 
 
+@pytest.mark.slow
 def test_rich_kernel_on_coulomb_laws_is_the_coulomb_kernel():
     """Coulomb laws given as one-piece piecewise-linear laws take the general kernel for
     piecewise-linear laws: it must give the Coulomb kernel's simulation, to rounding."""
