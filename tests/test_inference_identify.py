@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.identify import identify, unfiltered_acceleration
+from bayes_inerter.inference.identify import identify
 from bayes_inerter.inference.model import PosteriorModel
 from bayes_inerter.records.generator import GeneratorSettings, paper_record
 
@@ -23,7 +23,7 @@ def test_least_squares_finds_b_and_phi_is_eq_5_on_the_unfiltered_record(model):
     phys = [got.values[n] for n in model.names[: model.n_phys]]
     x = np.array([np.log(v) if model.all_priors[n].log_scale else v for n, v in zip(model.names, phys)])
     full = np.concatenate([x, model.bounds()[model.n_phys:].mean(axis=1)])
-    sim = unfiltered_acceleration(model, full)
+    sim = model.simulate_unfiltered(full)
     m = model.record.accel[w]
     phi = 1 - np.linalg.norm(sim[w] - m) / np.linalg.norm(m - m.mean())
     assert got.phi == pytest.approx(phi, rel=1e-9)

@@ -26,13 +26,13 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize, signal
+from scipy import optimize
 from scipy.stats import qmc
 
 from .model import PosteriorModel
 from .optimize import find_start
 
-__all__ = ["Identification", "identify", "unfiltered_acceleration", "STARTS", "BOOTSTRAP_LEVEL"]
+__all__ = ["Identification", "identify", "STARTS", "BOOTSTRAP_LEVEL"]
 
 #: Least-squares starts (the optimiser's and Sobol points in the prior's box).
 STARTS = 4
@@ -65,21 +65,11 @@ class Identification:
         return float(self.values["b"])
 
 
-def unfiltered_acceleration(model: PosteriorModel, theta) -> np.ndarray:
-    """The simulated acceleration at the record's samples, without the likelihood's
-    low-pass (back at the record's rate when the likelihood upsamples the force)."""
-    a = model.simulate_raw(theta)
-    q = model.likelihood.upsample
-    if q > 1:
-        a = signal.resample_poly(a, 1, q)[: len(model.record.time)]
-    return a
-
-
 def _residual(model: PosteriorModel, phys, target: np.ndarray, noise: np.ndarray) -> np.ndarray:
     theta = np.concatenate([phys, noise])
     w = model.window
     try:
-        r = unfiltered_acceleration(model, theta)[w] - target[w]
+        r = model.simulate_unfiltered(theta)[w] - target[w]
     except (ValueError, RuntimeError):  # out of range, or the simulation gave up
         return np.full(len(w), 1e6)
     return r if np.all(np.isfinite(r)) else np.full(len(w), 1e6)
@@ -123,7 +113,7 @@ def identify(model: PosteriorModel, *, starts: int = STARTS, seed: int = 0, boot
     theta = np.concatenate([best, noise])
     w = model.window
     m = measured[w]
-    fitted = unfiltered_acceleration(model, theta)
+    fitted = model.simulate_unfiltered(theta)
     phi = 1.0 - math.sqrt(min(sse)) / float(np.linalg.norm(m - m.mean()))
     values = {k: v for k, v in model.values(theta).items() if k not in ("sigma", "rho")}  # noise: not fitted
     draws, interval = (), None

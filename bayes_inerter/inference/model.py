@@ -300,13 +300,18 @@ class PosteriorModel:
         a, _ = run_exact(A, B, *contacts(bounds, masses), self._force, self._drive.h, sampling=lk.sampling)
         return a
 
-    def simulate_lp(self, theta) -> np.ndarray:
-        """Low-passed simulated acceleration over the whole record."""
+    def simulate_unfiltered(self, theta) -> np.ndarray:
+        """Simulated acceleration at the record's samples, before the low-pass (back at
+        the record's rate when the likelihood upsamples the force)."""
         a = self.simulate_raw(theta)
         q = self.likelihood.upsample
         if q > 1:
             a = signal.resample_poly(a, 1, q)[: len(self.record.time)]
-        return lowpass(a, self.fs, self.likelihood.cutoff)
+        return a
+
+    def simulate_lp(self, theta) -> np.ndarray:
+        """Low-passed simulated acceleration over the whole record."""
+        return lowpass(self.simulate_unfiltered(theta), self.fs, self.likelihood.cutoff)
 
     def phi(self, sim_lp: np.ndarray) -> float:
         w = self.window
