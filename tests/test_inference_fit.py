@@ -1,3 +1,4 @@
+import csv
 import json
 import os
 import signal
@@ -68,6 +69,12 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
     # names only the ensemble moves the chain used (the fitted case: tests/test_inference_sampler.py)
     assert info["moves"] and not any(m.startswith("IndependenceMove") for m in info["moves"]), info["moves"]
     assert 0.0 < info["coordinates_domain_edge"] < 0.5  # how near the domain's edge its draws came
+    # b's reported interval is the honest one, wider than the posterior's own, and printed
+    iv = info["b_interval"]
+    assert iv["method"] == "honest" and iv["sd_log_sensors"] > 0 and iv["sd_log_discrepancy"] >= 0
+    b = next(r for r in csv.DictReader(open(out / "summary.csv")) if r["name"] == "b")
+    assert iv["lo"] < float(b["hdi_3%"]) < float(b["hdi_97%"]) < iv["hi"]
+    assert f"{iv['lo']:.6g} to {iv['hi']:.6g}" in text and "the posterior alone" in text
 
 
 @pytest.mark.slow

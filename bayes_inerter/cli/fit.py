@@ -39,18 +39,19 @@ def cmd_fit(args) -> int:
             steps=args.steps, seed=args.seed, fresh=args.fresh, processes=processes,
             likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=bar.step,
             report=bar.status, coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
-            checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots,
+            checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
         )
     finally:
         bar.close()
     if result.recovered:
         print(f"note: checkpoint damaged, recovered: {result.recovered}")
-    b = result.row("b")
-    print(f"b = {b['mean']:.6g} kg (94 % HDI {b['hdi_3%']:.6g} to {b['hdi_97%']:.6g}), "
-          f"{result.iterations} steps")
+    b, iv = result.row("b"), result.b_interval
+    print(f"b = {iv.median:.6g} kg ({iv.describe()}: {iv.lo:.6g} to {iv.hi:.6g}), {result.iterations} steps")
+    if iv.method != "posterior":
+        print(f"  the posterior alone: 94 % HDI {b['hdi_3%']:.6g} to {b['hdi_97%']:.6g}")
     if result.b_theory is not None:
         print(f"theory (device file geometry): b = {result.b_theory:.6g} kg "
-              f"({(b['mean'] - result.b_theory) / result.b_theory:+.1%} identified against it)")
+              f"({(iv.median - result.b_theory) / result.b_theory:+.1%} identified against it)")
     phi = result.row("phi")
     print(f"phi = {phi['mean']:.2%} (94 % HDI {_percent_interval(phi['hdi_3%'], phi['hdi_97%'])})")
     for w in result.warnings:

@@ -66,6 +66,9 @@ def _add_generator_options(p: argparse.ArgumentParser) -> None:
 #: world before it is needed; a test keeps the two equal.
 FIT_MODELS = ("two-port", "rigid", "linear", "two-port-stribeck", "two-port-backlash", "two-port-rich")
 
+#: ``inference.interval.INTERVALS``, written out likewise; a test keeps the two equal.
+FIT_INTERVALS = ("honest", "posterior")
+
 #: ``records.checks.CHECKS``, written out so that the parser does not import numpy's
 #: world before it is needed; a test keeps the two equal.
 RECORD_CHECKS = ("time-unit", "flat", "clipped", "accel-vs-disp", "apparent-mass")
@@ -118,6 +121,10 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--model", choices=FIT_MODELS, default="two-port",
                    help="model (%(default)s); two-port-stribeck, -backlash and -rich add Stribeck friction, nut "
                         "backlash or both (docs/inference.md)")
+    p.add_argument("--interval", choices=FIT_INTERVALS, default="honest",
+                   help="b's reported interval (%(default)s): honest widens the posterior's by the sensors' "
+                        "calibration and the model discrepancy the record shows; posterior is the posterior's alone "
+                        "(docs/inference.md)")
     p.add_argument("--walkers", type=_positive_int, help="walkers (default 2 x parameters + 2)")
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
     p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")

@@ -24,7 +24,9 @@ from ..lock import folder_lock
 from ..masses import resolve_masses
 from .coordinates import default_coordinates
 from .end_state import end_state_warnings
+from .interval import DEFAULT_INTERVAL, INTERVALS, IntervalSettings, inertance_interval
 from .model import LikelihoodSettings, PosteriorModel
+from .optimize import laplace_covariance
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
 from .sampler import Adaptation, Convergence, check_run_options, run_sampler
 
@@ -59,6 +61,8 @@ class FitResult:
     masses: object = None
     #: the theoretical inertance from the device file's geometry, kg (None without one)
     b_theory: float | None = None
+    #: b's reported interval (``interval.InertanceInterval``; None for the joint model)
+    b_interval: object = None
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -108,8 +112,15 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                processes: int = 1, likelihood: LikelihoodSettings | None = None, priors: dict | None = None,
                convergence: Convergence | None = None, progress=None, report=None, plots: bool = True,
                coordinates: str = "impedance", adaptation: Adaptation | None = Adaptation(),
-               checkpoint_seconds: float = WRITE_SECONDS) -> FitResult:
+               checkpoint_seconds: float = WRITE_SECONDS,
+               interval: str | IntervalSettings = DEFAULT_INTERVAL) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
+
+    ``interval``: how b's reported interval is made, a name of ``interval.INTERVALS``
+    ("honest", the default: the posterior widened by the sensors' calibration and the
+    model discrepancy; "posterior": the posterior alone) or ``IntervalSettings``. It is
+    in fit.json (``b_interval``) and ``FitResult.b_interval``; summary.csv keeps the
+    posterior's own.
 
     ``coordinates``: where the walkers move (``coordinates.COORDINATES``; the outputs are
     in the model's parameters whichever is used). ``adaptation``: the fitted independence
@@ -127,6 +138,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     record's physical sense (``records.checks``) is the caller's to check first.
     """
     out = Path(out)
+    interval_settings = _interval_settings(interval)
     masses = resolve_masses(record, m_s=m_s, m_B=m_B, device=device)
     b_theory = device.theoretical_inertance if device is not None else None
     pm = PosteriorModel(record, model, m_s=masses.m_s, m_B=masses.m_B, priors=priors or {},
@@ -147,15 +159,28 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         write_loo(out, idata)
         if plots:
             _write_plots(out, pm, sample, sims)
+        best = sample.theta.reshape(-1, pm.ndim)[int(np.argmax(sample.lp))]
+        b_interval = inertance_interval(pm, sample.values[..., pm.names.index("b")], best,
+                                        cov=laplace_covariance(pm, best), phi=float(np.median(sample.phi)),
+                                        settings=interval_settings, rng=np.random.default_rng(seed + 2))
         info = _run_info(model, pm, got, seed, {
             "m_s": pm.m_s, "m_B": pm.m_B, "masses": masses.as_dict(), "b_theory_device_file": b_theory,
-            "stride": pm.stride, "record_metadata": record.metadata})
+            "stride": pm.stride, "record_metadata": record.metadata, "b_interval": b_interval.as_dict(),
+            "interval_settings": dataclasses.asdict(interval_settings)})
         info["timings_s"] = {"sampling": got.seconds, "posterior_draws": t_post, "total": time.perf_counter() - t0,
                              **_sampling_all_runs(out, got.seconds, run, fresh or run.start_theta is not None)}
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
         return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, idata,
                          info["timings_s"], got.shrink, run.recovered, warnings=got.ended, masses=masses,
-                         b_theory=b_theory)
+                         b_theory=b_theory, b_interval=b_interval)
+
+
+def _interval_settings(interval) -> IntervalSettings:
+    if isinstance(interval, IntervalSettings):
+        return interval
+    if interval not in INTERVALS:
+        raise ValueError(f"unknown interval {interval!r}; choose {', '.join(INTERVALS)} or pass IntervalSettings")
+    return INTERVALS[interval]
 
 
 def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | None = None, walkers: int | None = None,
