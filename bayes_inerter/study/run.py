@@ -29,6 +29,7 @@ from .analysis import (
     record_table,
     write_csv,
 )
+from .honest import honest_columns
 from .plan import StudyPlan, record_name
 from .runner import run_jobs
 
@@ -211,7 +212,7 @@ def _tables(plan: StudyPlan, fits: list, joint, truth_b, truth_app) -> tuple[dic
         inert = joint_estimate(inert, joint.draws, joint.converged, calibration=cal)
         if is_joint(inert):  # every setting's b jointly sampled: regress the draws
             draws = np.column_stack([np.ravel(joint.draws[f"b_{r['setting']}"]) for r in inert])
-    tables["inertance"] = inert
+    tables["inertance"] = honest_columns(inert, fits, cal, truth_b)
     tables["regression"] = flywheel_regression(inert, truth_b=truth_b, calibration=cal, draws=draws)
     return tables, files
 
