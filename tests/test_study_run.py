@@ -29,6 +29,11 @@ def study(tmp_path_factory):
     return run_study(tiny_plan(), out, processes=2)
 
 
+def report_head(out):
+    """REPORT.md up to its limitations: the answer's screen."""
+    return (out / "REPORT.md").read_text().split("## Limitations")[0]
+
+
 def test_study_writes_tables_figures_and_report(study):
     out = study.out
     for name in ("inertance.csv", "inertance_records.csv", "flywheels.csv", "phi.csv", "model_comparison.csv",
@@ -38,6 +43,9 @@ def test_study_writes_tables_figures_and_report(study):
     header = (out / "inertance.csv").read_text().splitlines()[0]
     assert header.startswith("setting,b_theory,b_paper,b_median,b_hdi_3%,b_hdi_97%")
     assert "b_cal_hdi_3%" in header  # the sensors' calibration, beside the records-alone interval
+    # the honest interval per setting, from the fits' own (fit.json), in the report's first table
+    assert "b_honest_3%" in header and "honest_records" in header
+    assert "honest 94 % interval (kg)" in report_head(out) and "records the model reproduces" in report_head(out)
     assert [o["status"] for o in study.outcomes] == ["done"] * 4  # A0 two-port; A2 two-port, rigid, linear
     report = (out / "REPORT.md").read_text()
     assert "not converged" in report  # 8 steps: the report must say so

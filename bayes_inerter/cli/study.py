@@ -96,8 +96,12 @@ def _say_result(result, out: Path) -> int:
     from . import EXIT_FAIL, EXIT_OK
 
     for row in result.tables["inertance"]:
+        honest = ""
+        if "b_honest_3%" in row:
+            honest = (f"; honest {row['b_honest_3%']:.6g} to {row['b_honest_97%']:.6g}" if row["honest_identified"]
+                      else "; honest: not identified")
         print(f"{row['setting']}: b = {row['b_median']:.6g} kg (94 % {row['b_hdi_3%']:.6g} to "
-              f"{row['b_hdi_97%']:.6g}); theory {row['b_theory']:.6g}, paper {row['b_paper']:.6g}")
+              f"{row['b_hdi_97%']:.6g}{honest}); theory {row['b_theory']:.6g}, paper {row['b_paper']:.6g}")
     reused = sum(o["status"] == "skipped" for o in result.outcomes)
     if reused:
         print(f"reused {reused} of {len(result.outcomes)} fits finished earlier in {out} "
