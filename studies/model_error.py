@@ -3,31 +3,40 @@
 Run from the project root:
 
     python studies/model_error.py --replicates 100 --out results/model-error [--processes 2]
-        [--methods two-port two-port-rich joint] [--duration 10] [--seed 0]
+        [--methods M ...] [--duration 10] [--seed 0] [--device paper-like|model] [--only K ...]
 
 Each replicate is one paper-like laboratory (``records.paper_like``, seed = replicate
 number + ``--seed`` x 100,000) and one flywheel setting drawn uniformly from the nine; its
-records are that setting at 0.5, 1 and 1.5 Hz. A single-record method fits the record at
-one frequency drawn uniformly from the three; ``joint`` fits the setting's three records
-together (one b). Every draw's seed is written to replicates.csv.
+records are that setting at 0.5, 1 and 1.5 Hz. A single-record method (``two-port``, or
+a richer model's name) fits the record at one frequency drawn uniformly from the three;
+``joint`` fits the setting's three records together (one b); ``setting`` fits each of
+the three alone and combines their intervals (``interval.combined_interval``). Every
+draw's seed is written to replicates.csv. ``--device model`` makes the records with the
+model itself instead (``records.generator.paper_record``): the control where the model
+is right.
 
 Each fit is summarised by the normal (Laplace) approximation of its posterior at the
 optimum the sampler would start from (``optimize.find_start``, then
 ``optimize.laplace_covariance``), in log b: the intervals are exp(mu +- z sd) at 50 % and
-94 %. ``--mcmc N`` also runs the default sampler (``fit_record``) on the first N
-replicates' single records, to check the approximation against the posterior itself.
-Methods whose name has ``+sensors`` add the sensors' calibration uncertainty
-(``records.sensitivity.SensorCalibration``'s defaults) to the interval, ``+discrepancy``
-the harmonic model discrepancy's share (``inference.discrepancy``).
+94 %; these are approximate posteriors, not MCMC. A method's ``+`` terms add shares to
+the sd: ``+sensors`` the sensors' calibration uncertainty
+(``records.sensitivity.SensorCalibration``'s defaults), ``+discrepancy`` the harmonic
+model discrepancy (``inference.discrepancy``; the other parameters free, decay 1),
+``+discrepancy_flat`` the same with decay 0, ``+discrepancy_held`` with the other
+parameters held; ``+guard`` reports b as not identified (the prior's range) where phi is
+below ``end_state.PHI_WARNING`` (for ``setting``: leaves such records out).
+``two-port+discrepancy+sensors+guard`` and ``setting+sensors+guard`` are what ``fit``
+and ``study`` report by default (``interval.INTERVALS["honest"]``).
 
 Writes replicates.csv (one row per replicate and method), coverage.csv (per method:
-replicates, coverage of the 50 % and 94 % intervals with binomial standard errors, median
-relative width of the 94 % interval, median relative error of the centre) and
-coverage.png.
+replicates, coverage of the 50 % and 94 % intervals with binomial standard errors, the
+share identified, median relative width of the identified 94 % intervals, median
+relative error of the centre) and coverage.png.
 """
 
 import argparse
 import csv
+import json
 import math
 import sys
 import time
@@ -37,16 +46,29 @@ import numpy as np
 
 from bayes_inerter.device import FREQUENCIES_HZ, SETTINGS
 from bayes_inerter.executor import make_executor
-from bayes_inerter.inference.discrepancy import harmonic_discrepancy
+from bayes_inerter.inference.discrepancy import DECAY, harmonic_discrepancy
+from bayes_inerter.inference.end_state import PHI_WARNING
+from bayes_inerter.inference.priors import DEFAULT_PRIORS
+from bayes_inerter.inference.interval import InertanceInterval, combined_interval
 from bayes_inerter.inference.joint import JointModel
 from bayes_inerter.inference.model import PosteriorModel
 from bayes_inerter.inference.optimize import NM_RESTARTS, find_start, laplace_covariance, local_optimum
-from bayes_inerter.records.generator import GeneratorSettings
+from bayes_inerter.records.generator import GeneratorSettings, paper_record
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 from bayes_inerter.records.sensitivity import SensorCalibration
 
 Z50, Z94 = 0.6744897501960817, 1.8807936081512509  # normal quantiles of 0.75 and 0.97
+#: What the script measures unless told: today's posterior, each share alone and the
+#: defaults of ``fit`` (``two-port+discrepancy+sensors+guard``) and ``study``
+#: (``setting+sensors+guard``).
+DEFAULT_METHODS = ("two-port", "two-port+sensors", "two-port+discrepancy+sensors", "two-port+discrepancy_flat+sensors",
+                   "two-port+discrepancy_held+sensors", "two-port+discrepancy+sensors+guard", "setting",
+                   "setting+sensors", "setting+sensors+guard")
+PRIOR_B = tuple(float(v) for v in np.exp(DEFAULT_PRIORS["b"].bounds))  # b's prior range, kg: "not identified"
 METHODS = ("two-port", "two-port+sensors", "two-port+discrepancy", "two-port+discrepancy+sensors",
+           "two-port+discrepancy_flat", "two-port+discrepancy_flat+sensors", "joint+discrepancy_flat+sensors",
+           "two-port+discrepancy_held+sensors", "joint+discrepancy_held+sensors", "setting", "setting+sensors",
+           "two-port+discrepancy+sensors+guard", "setting+sensors+guard",
            "two-port-stribeck", "two-port-backlash", "two-port-rich", "two-port-rich+discrepancy", "joint",
            "joint+sensors", "joint+discrepancy", "joint+discrepancy+sensors")
 
@@ -61,9 +83,14 @@ def _laplace_b(model, theta, name: str) -> tuple[float, float]:
 def _single(rec, model_name: str, rng) -> dict:
     pm = PosteriorModel(rec, model_name)
     theta, _ = find_start(pm, rng)
-    mu, sd = _laplace_b(pm, theta, "b")
+    cov = laplace_covariance(pm, theta)
+    i = pm.names.index("b")
+    mu, sd = float(theta[i]), float(math.sqrt(max(cov[i, i], 0.0)))
     return {"mu": mu, "sd": sd, "phi": pm.log_prob(theta)[1],
-            "discrepancy": harmonic_discrepancy(pm, theta).sd_log_b}
+            "discrepancy": harmonic_discrepancy(pm, theta, cov=cov).sd_log_b,
+            "discrepancy_flat": harmonic_discrepancy(pm, theta, cov=cov, decay=0.0).sd_log_b,
+            "discrepancy_held": harmonic_discrepancy(pm, theta).sd_log_b,
+            "power": list(harmonic_discrepancy(pm, theta, cov=cov).power)}
 
 
 def _joint(recs, setting: str, rng) -> dict:
@@ -72,58 +99,139 @@ def _joint(recs, setting: str, rng) -> dict:
     theta, _ = local_optimum(jm, jm.start(centres), restarts=NM_RESTARTS)
     mu, sd = _laplace_b(jm, theta, f"b_{setting}")
     # each record's discrepancy at the joint optimum, combined as independent evidence
-    parts = [harmonic_discrepancy(part, jm.part_theta(theta, k)).sd_log_b for k, part in enumerate(jm.parts)]
-    precision = sum(1.0 / v ** 2 for v in parts if v > 0)
-    return {"mu": mu, "sd": sd, "phi": jm.log_prob(theta)[1],
-            "discrepancy": math.sqrt(1.0 / precision) if precision > 0 else 0.0}
+    got = {"mu": mu, "sd": sd, "phi": jm.log_prob(theta)[1]}
+    for key, decay in (("discrepancy", DECAY), ("discrepancy_flat", 0.0), ("discrepancy_held", DECAY)):
+        parts = [harmonic_discrepancy(part, jm.part_theta(theta, k), decay=decay).sd_log_b
+                 for k, part in enumerate(jm.parts)]
+        precision = sum(1.0 / v ** 2 for v in parts if v > 0)
+        got[key] = math.sqrt(1.0 / precision) if precision > 0 else 0.0
+    return got
+
+
+def _setting(singles: dict, moving_mass: float, guard: bool) -> dict:
+    """The setting's b from its records' single fits (``interval.combined_interval``, the
+    sensors left to ``+sensors``; with ``guard``, records whose phi is below
+    ``PHI_WARNING`` left out); ``parts`` keeps each record's (freq, mu, sd, discrepancy,
+    phi) for other combinations."""
+    parts = [InertanceInterval("honest", math.exp(g["mu"]), *PRIOR_B, 0.94, g["sd"], 0.0, g["discrepancy"],
+                               identified=not guard or g["phi"] >= PHI_WARNING, phi=g["phi"])
+             for g in singles.values()]
+    got = combined_interval(parts, calibration=None, moving_mass=moving_mass)
+    sd = math.log(got.hi / got.median) / Z94 if got.identified else math.nan
+    return {"mu": math.log(got.median), "sd": sd, "phi": min(g["phi"] for g in singles.values()),
+            "identified": got.identified, "discrepancy": 0.0, "discrepancy_flat": 0.0, "discrepancy_held": 0.0,
+            "parts": [[f, g["mu"], g["sd"], g["discrepancy"], g["phi"]] for f, g in singles.items()]}
 
 
 def _interval(mu: float, sd: float, z: float) -> tuple[float, float]:
     return math.exp(mu - z * sd), math.exp(mu + z * sd)
 
 
-def replicate(job) -> list[dict]:
-    k, args = job
+def _draw(k: int, args, every: bool):
+    """Replicate k's seed, setting, drive frequency and records (all three frequencies'
+    with ``every``, else the drawn one's)."""
     seed = k + 100_000 * args.seed
     rng = np.random.default_rng([args.seed, k])
     setting = str(rng.choice(list(SETTINGS)))
     freq = float(rng.choice(FREQUENCIES_HZ))
-    device = PaperLike(base=GeneratorSettings(duration=args.duration))
-    recs = {f: paper_like_record(setting, f, seed=seed, device=device) for f in
-            (FREQUENCIES_HZ if "joint" in args.methods else (freq,))}
-    rec = recs[freq]
-    truth = rec.metadata["true_parameters"]["b"]
-    gen = rec.metadata["generator"]
-    rows = []
-    fits = {}  # one fit per model; its variants add terms to the same posterior
+    base = GeneratorSettings(duration=args.duration)
+    device = PaperLike(base=base)
+    recs = {f: (paper_like_record(setting, f, seed=seed, device=device) if args.device == "paper-like" else
+                paper_record(setting, f, settings=base, seed=seed))
+            for f in (FREQUENCIES_HZ if every else (freq,))}
+    return seed, setting, freq, recs
+
+
+def replicate(job) -> list[dict]:
+    k, args = job
+    every = any(m.split("+")[0] in ("joint", "setting") for m in args.methods)
+    seed, setting, freq, recs = _draw(k, args, every)
+    m = recs[freq].metadata["m_s"] + recs[freq].metadata["m_B"]
+    fits, seconds = {}, {}  # one fit per model; its variants add terms to the same posterior
     for method in args.methods:
         t0 = time.perf_counter()
-        fit_rng = np.random.default_rng([args.seed, k, 1])
-        model_name = method.split("+")[0]
-        if model_name not in fits:
-            fits[model_name] = (_joint(list(recs.values()), setting, fit_rng) if model_name == "joint" else
-                                _single(rec, model_name, fit_rng))
-        got = fits[model_name]
-        sd = got["sd"]
-        if "+discrepancy" in method:
-            sd = math.hypot(sd, got["discrepancy"])
-        if method.endswith("+sensors"):
-            cal = SensorCalibration()
-            m = rec.metadata["m_s"] + rec.metadata["m_B"]
-            b = math.exp(got["mu"])
-            sd = math.hypot(sd, cal.inertance_sd(b, 0.0, m) / b)
-        lo50, hi50 = _interval(got["mu"], sd, Z50)
-        lo94, hi94 = _interval(got["mu"], sd, Z94)
+        model_name, *terms = method.split("+")
+        key = _key(model_name, terms)
+        if model_name == "setting" and key not in fits:
+            if "singles" not in fits:
+                fits["singles"] = {f: (fits["two-port"] if f == freq and "two-port" in fits else
+                                       _single(r, "two-port", np.random.default_rng([args.seed, k, 1, int(10 * f)])))
+                                   for f, r in recs.items()}
+            fits[key] = _setting(fits["singles"], m, "guard" in terms)
+        if key not in fits:
+            fit_rng = np.random.default_rng([args.seed, k, 1])
+            fits[key] = (_joint(list(recs.values()), setting, fit_rng) if model_name == "joint" else
+                         _single(recs[freq], model_name, fit_rng))
+        seconds[method] = round(time.perf_counter() - t0, 2)
+    return _rows(k, seed, setting, freq, recs[freq].metadata, fits, args.methods, seconds)
+
+
+def _key(model_name: str, terms) -> str:
+    """The fit a method reads: a setting's combination differs with the guard; the other
+    methods' terms only add to the same fit's sd."""
+    return model_name + ("+guard" if "guard" in terms and model_name == "setting" else "")
+
+
+def _rows(k, seed, setting, freq, meta, fits, methods, seconds) -> list[dict]:
+    """One row per method from the replicate's fits (``_single``, ``_joint``, ``_setting``)."""
+    truth = meta["true_parameters"]["b"]
+    gen = {name: meta["generator"].get(name, math.nan) for name in
+           ("stribeck_ratio", "stribeck_velocity", "backlash", "force_gain", "accel_gain")}
+    m = meta["m_s"] + meta["m_B"]
+    rows = []
+    for method in methods:
+        model_name, *terms = method.split("+")
+        got = fits[_key(model_name, terms)]
+        # a setting's guard is in its combination (records left out); a single record's here
+        identified = got.get("identified", True) and not (
+            "guard" in terms and model_name != "setting" and got["phi"] < PHI_WARNING)
+        b = math.exp(got["mu"])
+        shares = {"stat": got["sd"], "sensors": SensorCalibration().inertance_sd(b, 0.0, m) / b,
+                  "discrepancy": got["discrepancy"], "discrepancy_flat": got["discrepancy_flat"],
+                  "discrepancy_held": got["discrepancy_held"]}
+        sd = math.sqrt(got["sd"] ** 2 + sum(shares[t] ** 2 for t in terms if t in shares))
+        lo50, hi50 = _interval(got["mu"], sd, Z50) if identified else PRIOR_B
+        lo94, hi94 = _interval(got["mu"], sd, Z94) if identified else PRIOR_B
         rows.append({
-            "replicate": k, "seed": seed, "setting": setting, "freq_hz": freq if model_name != "joint" else "all",
-            "method": method, "b_true": truth, "b_centre": math.exp(got["mu"]), "sd_log_b": sd,
-            "lo50": lo50, "hi50": hi50, "lo94": lo94, "hi94": hi94,
+            "replicate": k, "seed": seed, "setting": setting,
+            "freq_hz": freq if model_name not in ("joint", "setting") else "all",
+            "method": method, "b_true": truth, "b_centre": b, "sd_log_b": sd,
+            "lo50": lo50, "hi50": hi50, "lo94": lo94, "hi94": hi94, "identified": int(identified),
             "covered50": int(lo50 <= truth <= hi50), "covered94": int(lo94 <= truth <= hi94),
-            "phi": got["phi"], "stribeck_ratio": gen["stribeck_ratio"], "stribeck_velocity": gen["stribeck_velocity"],
-            "backlash": gen["backlash"], "force_gain": gen["force_gain"], "accel_gain": gen["accel_gain"],
-            "seconds": round(time.perf_counter() - t0, 2),
+            "phi": got["phi"], **gen, "seconds": seconds.get(method, 0.0),
+            **{f"sd_{name}": v for name, v in shares.items()}, "parts": json.dumps(got.get("parts", [])),
+            "power": json.dumps(got.get("power", [])),
         })
     return rows
+
+
+def rescore(rows: list[dict], args) -> list[dict]:
+    """Every replicate's rows remade for ``args.methods`` from the fits' numbers that
+    earlier rows keep (the single record's from its ``two-port`` row, the other records'
+    from a ``setting`` row's parts), with no fitting: for methods that only combine
+    those numbers differently."""
+    out = []
+    for k in sorted({int(r["replicate"]) for r in rows}):
+        mine = {r["method"]: r for r in rows if int(r["replicate"]) == k}
+        one = mine["two-port"]
+        single = {"mu": math.log(float(one["b_centre"])), "sd": float(one["sd_stat"]), "phi": float(one["phi"]),
+                  **{name: float(one[f"sd_{name}"]) for name in ("discrepancy", "discrepancy_flat",
+                                                                 "discrepancy_held")},
+                  "power": json.loads(one.get("power") or "[]")}
+        fits = {"two-port": single}
+        parts = next((json.loads(r["parts"]) for r in mine.values() if r.get("parts") not in (None, "", "[]")), [])
+        if parts:
+            fits["singles"] = {f: {"mu": mu, "sd": sd, "discrepancy": disc, "phi": phi}
+                               for f, mu, sd, disc, phi in parts}
+        seed, setting, freq, recs = _draw(k, args, every=False)
+        m = recs[freq].metadata["m_s"] + recs[freq].metadata["m_B"]
+        for method in args.methods:
+            model_name, *terms = method.split("+")
+            if model_name == "setting":
+                fits[_key(model_name, terms)] = _setting(fits["singles"], m, "guard" in terms)
+        seconds = {r["method"]: float(r["seconds"]) for r in mine.values()}
+        out.extend(_rows(k, seed, setting, freq, recs[freq].metadata, fits, args.methods, seconds))
+    return out
 
 
 def coverage(rows: list[dict]) -> list[dict]:
@@ -136,7 +244,10 @@ def coverage(rows: list[dict]) -> list[dict]:
             p = float(np.mean([r[f"covered{level}"] for r in mine]))
             row[f"coverage{level}"] = round(p, 3)
             row[f"se{level}"] = round(math.sqrt(p * (1 - p) / n), 3)
-        row["median_width94_pct"] = round(100 * float(np.median([(r["hi94"] - r["lo94"]) / r["b_true"] for r in mine])), 3)
+        shown = [r for r in mine if int(r.get("identified", 1))]
+        row["identified"] = round(len(shown) / n, 3)
+        row["median_width94_pct"] = round(100 * float(np.median([(r["hi94"] - r["lo94"]) / r["b_true"]
+                                                                  for r in shown])), 3) if shown else math.nan
         row["median_abs_error_pct"] = round(100 * float(np.median([abs(r["b_centre"] / r["b_true"] - 1) for r in mine])), 3)
         out.append(row)
     return out
@@ -198,12 +309,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--replicates", type=int, default=100)
     ap.add_argument("--out", default="runs/model-error")
-    ap.add_argument("--methods", nargs="+", default=["two-port", "two-port+sensors", "two-port+discrepancy",
-                                                      "two-port+discrepancy+sensors", "joint", "joint+sensors",
-                                                      "joint+discrepancy", "joint+discrepancy+sensors"])
+    ap.add_argument("--methods", nargs="+", default=list(DEFAULT_METHODS))
     ap.add_argument("--duration", type=float, default=10.0, help="record length, s (%(default)s)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--processes", type=int, default=2)
+    ap.add_argument("--device", choices=("paper-like", "model"), default="paper-like",
+                    help="the records' device: paper-like (richer than the model) or the model itself (a control)")
+    ap.add_argument("--rescore", action="store_true",
+                    help="remake replicates.csv and the table from the rows in --out for --methods, with no fitting")
+    ap.add_argument("--only", type=int, nargs="+", help="run these replicates alone (their numbers)")
     args = ap.parse_args()
     unknown = set(args.methods) - set(METHODS)
     if unknown:
@@ -213,16 +327,20 @@ def main() -> None:
     partial = out / "replicates.partial.csv"  # each replicate's rows as it ends: a rerun goes on from them
     rows = _read(partial)
     done = {int(r["replicate"]) for r in rows}
-    todo = [(k, args) for k in range(args.replicates) if k not in done]
+    wanted = range(args.replicates) if args.only is None else [k for k in args.only if k < args.replicates]
+    todo = [] if args.rescore else [(k, args) for k in wanted if k not in done]
+    start = len(wanted) - len(todo)
+    if args.rescore:
+        rows = rescore([r for r in rows if int(r["replicate"]) in set(wanted)], args)
     t0 = time.perf_counter()
     with make_executor(args.processes) as ex:
-        for n, got in enumerate(ex.as_completed(replicate, todo), len(done) + 1):
+        for n, got in enumerate(ex.as_completed(replicate, todo), start + 1):
             if not got.ok:
                 sys.exit(f"error: replicate {todo[got.index][0]}: {got.error}")
             _append(partial, got.value)
             rows.extend(got.value)
-            print(f"{n}/{args.replicates} replicates ({time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
-    rows = [r for r in rows if int(r["replicate"]) < args.replicates and r["method"] in args.methods]
+            print(f"{n}/{len(wanted)} replicates ({time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
+    rows = [r for r in rows if int(r["replicate"]) in set(wanted) and r["method"] in args.methods]
     rows.sort(key=lambda r: (int(r["replicate"]), args.methods.index(r["method"])))
     _write(out / "replicates.csv", rows)
     table = coverage(rows)
