@@ -21,9 +21,9 @@ optimum the sampler would start from (``optimize.find_start``, then
 94 %; these are approximate posteriors, not MCMC. A method's ``+`` terms add shares to
 the sd: ``+sensors`` the sensors' calibration uncertainty
 (``records.sensitivity.SensorCalibration``'s defaults), ``+discrepancy`` the harmonic
-model discrepancy (``inference.discrepancy``; the other parameters free, decay 1),
-``+discrepancy_flat`` the same with decay 0, ``+discrepancy_held`` with the other
-parameters held; ``+guard`` reports b as not identified (the prior's range) where phi is
+model discrepancy (``inference.discrepancy``; the other parameters held, decay 1),
+``+discrepancy_flat`` the same with decay 0, ``+discrepancy_free`` with the other
+parameters free (the Laplace covariance's linear response); ``+guard`` reports b as not identified (the prior's range) where phi is
 below ``end_state.PHI_WARNING`` (for ``setting``: leaves such records out).
 ``two-port+discrepancy+sensors+guard`` and ``setting+sensors+guard`` are what ``fit``
 and ``study`` report by default (``interval.INTERVALS["honest"]``).
@@ -62,12 +62,12 @@ Z50, Z94 = 0.6744897501960817, 1.8807936081512509  # normal quantiles of 0.75 an
 #: defaults of ``fit`` (``two-port+discrepancy+sensors+guard``) and ``study``
 #: (``setting+sensors+guard``).
 DEFAULT_METHODS = ("two-port", "two-port+sensors", "two-port+discrepancy+sensors", "two-port+discrepancy_flat+sensors",
-                   "two-port+discrepancy_held+sensors", "two-port+discrepancy+sensors+guard", "setting",
+                   "two-port+discrepancy_free+sensors", "two-port+discrepancy+sensors+guard", "setting",
                    "setting+sensors", "setting+sensors+guard")
 PRIOR_B = tuple(float(v) for v in np.exp(DEFAULT_PRIORS["b"].bounds))  # b's prior range, kg: "not identified"
 METHODS = ("two-port", "two-port+sensors", "two-port+discrepancy", "two-port+discrepancy+sensors",
            "two-port+discrepancy_flat", "two-port+discrepancy_flat+sensors", "joint+discrepancy_flat+sensors",
-           "two-port+discrepancy_held+sensors", "joint+discrepancy_held+sensors", "setting", "setting+sensors",
+           "two-port+discrepancy_free+sensors", "joint+discrepancy_free+sensors", "setting", "setting+sensors",
            "two-port+discrepancy+sensors+guard", "setting+sensors+guard",
            "two-port-stribeck", "two-port-backlash", "two-port-rich", "two-port-rich+discrepancy", "joint",
            "joint+sensors", "joint+discrepancy", "joint+discrepancy+sensors")
@@ -86,11 +86,10 @@ def _single(rec, model_name: str, rng) -> dict:
     cov = laplace_covariance(pm, theta)
     i = pm.names.index("b")
     mu, sd = float(theta[i]), float(math.sqrt(max(cov[i, i], 0.0)))
-    return {"mu": mu, "sd": sd, "phi": pm.log_prob(theta)[1],
-            "discrepancy": harmonic_discrepancy(pm, theta, cov=cov).sd_log_b,
-            "discrepancy_flat": harmonic_discrepancy(pm, theta, cov=cov, decay=0.0).sd_log_b,
-            "discrepancy_held": harmonic_discrepancy(pm, theta).sd_log_b,
-            "power": list(harmonic_discrepancy(pm, theta, cov=cov).power)}
+    held = harmonic_discrepancy(pm, theta)
+    return {"mu": mu, "sd": sd, "phi": pm.log_prob(theta)[1], "discrepancy": held.sd_log_b,
+            "discrepancy_flat": harmonic_discrepancy(pm, theta, decay=0.0).sd_log_b,
+            "discrepancy_free": harmonic_discrepancy(pm, theta, cov=cov).sd_log_b, "power": list(held.power)}
 
 
 def _joint(recs, setting: str, rng) -> dict:
@@ -100,7 +99,7 @@ def _joint(recs, setting: str, rng) -> dict:
     mu, sd = _laplace_b(jm, theta, f"b_{setting}")
     # each record's discrepancy at the joint optimum, combined as independent evidence
     got = {"mu": mu, "sd": sd, "phi": jm.log_prob(theta)[1]}
-    for key, decay in (("discrepancy", DECAY), ("discrepancy_flat", 0.0), ("discrepancy_held", DECAY)):
+    for key, decay in (("discrepancy", DECAY), ("discrepancy_flat", 0.0), ("discrepancy_free", DECAY)):
         parts = [harmonic_discrepancy(part, jm.part_theta(theta, k), decay=decay).sd_log_b
                  for k, part in enumerate(jm.parts)]
         precision = sum(1.0 / v ** 2 for v in parts if v > 0)
@@ -119,7 +118,7 @@ def _setting(singles: dict, moving_mass: float, guard: bool) -> dict:
     got = combined_interval(parts, calibration=None, moving_mass=moving_mass)
     sd = math.log(got.hi / got.median) / Z94 if got.identified else math.nan
     return {"mu": math.log(got.median), "sd": sd, "phi": min(g["phi"] for g in singles.values()),
-            "identified": got.identified, "discrepancy": 0.0, "discrepancy_flat": 0.0, "discrepancy_held": 0.0,
+            "identified": got.identified, "discrepancy": 0.0, "discrepancy_flat": 0.0, "discrepancy_free": 0.0,
             "parts": [[f, g["mu"], g["sd"], g["discrepancy"], g["phi"]] for f, g in singles.items()]}
 
 
@@ -188,7 +187,7 @@ def _rows(k, seed, setting, freq, meta, fits, methods, seconds) -> list[dict]:
         b = math.exp(got["mu"])
         shares = {"stat": got["sd"], "sensors": SensorCalibration().inertance_sd(b, 0.0, m) / b,
                   "discrepancy": got["discrepancy"], "discrepancy_flat": got["discrepancy_flat"],
-                  "discrepancy_held": got["discrepancy_held"]}
+                  "discrepancy_free": got["discrepancy_free"]}
         sd = math.sqrt(got["sd"] ** 2 + sum(shares[t] ** 2 for t in terms if t in shares))
         lo50, hi50 = _interval(got["mu"], sd, Z50) if identified else PRIOR_B
         lo94, hi94 = _interval(got["mu"], sd, Z94) if identified else PRIOR_B
@@ -216,7 +215,7 @@ def rescore(rows: list[dict], args) -> list[dict]:
         one = mine["two-port"]
         single = {"mu": math.log(float(one["b_centre"])), "sd": float(one["sd_stat"]), "phi": float(one["phi"]),
                   **{name: float(one[f"sd_{name}"]) for name in ("discrepancy", "discrepancy_flat",
-                                                                 "discrepancy_held")},
+                                                                 "discrepancy_free")},
                   "power": json.loads(one.get("power") or "[]")}
         fits = {"two-port": single}
         parts = next((json.loads(r["parts"]) for r in mine.values() if r.get("parts") not in (None, "", "[]")), [])

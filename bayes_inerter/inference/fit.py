@@ -161,7 +161,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
             _write_plots(out, pm, sample, sims)
         best = sample.theta.reshape(-1, pm.ndim)[int(np.argmax(sample.lp))]
         b_interval = inertance_interval(pm, sample.values[..., pm.names.index("b")], best,
-                                        cov=laplace_covariance(pm, best), phi=float(np.median(sample.phi)),
+                                        cov=laplace_covariance(pm, best) if interval_settings.others == "free"
+                                        else None, phi=float(np.median(sample.phi)),
                                         settings=interval_settings, rng=np.random.default_rng(seed + 2))
         info = _run_info(model, pm, got, seed, {
             "m_s": pm.m_s, "m_B": pm.m_B, "masses": masses.as_dict(), "b_theory_device_file": b_theory,

@@ -50,6 +50,9 @@ class IntervalSettings:
     calibration : the sensors' calibration uncertainties, or None (taken as exact).
     discrepancy : add the harmonic model discrepancy's share.
     decay, harmonics : the discrepancy's assumptions (``inference.discrepancy``).
+    others : "held" (default): the discrepancy is carried to b with the other parameters
+        held; "free": by the posterior's linear response (given ``cov``), which is wild
+        where the posterior has flat directions (results/model-error).
     level : the interval's probability (0.94).
     phi_min : below this phi, b is not identified (None: always reported).
     """
@@ -60,8 +63,11 @@ class IntervalSettings:
     harmonics: int = HARMONICS
     level: float = LEVEL
     phi_min: float | None = PHI_WARNING
+    others: str = "held"
 
     def __post_init__(self) -> None:
+        if self.others not in ("held", "free"):
+            raise ValueError(f"others must be 'held' or 'free', got {self.others!r}")
         if not (isinstance(self.level, float) and 0.0 < self.level < 1.0):
             raise ValueError(f"the interval's level must be a probability strictly between 0 and 1, got {self.level!r}")
 
@@ -135,9 +141,9 @@ def inertance_interval(model, b_draws, theta, *, cov=None, phi: float = math.nan
                        b_name: str = "b") -> InertanceInterval:
     """b's interval for a single-record posterior ``model`` with kept draws ``b_draws``
     (kg, any shape) and ``theta``, the point the discrepancy is measured at (the draw of
-    highest posterior, say); ``cov``, the posterior covariance of theta (from the draws),
-    lets the other parameters take up their share of the discrepancy
-    (``discrepancy.harmonic_discrepancy``); ``phi``: the posterior's median phi, for
+    highest posterior, say); ``cov``, the posterior covariance of theta, lets the other
+    parameters take up their share of the discrepancy where ``settings.others`` is
+    "free" (``discrepancy.harmonic_discrepancy``); ``phi``: the posterior's median phi, for
     ``settings.phi_min``. ``settings`` default to ``INTERVALS[DEFAULT_INTERVAL]``."""
     settings = settings or INTERVALS[DEFAULT_INTERVAL]
     b = np.asarray(b_draws, dtype=float)
@@ -157,7 +163,10 @@ def inertance_interval(model, b_draws, theta, *, cov=None, phi: float = math.nan
         sensors = settings.calibration.inertance_sd(median, 0.0, model.m_s + model.m_B) / median
     discrepancy = 0.0
     if settings.discrepancy:
-        discrepancy = harmonic_discrepancy(model, theta, cov=cov, harmonics=settings.harmonics,
+        if settings.others == "free" and cov is None:
+            raise ValueError("others='free' needs the posterior covariance cov")
+        discrepancy = harmonic_discrepancy(model, theta, cov=cov if settings.others == "free" else None,
+                                           harmonics=settings.harmonics,
                                            decay=settings.decay, b_name=b_name).sd_log_b
     got = widened_interval(np.log(b), math.hypot(sensors, discrepancy), settings.level, rng, name, sensors,
                            discrepancy)
