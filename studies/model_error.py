@@ -198,8 +198,10 @@ def _rows(k, seed, setting, freq, meta, fits, methods, seconds) -> list[dict]:
             "lo50": lo50, "hi50": hi50, "lo94": lo94, "hi94": hi94, "identified": int(identified),
             "covered50": int(lo50 <= truth <= hi50), "covered94": int(lo94 <= truth <= hi94),
             "phi": got["phi"], **gen, "seconds": seconds.get(method, 0.0),
-            **{f"sd_{name}": v for name, v in shares.items()}, "parts": json.dumps(got.get("parts", [])),
-            "power": json.dumps(got.get("power", [])),
+            **{f"sd_{name}": v for name, v in shares.items()},
+            # what --rescore needs, once a replicate: the other records' fits, the harmonics' power
+            "parts": json.dumps(got.get("parts", [])) if model_name == "setting" else "",
+            "power": json.dumps(got.get("power", [])) if not terms else "",
         })
     return rows
 
@@ -276,10 +278,11 @@ def _append(path: Path, rows: list[dict]) -> None:
 
 
 def _write(path: Path, rows: list[dict]) -> None:
+    """The rows as CSV, numbers to 7 significant digits (the partial file keeps them all)."""
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
-        w.writerows(rows)
+        w.writerows([{k: f"{v:.7g}" if isinstance(v, float) else v for k, v in r.items()} for r in rows])
 
 
 def _figure(path: Path, table: list[dict]) -> None:
@@ -298,7 +301,7 @@ def _figure(path: Path, table: list[dict]) -> None:
     ax.set_xlim(0, 1)
     ax.set_xlabel("share of replicates whose interval covers the true b")
     ax.set_title(f"b's intervals on paper-like records ({table[0]['replicates']} replicates)")
-    ax.legend(loc="lower left", fontsize=8)
+    ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
