@@ -17,12 +17,14 @@ do not move it).
 
 **Not identified.** Where the model reproduces less than ``phi_min`` of the record
 (phi, eq. 5 on the filtered record; ``end_state.PHI_WARNING``, 0.5), the misfit is no
-longer a small discrepancy beside b's signature: on records of richer devices such fits
-move b by tens of per cent to several times, far beyond what the harmonics show
+longer a small discrepancy beside b's signature: on records of a richer device such fits
+put b at 1.8 to 18 times its value, far beyond what the harmonics show
 (results/model-error). b is then reported as not identified, its interval the prior's
-range. ``INTERVALS`` names the two ways: ``"honest"`` (both terms; the
-default) and ``"posterior"`` (the posterior alone, right only for a record of the model
-itself with exact sensors).
+range.
+
+``INTERVALS`` names the two ways: ``"honest"`` (both terms and the guard; the default)
+and ``"posterior"`` (the posterior alone, right only for a record of the model itself
+with exact sensors).
 """
 
 from __future__ import annotations
