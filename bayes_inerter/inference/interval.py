@@ -118,7 +118,7 @@ class InertanceInterval:
         added = [f"{k} {100 * v:.2g} %" for k, v in shares.items() if v > 0]
         how = f"the posterior's sd {100 * self.sd_log_posterior:.2g} %"
         how += " widened by " + " and ".join(added) if added else " alone"
-        return f"{100 * self.level:g} % interval, {self.method}: {how}"
+        return f"{100 * self.level:g} % equal-tailed interval, {self.method}: {how}"
 
 
 def widened_interval(log_b: np.ndarray, extra_sd: float, level: float, rng: np.random.Generator,

@@ -71,7 +71,7 @@ def how_identified(inert) -> str:
         return ("the joint model of all records (one set of friction and deformation parameters, one b per setting; "
                 "`joint/`): posterior median and 94 % highest-density interval.")
     if all(r.get("records", 1) <= 1 for r in inert):
-        return "each setting's one record: posterior median and 94 % highest-density interval."
+        return "each setting's one record: posterior mean and its normal 94 % interval (mean +- 1.88 sd)."
     return ("each setting's records fitted one by one and combined as independent normals (the product of their "
             "posteriors): median and 94 % interval." + discrepancy_text(inert))
 
@@ -117,7 +117,7 @@ def calibration_text(rows, calibration, truth_b: dict | None, prefix: str, gains
             f"uncertainties, an **assumption**: `--sensor-uncertainty`), a record reads the same whether b or the "
             f"sensitivities' ratio is off (`records.sensitivity`), so b carries a further {100 * u:.2g} % of "
             f"b plus the moving mass that no record can reduce: the 94 % intervals widen to those of the first "
-            f"table's last column.")
+            f"table's column with sensor uncertainty.")
     if truth_b and gains is not None:
         if tuple(gains) == (1.0, 1.0):
             text += (" The records were generated with exact sensitivities, so the records-alone intervals are the "
