@@ -73,9 +73,10 @@ METHODS = ("two-port", "two-port+sensors", "two-port+discrepancy", "two-port+dis
            "joint+sensors", "joint+discrepancy", "joint+discrepancy+sensors")
 
 
-def _laplace_b(model, theta, name: str) -> tuple[float, float]:
-    """(mu, sd) of log b in the Laplace approximation at ``theta``."""
-    cov = laplace_covariance(model, theta)
+def _laplace_b(model, theta, name: str, cov=None) -> tuple[float, float]:
+    """(mu, sd) of log b in the Laplace approximation at ``theta`` (its covariance ``cov``,
+    computed here unless given)."""
+    cov = laplace_covariance(model, theta) if cov is None else cov
     i = model.names.index(name)
     return float(theta[i]), float(math.sqrt(max(cov[i, i], 0.0)))
 
@@ -84,8 +85,7 @@ def _single(rec, model_name: str, rng) -> dict:
     pm = PosteriorModel(rec, model_name)
     theta, _ = find_start(pm, rng)
     cov = laplace_covariance(pm, theta)
-    i = pm.names.index("b")
-    mu, sd = float(theta[i]), float(math.sqrt(max(cov[i, i], 0.0)))
+    mu, sd = _laplace_b(pm, theta, "b", cov)
     held = harmonic_discrepancy(pm, theta)
     return {"mu": mu, "sd": sd, "phi": pm.log_prob(theta)[1], "discrepancy": held.sd_log_b,
             "discrepancy_flat": harmonic_discrepancy(pm, theta, decay=0.0).sd_log_b,

@@ -22,7 +22,8 @@ def _fit(setting, freq, median, sd, identified=True, phi=0.9, with_interval=True
 def test_a_settings_records_combine_and_one_not_identified_is_left_out():
     fits = [_fit("A3", 0.5, 9000.0, 0.05, identified=False, phi=0.3), _fit("A3", 1.0, 3500.0, 0.01),
             _fit("A3", 1.5, 3520.0, 0.01), _fit("B1", 1.0, 10400.0, 0.01)]
-    rows = honest_columns([{"setting": "A3"}, {"setting": "B1"}], fits, SensorCalibration(), {"A3": 3510.0})
+    rows = honest_columns([{"setting": "A3", "moving_mass": 67.2}, {"setting": "B1", "moving_mass": 67.2}], fits,
+                          SensorCalibration(), {"A3": 3510.0})
     a3 = rows[0]
     want = combined_interval([record_interval(f) for f in fits[:3]], calibration=SensorCalibration(),
                              moving_mass=67.2)
@@ -34,12 +35,12 @@ def test_a_settings_records_combine_and_one_not_identified_is_left_out():
 
 
 def test_fits_made_before_the_honest_interval_leave_the_columns_out():
-    rows = honest_columns([{"setting": "A3"}], [_fit("A3", 1.0, 3500.0, 0.01, with_interval=False)],
-                          SensorCalibration())
-    assert rows == [{"setting": "A3"}]
+    rows = honest_columns([{"setting": "A3", "moving_mass": 67.2}], [_fit("A3", 1.0, 3500.0, 0.01,
+                                                                         with_interval=False)], SensorCalibration())
+    assert rows == [{"setting": "A3", "moving_mass": 67.2}]
 
 
 def test_a_setting_no_record_identifies_is_reported_so():
-    rows = honest_columns([{"setting": "A0"}], [_fit("A0", 0.5, 9000.0, 0.05, identified=False, phi=0.2)],
-                          SensorCalibration())
+    rows = honest_columns([{"setting": "A0", "moving_mass": 67.2}],
+                          [_fit("A0", 0.5, 9000.0, 0.05, identified=False, phi=0.2)], SensorCalibration())
     assert not rows[0]["honest_identified"] and (rows[0]["b_honest_3%"], rows[0]["b_honest_97%"]) == (100.0, 1e5)

@@ -80,16 +80,21 @@ def _check(harmonics, decay) -> None:
         raise ValueError(f"decay must be a number of at least 0, got {decay!r}")
 
 
+def _derivative(model, theta: np.ndarray, i: int, step: float, rows: np.ndarray) -> np.ndarray:
+    """d (filtered simulation)[rows] / d theta_i by central differences of ``step``,
+    one-sided where theta_i is within a step of its prior bound."""
+    lo, hi = model.bounds()[i]
+    up, down = theta.copy(), theta.copy()
+    up[i] = min(theta[i] + step, hi)
+    down[i] = max(theta[i] - step, lo)
+    return (model.simulate_lp(up)[rows] - model.simulate_lp(down)[rows]) / (up[i] - down[i])
+
+
 def _signature(model, theta, b_name: str) -> np.ndarray:
     """d a / d log b of the filtered simulation over the model's window."""
     i = model.names.index(b_name)
-    up, down = theta.copy(), theta.copy()
     log_b = model.all_priors[b_name].log_scale
-    step = B_STEP if log_b else B_STEP * float(theta[i])
-    up[i] += step
-    down[i] -= step
-    w = model.window
-    signature = (model.simulate_lp(up)[w] - model.simulate_lp(down)[w]) / (2 * step)
+    signature = _derivative(model, theta, i, B_STEP if log_b else B_STEP * float(theta[i]), model.window)
     return signature * float(theta[i]) if not log_b else signature
 
 
@@ -124,14 +129,9 @@ def _response(model, theta, cov, t_grid, freq, ks) -> np.ndarray:
     """g: the change of the posterior mean of each parameter (rows) per unit coefficient of
     each harmonic (columns, cosine and sine per k in ``ks``), ``C J' W H``."""
     p = model.n_phys
-    bounds = model.bounds()
-    cols = []
-    for i in range(p):
-        step = B_STEP if model.all_priors[model.names[i]].log_scale else B_STEP * float(np.diff(bounds[i])[0])
-        up, down = theta.copy(), theta.copy()
-        up[i] = min(theta[i] + step, bounds[i, 1])  # one-sided at a bound
-        down[i] = max(theta[i] - step, bounds[i, 0])
-        cols.append((model.simulate_lp(up)[model.grid] - model.simulate_lp(down)[model.grid]) / (up[i] - down[i]))
+    width = np.diff(model.bounds(), axis=1)[:, 0]
+    cols = [_derivative(model, theta, i, B_STEP if model.all_priors[model.names[i]].log_scale else B_STEP * width[i],
+                        model.grid) for i in range(p)]
     sigma, rho = model.noise(theta)
     J = _whiten(np.column_stack(cols), rho)
     H = _whiten(_design(t_grid, freq, ks), rho)

@@ -10,8 +10,6 @@ frequencies disagree, and the sensors' share added once.
 
 from __future__ import annotations
 
-import math
-
 from ..inference.interval import LEVEL, InertanceInterval, combined_interval
 from ..records.sensitivity import SensorCalibration
 from .fits import RecordFit
@@ -26,14 +24,10 @@ def record_interval(fit: RecordFit) -> InertanceInterval | None:
     return InertanceInterval(**got) if isinstance(got, dict) else None
 
 
-def _moving_mass(fits: list[RecordFit]) -> float:
-    masses = [float(f.info["m_s"]) + float(f.info["m_B"]) for f in fits if "m_s" in f.info and "m_B" in f.info]
-    return sum(masses) / len(masses) if masses else math.nan
-
-
 def honest_columns(inert: list[dict], fits: list[RecordFit], calibration: SensorCalibration | None,
                    truth_b: dict | None = None) -> list[dict]:
-    """``inert``'s rows (one per setting) with the honest combination of its two-port
+    """``inert``'s rows (one per setting, ``analysis.inertance_table``'s, whose
+    ``moving_mass`` the sensors' share uses) with the honest combination of its two-port
     records added: ``b_honest_median``, ``b_honest_3%``, ``b_honest_97%`` (kg; the prior's
     range where no record identifies b), ``honest_identified`` and ``honest_records``
     ("used of all"); ``covers_truth_honest`` with ``truth_b``. A setting whose fits have no
@@ -44,7 +38,7 @@ def honest_columns(inert: list[dict], fits: list[RecordFit], calibration: Sensor
         parts = [record_interval(f) for f in group]
         row = dict(row)
         if parts and all(p is not None for p in parts):
-            got = combined_interval(parts, calibration=calibration, moving_mass=_moving_mass(group), level=LEVEL)
+            got = combined_interval(parts, calibration=calibration, moving_mass=row["moving_mass"], level=LEVEL)
             used = sum(p.identified for p in parts)
             row.update({"b_honest_median": got.median, "b_honest_3%": got.lo, "b_honest_97%": got.hi,
                         "honest_identified": got.identified, "honest_records": f"{used} of {len(parts)}"})
