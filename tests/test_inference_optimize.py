@@ -1,6 +1,7 @@
 """The start: the local optimum (optimize.local_optimum) and the initial ensemble drawn around it (optimize.laplace_ensemble)."""
 
 import numpy as np
+import pytest
 
 from bayes_inerter.inference.optimize import RESTART_GAIN, laplace_covariance, laplace_ensemble, local_optimum
 
@@ -92,3 +93,63 @@ def test_restarts_stop_once_a_pass_gains_little(monkeypatch):
     # the first pass finds the normal's peak; the second gains nothing and ends the restarts
     assert len(calls) == 2
     assert lp > -1e-6
+
+
+def _short_record_model(residual="ar1"):
+    """A 3 s generated A3 record at 1 Hz and its two-port posterior (fast to simulate)."""
+    from bayes_inerter.inference import LikelihoodSettings, PosteriorModel
+    from bayes_inerter.records import GeneratorSettings
+    from bayes_inerter.records.generator import paper_record
+
+    rec = paper_record("A3", 1.0, seed=0, settings=GeneratorSettings(duration=3.0))
+    return PosteriorModel(rec, likelihood=LikelihoodSettings(residual=residual))
+
+
+def test_profiled_misfit_is_the_likelihood_at_its_best_sigma():
+    import math
+
+    from bayes_inerter import paper_parameters
+    from bayes_inerter.inference.optimize import profiled_misfit
+
+    pm = _short_record_model()
+    theta = pm.to_theta(paper_parameters("A3"), 0.003, 0.0)
+    phys = theta[: pm.n_phys].copy()
+    phys[0] += 0.02  # b 2 % off: a residual with a structure of its own
+    r = pm.misfit(np.concatenate([phys, theta[pm.n_phys:]]))[0]
+    rho = float(np.dot(r[1:], r[:-1]) / np.dot(r, r))
+    n = len(r)
+    # -2 log-likelihood at the residual's rho over a fine grid of sigma, less the constant
+    sigmas = np.std(r) * np.exp(np.linspace(-1.0, 1.0, 2001))
+    curve = [-2.0 * pm.pointwise_loglik(r, s, rho).sum() - n * (math.log(2 * math.pi) + 1.0) for s in sigmas]
+    got = profiled_misfit(pm, phys)
+    assert min(curve) == pytest.approx(got, abs=1e-3 * n)
+    assert min(curve) >= got - 1e-9 * n  # the profile is the lowest any sigma reaches
+
+
+def test_profiled_misfit_of_iid_residual_ranks_like_the_sum_of_squares():
+    from bayes_inerter import paper_parameters
+    from bayes_inerter.inference.optimize import profiled_misfit, sse
+
+    pm = _short_record_model("iid")
+    theta = pm.to_theta(paper_parameters("A3"), 0.003)
+    points = [theta[: pm.n_phys] + d for d in (0.0, 0.01, -0.03)]
+    assert np.argsort([sse(pm, p) for p in points]).tolist() == np.argsort(
+        [profiled_misfit(pm, p) for p in points]).tolist()
+
+
+@pytest.mark.slow
+def test_start_is_the_best_of_its_objectives():
+    from bayes_inerter.inference.optimize import find_start
+
+    pm = _short_record_model()
+    _, lp_sse = find_start(pm, np.random.default_rng(3), objectives=("sse",), popsize=4, maxiter=10)
+    _, lp_both = find_start(pm, np.random.default_rng(3), popsize=4, maxiter=10)
+    # the least-squares search is the same in both (it comes first, from the same rng)
+    assert lp_both >= lp_sse
+
+
+def test_start_refuses_unknown_objectives():
+    from bayes_inerter.inference.optimize import find_start
+
+    with pytest.raises(ValueError, match="start objectives"):
+        find_start(object(), np.random.default_rng(0), objectives=("least-squares",))

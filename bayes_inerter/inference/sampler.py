@@ -43,7 +43,7 @@ from .identity import run_identity
 from .model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble
-from .target import Target, sse_at
+from .target import Target, objective_at
 
 __all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "SamplerStatus", "sample", "run_sampler",
            "check_run_options", "default_moves", "default_walkers", "transient", "WARMUP"]
@@ -293,8 +293,9 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
     model, coords = target.model, target.coords
     rng = np.random.default_rng(seed)
     if start is None:
-        sse_many = (lambda xs: executor.map_state(sse_at, xs)) if executor.workers > 1 else None
-        start = find_start(model, rng, sse_many=sse_many)
+        many = ((lambda name, xs: executor.map_state(objective_at, [(name, x) for x in xs]))
+                if executor.workers > 1 else None)
+        start = find_start(model, rng, many=many)
     elif callable(start):
         start = start()
     start_theta = np.asarray(start[0], dtype=float)

@@ -15,9 +15,9 @@ import numpy as np
 from ..executor import Executor, Serial
 from .coordinates import Coordinates
 from .model import PosteriorModel
-from .optimize import sse
+from .optimize import OBJECTIVES
 
-__all__ = ["Target", "log_prob_at", "sse_at"]
+__all__ = ["Target", "log_prob_at", "objective_at"]
 
 
 @dataclass(frozen=True)
@@ -57,7 +57,8 @@ def log_prob_at(target: Target, theta) -> tuple[float, float]:
     return target.model.log_prob(theta)
 
 
-def sse_at(target: Target, theta) -> float:
-    """The model's squared error at ``theta`` (for the optimiser's start-up search on
-    worker processes)."""
-    return sse(target.model, theta)
+def objective_at(target: Target, job) -> float:
+    """The start search's objective ``job[0]`` (a name of ``optimize.OBJECTIVES``) at the
+    physical parameters ``job[1]`` (for its differential evolution on worker processes)."""
+    name, phys = job
+    return OBJECTIVES[name](target.model, phys)
