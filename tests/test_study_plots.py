@@ -51,6 +51,21 @@ def test_theory_against_identification_shows_the_joint_model_where_it_ran():
     plt.close(fig)
 
 
+def test_theory_against_identification_shows_the_honest_interval():
+    rows = [_row("A0", 750.0) | {"b_honest_median": 760.0, "b_honest_3%": 700.0, "b_honest_97%": 820.0,
+                                 "honest_identified": True},
+            _row("A1", 1660.0) | {"b_honest_median": 2000.0, "b_honest_3%": 100.0, "b_honest_97%": 1e5,
+                                  "honest_identified": False}]
+    fig = plot_inertance(rows)
+    labels = _series(fig)
+    assert labels == ["posterior: median, 94 % interval", "honest: median, 94 % interval"]
+    # only the identified setting gets an interval; the other a hollow marker at its median
+    assert list(fig.axes[0].containers[1].lines[0].get_ydata()) == [760.0]
+    hollow = [ln for ln in fig.axes[0].lines if "not identified" in ln.get_label()]
+    assert len(hollow) == 1 and list(hollow[0].get_ydata()) == [2000.0]
+    plt.close(fig)
+
+
 def test_inertance_draws_into_the_given_figure():
     fig = plt.figure()
     got = plot_inertance([_row("A0", 752.0, product=750.0), _row("A1", 1668.0, product=1665.0)], fig=fig)

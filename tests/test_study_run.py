@@ -170,7 +170,18 @@ def test_a_users_folder_of_records(study, tmp_path):
         shutil.copy(study.out / "records" / name, folder / name)
     res = run_study(tiny_plan(records_dir=str(folder), comparison=((), ())), tmp_path / "out", processes=1)
     assert [r["setting"] for r in res.tables["inertance"]] == ["A2"]
-    assert "the records in" in res.report.read_text()
+    text = res.report.read_text()
+    assert "the records in" in text
+    # generated records carry the b they were made with: the report checks against it
+    assert "carry the parameters they were generated with" in text
+    assert "covers_truth_honest" in res.tables["inertance"][0]
+    # a measured record carries none: no truth, the user's wording
+    meta = json.loads((folder / "A2_1Hz.json").read_text())
+    meta.pop("true_parameters")
+    (folder / "A2_1Hz.json").write_text(json.dumps(meta))
+    res = run_study(tiny_plan(records_dir=str(folder), comparison=((), ())), tmp_path / "out2", processes=1)
+    assert "no true inertance is known" in res.report.read_text()
+    assert "covers_truth_honest" not in res.tables["inertance"][0]
 
 
 @pytest.mark.slow

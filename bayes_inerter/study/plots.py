@@ -27,7 +27,8 @@ def _figure(fig, figsize):
 
 def plot_inertance(rows: list[dict], *, fig=None):
     """b per setting: theory, the paper's identified value, the posterior (median, 94 %),
-    and where the rows have them (``analysis.joint_estimate``) the records' product
+    the honest interval where the rows have it (``study.honest``; a hollow marker where
+    no record identifies b), and where the rows have them (``analysis.joint_estimate``) the records' product
     beside the joint model's b; below, each relative to theory. ``fig``: draw the three
     panels into this (empty) figure."""
     fig, made = _figure(fig, (8, 9))
@@ -42,6 +43,18 @@ def plot_inertance(rows: list[dict], *, fig=None):
     ax.plot(x, paper, "x", color="tab:red", ms=9, label="paper, identified by hand")
     ax.errorbar(x, med, yerr=err, fmt="o", color="tab:blue", capsize=4,
                 label=("joint model (all records)" if joint else "posterior") + ": median, 94 % interval")
+    honest = [i for i, r in enumerate(rows) if "b_honest_3%" in r]
+    if honest:  # the interval to quote (study.honest); where no record identifies b, an arrow at the median
+        ident = np.array([bool(rows[i]["honest_identified"]) for i in honest])
+        hm, hlo, hhi = (np.array([rows[i][k] for i in honest]) for k in ("b_honest_median", "b_honest_3%",
+                                                                         "b_honest_97%"))
+        hx = x[honest] - 0.2
+        herr = np.array([hm - hlo, hhi - hm])
+        ax.errorbar(hx[ident], hm[ident], yerr=herr[:, ident], fmt="^", color="tab:orange", capsize=4, ms=6,
+                    label="honest: median, 94 % interval")
+        if (~ident).any():
+            ax.plot(hx[~ident], hm[~ident], "^", mfc="none", color="tab:orange", ms=8,
+                    label="honest: b not identified (interval: the prior's range)")
     product = any("b_product_median" in r for r in rows)
     if product:  # each setting's records combined one by one, beside the joint model (NaN: not there)
         pm, lo, hi = (np.array([r.get(k, np.nan) for r in rows]) for k in ("b_product_median", "b_product_hdi_3%",
@@ -56,6 +69,10 @@ def plot_inertance(rows: list[dict], *, fig=None):
     rel.axhline(0, color="k", lw=0.8)
     rel.plot(x, 100 * (paper / theory - 1), "x", color="tab:red", ms=9)
     rel.errorbar(x, 100 * (med / theory - 1), yerr=100 * err / theory, fmt="o", color="tab:blue", capsize=4)
+    if honest:
+        th = theory[honest]
+        rel.errorbar(hx[ident], 100 * (hm[ident] / th[ident] - 1), yerr=100 * herr[:, ident] / th[ident], fmt="^",
+                     color="tab:orange", capsize=4, ms=6)
     if product:
         rel.errorbar(x + 0.2, 100 * (pm / theory - 1), yerr=100 * perr / theory, fmt="D", color="tab:green",
                      capsize=4, ms=5)
@@ -64,6 +81,9 @@ def plot_inertance(rows: list[dict], *, fig=None):
     # the intervals are far narrower than the gaps to theory: their own panel shows them
     width.axhline(0, color="k", lw=0.8)
     width.errorbar(x, np.zeros_like(med), yerr=100 * err / med, fmt="o", color="tab:blue", capsize=4)
+    if honest:
+        width.errorbar(hx[ident], np.zeros(ident.sum()), yerr=100 * herr[:, ident] / hm[ident], fmt="^",
+                       color="tab:orange", capsize=4, ms=6)
     if product:
         width.errorbar(x + 0.2, np.zeros_like(pm), yerr=100 * perr / pm, fmt="D", color="tab:green", capsize=4, ms=5)
     width.set_ylabel("94 % interval about\nits median (%)")

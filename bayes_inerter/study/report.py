@@ -127,7 +127,12 @@ def _limitations_section(plan, tables, outcomes, truth_b) -> list[str]:
     failed = [o for o in outcomes if o["status"] == "failed"]
     n_conv = sum(bool(o.get("converged")) for o in done)
     items = []
-    if plan.records_dir:
+    if plan.records_dir and truth_b:
+        items.append(f"The records (`{plan.records_dir}`) carry the parameters they were generated with, so each "
+                     "interval is checked against a known b. A generated device is not the paper's device: a richer "
+                     "one (paper-like: Stribeck friction, nut backlash, sensor errors) shows how the intervals behave "
+                     "when the model is wrong in known ways, not in every way a real inerter may be.")
+    elif plan.records_dir:
         items.append(f"The records are the user's (`{plan.records_dir}`): no true inertance is known, and no model "
                      "fits a real device exactly; the posterior's intervals are the model's, the honest ones add what "
                      "the records show of the model's discrepancy and the sensors' calibration.")

@@ -169,7 +169,7 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
     fits = collect(out / "fits")
     joint = run_joint(plan, out, fits, records, processes=processes, progress=on_joint_step) if plan.joint else None
     t_joint = time.perf_counter()
-    truth_b, truth_app = _truths(plan)
+    truth_b, truth_app = _truths(plan, records)
     tables, files = _tables(plan, fits, joint, truth_b, truth_app)
     for key, name in files.items():
         write_csv(out / name, tables[key])
@@ -183,14 +183,29 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
     return StudyResult(out, outcomes, tables, report, seconds)
 
 
-def _truths(plan: StudyPlan):
+def _truths(plan: StudyPlan, records: dict | None = None):
     """(b, b_app) per setting of the generated records, which are made with the paper's
-    parameters; (None, None) for a user's records, which have no truth."""
-    if plan.records_dir:
+    parameters. A folder's records have a truth only where every record of a setting
+    carries the same generating b in its metadata (``true_parameters``, as records made
+    by ``bayes-inerter generate`` do, paper-like ones included); a measured record has
+    none, and (None, None) is returned when no setting has one."""
+    if not plan.records_dir:
+        truth = {s: paper_parameters(s) for s in plan.settings}
+        return ({s: p.b for s, p in truth.items()},
+                {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()})
+    found: dict[str, set] = {}
+    for path, setting, _ in (records or {}).values():
+        if setting is None:
+            continue
+        true = read_record(path).metadata.get("true_parameters")
+        key = (float(true["b"]), float(true["k_n"]), float(true["c_n"])) if isinstance(true, dict) and {
+            "b", "k_n", "c_n"} <= set(true) else None
+        found.setdefault(setting, set()).add(key)
+    known = {s: next(iter(keys)) for s, keys in found.items() if len(keys) == 1 and None not in keys}
+    if not known:
         return None, None
-    truth = {s: paper_parameters(s) for s in plan.settings}
-    return ({s: p.b for s, p in truth.items()},
-            {s: apparent_inertance(p.b, p.k_n, p.c_n) for s, p in truth.items()})
+    return ({s: b for s, (b, _, _) in known.items()},
+            {s: apparent_inertance(b, k, c) for s, (b, k, c) in known.items()})
 
 
 def _tables(plan: StudyPlan, fits: list, joint, truth_b, truth_app) -> tuple[dict, dict]:
