@@ -20,14 +20,15 @@ Why two objectives: where the model is right the residual is nearly white and th
 agree; on a record of a richer device the residual is dominated by the model's error,
 strongly correlated (rho near 0.98), and the plain least-squares optimum can lie in
 another basin of the posterior than its mode. Measured on paper-like records
-(``records.paper_like``, laboratory seed 0) and generated ones (grid seed 0), 40 generations each,
-polished as above: the log posterior reached was (least squares, profiled) 1688.5 and
-1708.2 on A3 at 0.5 Hz, 1069.7 and 993.9 on A0 at 1 Hz, 1402.9 and 1573.0 on A0 at
-0.5 Hz, 1928.7 and 1849.6 on B2 at 0.5 Hz, 2594.5 and 2736.8 on the generated A3 at
-0.5 Hz: neither objective is best everywhere, and the worse start is tens to hundreds
-of nats down. A chain started from the least-squares point of A3 at 0.5 Hz, 40 nats
-below the best optimum found there, first reached a point 14 nats higher than its start
-after 3,500 steps; started at that optimum, the chain converged in 2,250 steps.
+(``records.paper_like``, laboratory seed 0) and generated ones (grid seed 0), with 40
+generations each and polished as above: the log posterior reached was (least squares,
+profiled) 1688.5 and 1708.2 on A3 at 0.5 Hz, 1069.7 and 993.9 on A0 at 1 Hz, 1402.9
+and 1573.0 on A0 at 0.5 Hz, 1928.7 and 1849.6 on B2 at 0.5 Hz, 2594.5 and 2736.8 on
+the generated A3 at 0.5 Hz: neither objective is best everywhere, and the worse start
+is tens to hundreds of nats down. A chain started from the least-squares point of A3
+at 0.5 Hz, 40 nats below the best optimum found there, first reached a point 14 nats
+higher than its start after 3,500 steps; started at that optimum, the chain converged
+in 2,250 steps.
 
 Then :func:`laplace_ensemble` draws the walkers from a normal approximation there.
 
@@ -205,8 +206,8 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
         raise ValueError(f"start objectives must be some of {', '.join(OBJECTIVES)}, got {list(objectives)}")
     best = None
     for name in objectives:
-        theta, lp = local_optimum(model, _with_noise_estimate(model, _evolve(model, name, rng, popsize, maxiter, many)),
-                                  restarts=NM_RESTARTS)
+        evolved = _evolve(model, name, rng, popsize, maxiter, many)
+        theta, lp = local_optimum(model, _with_noise_estimate(model, evolved), restarts=NM_RESTARTS)
         if best is None or lp > best[1]:
             best = (theta, lp)
     return best

@@ -28,8 +28,8 @@ def _figure(fig, figsize):
 def plot_inertance(rows: list[dict], *, fig=None):
     """b per setting: theory, the paper's identified value, the posterior (median, 94 %),
     the honest interval where the rows have it (``study.honest``; a hollow marker where
-    no record identifies b), and where the rows have them (``analysis.joint_estimate``) the records' product
-    beside the joint model's b; below, each relative to theory. ``fig``: draw the three
+    no record identifies b), and where the rows have them (``analysis.joint_estimate``)
+    the records' product beside the joint model's b; below, each relative to theory. ``fig``: draw the three
     panels into this (empty) figure."""
     fig, made = _figure(fig, (8, 9))
     ax, rel, width = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2, 2]})
@@ -44,7 +44,7 @@ def plot_inertance(rows: list[dict], *, fig=None):
     ax.errorbar(x, med, yerr=err, fmt="o", color="tab:blue", capsize=4,
                 label=("joint model (all records)" if joint else "posterior") + ": median, 94 % interval")
     honest = [i for i, r in enumerate(rows) if "b_honest_3%" in r]
-    if honest:  # the interval to quote (study.honest); where no record identifies b, an arrow at the median
+    if honest:  # the interval to quote (study.honest); where no record identifies b, a hollow marker
         ident = np.array([bool(rows[i]["honest_identified"]) for i in honest])
         hm, hlo, hhi = (np.array([rows[i][k] for i in honest]) for k in ("b_honest_median", "b_honest_3%",
                                                                          "b_honest_97%"))
