@@ -10,7 +10,7 @@ import pytest
 
 from bayes_inerter.cli_progress import StepProgress
 from bayes_inerter.cli import main
-from bayes_inerter.cli.fit import _percent_interval
+from bayes_inerter.cli.fit import _mixing, _percent_interval
 from bayes_inerter.inference.sampler import SamplerStatus
 from bayes_inerter.lock import folder_lock
 from bayes_inerter.records import read_record
@@ -91,9 +91,21 @@ def test_fit_prints_the_masses_and_their_sources_and_device_theory(tmp_path, cap
     assert "m_s = 21.7 kg (record metadata m_s), m_B = 50 kg (device file" in text
     theory = (2 * math.pi / 0.02) ** 2 * 0.03  # (2 pi / lead)^2 J_screw
     assert f"theory (device file geometry): b = {theory:.6g} kg" in text
+    # four steps cannot converge, nor tell how b mixes: the warning says so
+    assert "do not trust these intervals yet" in text
+    assert "b's own chain: too short to judge" in text
     info = json.loads((out / "fit.json").read_text())
     assert info["masses"]["m_B"] == {"kg": 50.0, "source": f"device file {dev}"}
     assert info["b_theory_device_file"] == pytest.approx((2 * math.pi / 0.02) ** 2 * 0.03)
+
+
+def test_an_unconverged_fit_names_how_b_mixes_and_the_slowest_parameters():
+    tau = {"b": 40.0, "c_n": 224.0, "k_B": 204.0, "k_n": 145.0, "sigma": float("nan")}
+    got = _mixing({"r_hat": 1.0293, "ess_bulk": 811.9}, tau)
+    assert got == ("b's own chain: R-hat 1.029, bulk ESS 812; slowest to mix: c_n (tau 224 steps), "
+                   "k_B (tau 204 steps), k_n (tau 145 steps)")
+    assert _mixing({"r_hat": float("nan"), "ess_bulk": float("nan")}, {}) == (
+        "b's own chain: too short to judge; slowest to mix: not known yet")
 
 
 def test_percent_interval_has_digits_enough_to_differ():

@@ -3,9 +3,21 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 __all__ = ["cmd_fit"]
+
+
+def _mixing(b_row: dict, tau: dict) -> str:
+    """What an unconverged chain says of b itself and which parameters hold it back: on
+    a real device these are often ones the record leaves unidentified (docs/studies.md)."""
+    slow = sorted(((t, n) for n, t in tau.items() if math.isfinite(t)), reverse=True)[:3]
+    rhat, ess = b_row.get("r_hat", math.nan), b_row.get("ess_bulk", math.nan)
+    own = (f"R-hat {rhat:.3f}, bulk ESS {ess:.0f}" if math.isfinite(rhat) and math.isfinite(ess)
+           else "too short to judge")
+    return (f"b's own chain: {own}; slowest to mix: "
+            + (", ".join(f"{n} (tau {t:.0f} steps)" for t, n in slow) or "not known yet"))
 
 
 def _percent_interval(lo: float, hi: float) -> str:
@@ -56,7 +68,8 @@ def cmd_fit(args) -> int:
     print(f"phi = {phi['mean']:.2%} (94 % HDI {_percent_interval(phi['hdi_3%'], phi['hdi_97%'])})")
     for w in result.warnings:
         print(f"warning: {w.message}")
-    edge = json.loads((Path(args.out) / "fit.json").read_text()).get("coordinates_domain_edge")
+    info = json.loads((Path(args.out) / "fit.json").read_text())
+    edge = info.get("coordinates_domain_edge")
     if edge is not None and edge > EDGE_WARNING:
         print(f"warning: the posterior reaches |dZ/dZ_theta - 1| = {edge:.2f}, near the edge of the impedance "
               f"coordinates' domain ({MAX_SENSITIVITY_CHANGE:g}), which may cut it; compare with "
@@ -66,6 +79,7 @@ def cmd_fit(args) -> int:
     else:
         print(f"warning: {result.reason}; do not trust these intervals yet "
               "(run again with more --steps, or without --steps)")
+        print(f"  {_mixing(b, info.get('tau') or {})}")
     figures = "" if args.no_plots else "corner.png, bands.png, trace.png, phi.png, "
     print(f"wrote {args.out}/summary.csv, posterior.nc, loo.json, chain.h5 (and its twin), {figures}fit.json")
     return EXIT_OK
