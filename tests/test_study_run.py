@@ -19,7 +19,7 @@ TINY = GeneratorSettings(duration=2.0, ramp=0.6)
 
 def tiny_plan(**changes):
     settings = dict(settings=("A0", "A2"), frequencies=(1.0,), steps=8, generator=TINY, comparison=(("A2",), (1.0,)),
-                    joint=True, joint_steps=6)
+                    joint=True, joint_steps=6, identify=True)
     return quick_plan(**{**settings, **changes})
 
 
@@ -69,6 +69,13 @@ def test_study_writes_tables_figures_and_report(study):
     assert a0["b_median"] == pytest.approx(np.median(draws["b_A0"]))
     assert "Identified: the joint model of all records" in report
     assert "Joint model" in report and json.loads((out / "joint" / "fit.json").read_text())["iterations"] == 6
+    # the paper's least squares of each record, beside its posterior and Table 2
+    ls = study.tables["least_squares"]
+    assert [r["record"] for r in ls] == ["A0_1Hz", "A2_1Hz"] and all(r["b_ls"] > 0 for r in ls)
+    assert all(r["b_paper"] == r["b_truth"] for r in ls)  # generated at the paper's b
+    assert (out / "least_squares.csv").is_file() and (out / "least_squares.png").is_file()
+    assert sorted(p.name for p in (out / "least_squares").iterdir()) == ["A0_1Hz.json", "A2_1Hz.json"]
+    assert "### The paper's least squares beside the posterior" in report and info["seconds"]["least_squares"] > 0
 
 
 def test_the_study_closes_its_figures_once_saved(study, tmp_path):
@@ -78,8 +85,8 @@ def test_the_study_closes_its_figures_once_saved(study, tmp_path):
 
     before = set(plt.get_fignums())
     _write_figures(tmp_path, study.tables)
-    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["model_comparison.png", "phi_map.png",
-                                                              "theory_vs_identified.png"]
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["least_squares.png", "model_comparison.png",
+                                                              "phi_map.png", "theory_vs_identified.png"]
     assert set(plt.get_fignums()) == before  # a study's figures do not pile up in memory
 
 
@@ -254,6 +261,10 @@ def test_cli_study_takes_the_sensor_uncertainty_in_percent(tmp_path, monkeypatch
     monkeypatch.setattr(study_pkg, "run_study", fake_run_study)
     assert main(["study", "--quick", "--sensor-uncertainty", "0.25", "1", "--out", str(tmp_path / "o")]) == 130
     assert seen[0].calibration.force == pytest.approx(0.0025) and seen[0].calibration.accel == pytest.approx(0.01)
+    assert not seen[0].identify  # the quick study leaves the least squares out unless asked
+    assert main(["study", "--quick", "--identify", "--out", str(tmp_path / "o")]) == 130
+    assert main(["study", "--no-identify", "--out", str(tmp_path / "o")]) == 130
+    assert seen[1].identify and not seen[2].identify
 
 
 def test_cli_study_refuses_a_missing_records_folder(tmp_path, capsys):

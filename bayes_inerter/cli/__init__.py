@@ -5,7 +5,7 @@ Exit status: 0 success; 1 bad input or a failed run (one-line error, no tracebac
 
 Here: how a command runs (its exit status, the one-line error, Ctrl-C). The options are
 in :mod:`.parser`; the commands in :mod:`.records` (``generate``, ``inspect``,
-``demo``), :mod:`.fit` and :mod:`.study` (``study``, ``report``), which take what they
+``demo``), :mod:`.fit`, :mod:`.identify` and :mod:`.study` (``study``, ``report``), which take what they
 need from here when they run.
 """
 
@@ -14,6 +14,7 @@ from __future__ import annotations
 import sys
 
 from .fit import cmd_fit
+from .identify import cmd_identify
 from .parser import CHECKPOINT_SECONDS, FIT_COORDINATES, RECORD_CHECKS, build_parser  # noqa: F401  (tests' names)
 from .records import cmd_demo, cmd_generate, cmd_inspect
 from .study import cmd_report, cmd_study
@@ -53,7 +54,8 @@ def main(argv=None) -> int:
 
     global _INTERRUPTED
     # the commands looked up as main runs: a test puts its own in their place
-    parser = build_parser({"demo": cmd_demo, "generate": cmd_generate, "fit": cmd_fit, "study": cmd_study,
+    parser = build_parser({"demo": cmd_demo, "generate": cmd_generate, "fit": cmd_fit, "identify": cmd_identify,
+                           "study": cmd_study,
                            "report": cmd_report, "inspect": cmd_inspect})
     args = parser.parse_args(argv)
     _INTERRUPTED = False

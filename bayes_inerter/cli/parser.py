@@ -30,6 +30,7 @@ def _number_type(convert, ok, requirement: str, noun: str = "number"):
 _positive_float = _number_type(float, lambda v: 0 < v < float("inf"), "a positive number")
 _non_negative_float = _number_type(float, lambda v: 0 <= v < float("inf"), "a non-negative number")
 _positive_int = _number_type(int, lambda v: v >= 1, "at least 1", "whole number")
+_non_negative_int = _number_type(int, lambda v: v >= 0, "0 or more", "whole number")
 #: ``inference.checkpoint.WRITE_SECONDS``, written out for the same reason as the
 #: coordinates below; a test keeps the two equal.
 CHECKPOINT_SECONDS = 0.5
@@ -144,6 +145,21 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     return p
 
 
+def _add_identify(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("identify", help="the paper's least-squares fit of one record (eq. 4) with phi and b's interval")
+    p.add_argument("record", help="record CSV file")
+    _add_record_options(p)
+    p.add_argument("--model", choices=FIT_MODELS, default="two-port", help="model (%(default)s)")
+    p.add_argument("--starts", type=_positive_int, default=4,
+                   help="least-squares starts: the quick optimum's and Sobol points in the priors' box (%(default)s)")
+    p.add_argument("--bootstrap", type=_non_negative_int, default=0, metavar="N",
+                   help="b's interval from N refits on the record's residual cycles drawn again (seconds each; "
+                        "50 or more) instead of the cycle-clustered Hessian (default)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the starts and the bootstrap (%(default)s)")
+    p.add_argument("--out", metavar="FILE.json", help="also write the fit to this JSON file")
+    return p
+
+
 def _add_study(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("study", help="posteriors of many records, theory against identification, a report")
     p.add_argument("--quick", action="store_true",
@@ -159,6 +175,9 @@ def _add_study(sub) -> argparse.ArgumentParser:
     p.add_argument("--joint-steps", type=_positive_int,
                    help="steps of the joint model's chain (full study; default: until converged)")
     p.add_argument("--no-joint", action="store_true", help="skip the joint model of all records")
+    p.add_argument("--identify", action=argparse.BooleanOptionalAction, default=None,
+                   help="also fit every record by the paper's least squares (eq. 4; about 10 s a record) and set it "
+                        "beside the posterior in least_squares.csv (default: full study yes, quick no)")
     p.add_argument("--sensor-uncertainty", type=_non_negative_float, nargs=2, metavar=("FORCE_%", "ACCEL_%"),
                    help="relative standard uncertainty of the load cell's and accelerometer's sensitivities, "
                         "percent, added to b in the b_cal columns (default 0.25 0.5; 0 0: exact sensors)")
@@ -184,7 +203,8 @@ def _add_inspect(sub) -> argparse.ArgumentParser:
 
 
 #: The commands in the order ``--help`` lists them, each with what adds its options.
-_COMMANDS = (("demo", _add_demo), ("generate", _add_generate), ("fit", _add_fit), ("study", _add_study),
+_COMMANDS = (("demo", _add_demo), ("generate", _add_generate), ("fit", _add_fit), ("identify", _add_identify),
+             ("study", _add_study),
              ("report", _add_report), ("inspect", _add_inspect))
 
 

@@ -42,6 +42,8 @@ def _plan(args):
         changes["skip_checks"] = tuple(args.skip_check)
     if args.figures:
         changes["figures"] = True
+    if args.identify is not None:
+        changes["identify"] = args.identify
     return replace(plan, **changes)
 
 
@@ -76,6 +78,14 @@ class _StudyProgress:
                 "converged" if outcome.get("converged") else "not converged")
             print(f"study {self.name}: fit {self.done} of {self.bar.total} done: {outcome['key']} ({state})",
                   file=sys.stderr, flush=True)
+
+    def on_identified(self, name: str) -> None:
+        self.check_interrupt()
+        if self.joint is not None:
+            self.joint.close()
+            self.joint = None
+        self.bar.close()
+        print(f"study {self.name}: least squares of {name} done", file=sys.stderr, flush=True)
 
     def on_joint_step(self, iteration: int, target) -> None:
         from ..cli_progress import StepProgress
@@ -131,7 +141,8 @@ def cmd_study(args) -> int:
     progress = _StudyProgress(plan.name, out, _check_interrupt)
     try:
         result = run_study(plan, out, processes=processes, scheduler=args.scheduler, on_done=progress.on_done,
-                           on_jobs=progress.on_jobs, on_joint_step=progress.on_joint_step)
+                           on_jobs=progress.on_jobs, on_joint_step=progress.on_joint_step,
+                           on_identified=progress.on_identified)
     finally:
         progress.close()
     return _say_result(result, out)

@@ -12,11 +12,20 @@ scrambled Sobol points in the prior's box, each polished by
 :func:`scipy.optimize.least_squares` in the sampled parameters; the best is kept. phi is
 the fraction, not a percentage.
 
-An interval for b, optionally, from a bootstrap over drive cycles (a moving-block
-bootstrap whose blocks are whole cycles, so the residual's correlation within a cycle
-is kept): the fitted acceleration plus the fit's residual cycles drawn with
-replacement, refitted from the best point. It says how much the point estimate moves
-with the noise and misfit the record shows, not what a posterior says.
+An interval for b, in one of two ways (``interval``), each saying how much the point
+estimate would move with the noise and misfit the record shows, not what a posterior
+says:
+
+- ``"hessian"`` (the default; no refits): the least-squares Jacobian J at the best
+  point gives the sandwich A^-1 B A^-1 with A = J'J and B the sum over whole drive
+  cycles of (J_c' r_c)(J_c' r_c)' (cycle-clustered, so the residual's correlation within a
+  cycle is kept), scaled by C / (C - 1) for C cycles; the interval is b's estimate
+  +- Student's t with C - 1 degrees of freedom times its sd, in log b where b is sampled
+  in log. **Assumption**: the cycles' residuals are independent of each other. Where J'J
+  is singular (a direction the record leaves flat) no interval is given.
+- ``"bootstrap"``: a moving-block bootstrap whose blocks are whole cycles: the fitted
+  acceleration plus the fit's residual cycles drawn with replacement, each refitted from
+  the best point (``bootstrap`` replicates; seconds each).
 """
 
 from __future__ import annotations
@@ -32,12 +41,18 @@ from scipy.stats import qmc
 from .model import PosteriorModel
 from .optimize import find_start
 
-__all__ = ["Identification", "identify", "STARTS", "BOOTSTRAP_LEVEL"]
+__all__ = ["Identification", "identify", "STARTS", "LEVEL", "BOOTSTRAP_LEVEL", "INTERVALS"]
 
 #: Least-squares starts (the optimiser's and Sobol points in the prior's box).
 STARTS = 4
-#: The bootstrap interval's level.
-BOOTSTRAP_LEVEL = 0.94
+#: The interval's level.
+LEVEL = 0.94
+BOOTSTRAP_LEVEL = LEVEL  # the name before the Hessian interval
+#: The ways of making b's interval (see module docstring).
+INTERVALS = ("hessian", "bootstrap")
+#: J'J whose columns, scaled to unit length, have a condition number above this is
+#: taken as singular: the record leaves a direction flat.
+MAX_CONDITION = 1e12
 
 
 @dataclass(frozen=True)
@@ -47,8 +62,9 @@ class Identification:
     ``values``: the model's physical parameters by name (b in kg; the noise's sigma and
     rho are not fitted by least squares and left out); ``phi``: eq. 5 on the
     unfiltered record; ``phi_filtered``: the same on the likelihood's low-passed
-    signals; ``b_interval``: the bootstrap's ``level`` interval of b (None without a
-    bootstrap); ``b_draws``: the bootstrap's b's.
+    signals; ``b_interval``: b's ``level`` interval made by ``interval`` (None where
+    none could be made, ``why`` then says why); ``b_draws``: the bootstrap's b's;
+    ``cycles``: the whole drive cycles the interval used.
     """
 
     values: dict
@@ -59,6 +75,9 @@ class Identification:
     b_interval: tuple[float, float] | None = None
     level: float | None = None
     b_draws: tuple = ()
+    interval: str | None = None
+    cycles: int = 0
+    why: str = ""
 
     @property
     def b(self) -> float:
@@ -75,31 +94,41 @@ def _residual(model: PosteriorModel, phys, target: np.ndarray, noise: np.ndarray
     return r if np.all(np.isfinite(r)) else np.full(len(w), 1e6)
 
 
-def _polish(model, x0, target, noise, lo, hi) -> np.ndarray:
+def _least_squares(model, x0, target, noise, lo, hi):
     x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        got = optimize.least_squares(lambda x: _residual(model, x, target, noise), x0, bounds=(lo, hi),
-                                     x_scale="jac", max_nfev=100 * len(x0))
-    return got.x
+        return optimize.least_squares(lambda x: _residual(model, x, target, noise), x0, bounds=(lo, hi),
+                                      x_scale="jac", max_nfev=100 * len(x0))
+
+
+def _polish(model, x0, target, noise, lo, hi) -> np.ndarray:
+    return _least_squares(model, x0, target, noise, lo, hi).x
 
 
 def _starts(model: PosteriorModel, n: int, rng: np.random.Generator, lo, hi) -> list[np.ndarray]:
-    first = find_start(model, rng)[0][: model.n_phys]
+    first = find_start(model, rng, objectives=("sse",))[0][: model.n_phys]
     if n <= 1:
         return [first]
-    sobol = qmc.Sobol(len(lo), scramble=True, seed=rng).random(n - 1)
+    sobol = qmc.Sobol(len(lo), scramble=True, seed=rng).random_base2(math.ceil(math.log2(n - 1)))[: n - 1]
     return [first] + [lo + u * (hi - lo) for u in sobol]
 
 
-def identify(model: PosteriorModel, *, starts: int = STARTS, seed: int = 0, bootstrap: int = 0,
-             level: float = BOOTSTRAP_LEVEL) -> Identification:
-    """Eq. (4)'s least-squares fit of ``model``'s record, with phi (eq. 5) and, with
-    ``bootstrap`` replicates, an interval for b (see module docstring)."""
+def identify(model: PosteriorModel, *, starts: int = STARTS, seed: int = 0, interval: str | None = "hessian",
+             bootstrap: int = 0, level: float = LEVEL) -> Identification:
+    """Eq. (4)'s least-squares fit of ``model``'s record, with phi (eq. 5) and b's
+    interval made by ``interval`` (one of :data:`INTERVALS`, or None for none; see module
+    docstring). ``bootstrap`` replicates, if given, make it a bootstrap interval."""
     if not (isinstance(starts, int) and starts >= 1):
         raise ValueError(f"starts must be a whole number of at least 1, got {starts!r}")
     if not (isinstance(bootstrap, int) and bootstrap >= 0):
         raise ValueError(f"bootstrap replicates must be a whole number, got {bootstrap!r}")
+    if bootstrap:
+        interval = "bootstrap"
+    if interval is not None and interval not in INTERVALS:
+        raise ValueError(f"interval must be one of {', '.join(INTERVALS)} or None, got {interval!r}")
+    if interval == "bootstrap" and not bootstrap:
+        raise ValueError("a bootstrap interval needs bootstrap replicates (bootstrap=N, N of 50 or more)")
     if not 0.0 < level < 1.0:
         raise ValueError(f"interval level must lie in (0, 1), got {level}")
     rng = np.random.default_rng(seed)
@@ -116,23 +145,59 @@ def identify(model: PosteriorModel, *, starts: int = STARTS, seed: int = 0, boot
     fitted = model.simulate_unfiltered(theta)
     phi = 1.0 - math.sqrt(min(sse)) / float(np.linalg.norm(m - m.mean()))
     values = {k: v for k, v in model.values(theta).items() if k not in ("sigma", "rho")}  # noise: not fitted
-    draws, interval = (), None
-    if bootstrap:
-        draws = tuple(_bootstrap_b(model, best, fitted, measured, noise, lo, hi, bootstrap, rng))
-        interval = tuple(float(q) for q in np.quantile(draws, [(1 - level) / 2, (1 + level) / 2]))
+    draws, b_interval, why = (), None, ""
+    blocks = _cycles(model, len(w))
+    if interval == "bootstrap":
+        draws = tuple(_bootstrap_b(model, best, fitted, measured, noise, lo, hi, bootstrap, rng, blocks))
+        b_interval = tuple(float(q) for q in np.quantile(draws, [(1 - level) / 2, (1 + level) / 2]))
+    elif interval == "hessian":
+        jac = _least_squares(model, best, measured, noise, lo, hi).jac  # at the best point: no moves left
+        b_interval, why = _sandwich_interval(model, best, jac, measured[w] - fitted[w], blocks, level)
     return Identification({k: float(v) for k, v in values.items()}, phi,
-                          model.phi(model.simulate_lp(theta)), min(sse), starts, interval,
-                          level if bootstrap else None, draws)
+                          model.phi(model.simulate_lp(theta)), min(sse), starts, b_interval,
+                          level if interval else None, draws, interval, len(blocks), why)
 
 
-def _bootstrap_b(model, best, fitted, measured, noise, lo, hi, n, rng) -> list[float]:
+def _cycles(model: PosteriorModel, n: int) -> list[slice]:
+    """The whole drive cycles in the likelihood's window (of ``n`` samples), as slices."""
+    freq = model.record.metadata.get("drive_frequency_hz")
+    period = int(round(model.fs / freq)) if freq else n // 10
+    return [slice(i, i + period) for i in range(0, n - period + 1, period)]
+
+
+def _sandwich_interval(model: PosteriorModel, best, jac, resid, blocks, level):
+    """(b's interval, "") from the cycle-clustered sandwich, or (None, why not)."""
+    from scipy import stats
+
+    if len(blocks) < 2:
+        return None, "the record holds fewer than two whole drive cycles"
+    k = model.names.index("b")
+    scale = np.linalg.norm(jac, axis=0)
+    if np.any(scale == 0):
+        return None, "the fit does not depend on some parameter at its best point"
+    js = jac / scale
+    a = js.T @ js
+    if np.linalg.cond(a) > MAX_CONDITION:
+        return None, "the record leaves a direction of the parameters flat at the least-squares point"
+    # each cycle's share of the estimate's move, x_b - x_b(true) ~ sum over cycles (in
+    # the columns' scaled coordinates, then back)
+    gains = [float(np.linalg.solve(a, js[c].T @ resid[c])[k] / scale[k]) for c in blocks]
+    n_c = len(blocks)
+    sd = math.sqrt(n_c / (n_c - 1) * sum(v * v for v in gains))
+    t = float(stats.t.ppf((1 + level) / 2, n_c - 1))
+    x_b = float(best[k])
+    lo, hi = x_b - t * sd, x_b + t * sd
+    if model.all_priors["b"].log_scale:
+        return (math.exp(lo), math.exp(hi)), ""
+    return (lo, hi), ""
+
+
+def _bootstrap_b(model, best, fitted, measured, noise, lo, hi, n, rng, cycles) -> list[float]:
     """b refitted on ``n`` records made of the fit plus its residual's drive cycles drawn
     with replacement (within the likelihood's window)."""
     w = model.window
-    freq = model.record.metadata.get("drive_frequency_hz")
-    period = int(round(model.fs / freq)) if freq else len(w) // 10
     r = measured[w] - fitted[w]
-    blocks = [r[i:i + period] for i in range(0, len(r) - period + 1, period)]
+    blocks = [r[c] for c in cycles]
     if len(blocks) < 2:
         raise ValueError("the bootstrap over cycles needs at least two drive cycles in the record")
     out = []

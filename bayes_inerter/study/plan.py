@@ -9,8 +9,9 @@ from: the paper's grid of generated records (nine flywheel settings at 0.5, 1 an
   runs on one core in minutes and is **not converged**: the report says so. It shows the
   whole pipeline and the order of magnitude of every answer.
 - :func:`full_plan`: all 27 records with the two-port model until converged, the
-  three nested models on the 1 Hz records for the comparison, and the joint model of
-  all 27 records (one b per setting, everything else shared).
+  three nested models on the 1 Hz records for the comparison, the joint model of
+  all 27 records (one b per setting, everything else shared), and the paper's
+  least-squares fit of every record beside its posterior.
 """
 
 from __future__ import annotations
@@ -81,6 +82,9 @@ class StudyPlan:
     figures : each fit draws its own figures as it ends (several seconds a fit); by
         default they are drawn afterwards, for the fits one wants, by
         ``bayes-inerter report`` (``study.redraw``).
+    identify : also fit every record by the paper's least squares (eq. 4, about 10 s a
+        record; ``study.least_squares``) and set it beside the posterior in
+        ``least_squares.csv``.
     """
 
     name: str
@@ -98,6 +102,7 @@ class StudyPlan:
     calibration: SensorCalibration = field(default_factory=SensorCalibration)
     skip_checks: tuple = ()
     figures: bool = False
+    identify: bool = False
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.settings if s not in SETTINGS]
@@ -137,5 +142,5 @@ def quick_plan(**changes) -> StudyPlan:
 
 def full_plan(**changes) -> StudyPlan:
     """The full study (see module docstring)."""
-    plan = StudyPlan(name="full", comparison=(tuple(SETTINGS), (1.0,)), joint=True)
+    plan = StudyPlan(name="full", comparison=(tuple(SETTINGS), (1.0,)), joint=True, identify=True)
     return replace(plan, **changes)

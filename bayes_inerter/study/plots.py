@@ -14,7 +14,7 @@ import numpy as np
 from ..device import FREQUENCIES_HZ, SETTINGS
 from .analysis import is_joint
 
-__all__ = ["plot_inertance", "plot_phi_map", "plot_models", "plot_design", "plot_ranks", "plot_coverage"]
+__all__ = ["plot_inertance", "plot_least_squares", "plot_phi_map", "plot_models", "plot_design", "plot_ranks", "plot_coverage"]
 
 
 def _figure(fig, figsize):
@@ -94,6 +94,62 @@ def plot_inertance(rows: list[dict], *, fig=None):
     if made:
         fig.tight_layout()
     return fig
+
+
+def plot_least_squares(rows: list[dict], *, fig=None):
+    """The paper's least squares beside the posterior, record by record
+    (``study.least_squares``): left, each record's b over the reference (the generating b
+    where the rows have it, else the paper's) with the least-squares interval, the
+    posterior's 94 % HDI and the honest interval; right, phi by least squares and by the
+    posterior against the paper's Table 2."""
+    fig, own = _figure(fig, (12, 4.8))
+    ax, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2.2, 1]})
+    truth = all(r.get("b_truth") for r in rows)
+    ref = [r["b_truth"] if truth else r.get("b_paper") for r in rows]
+    x = np.arange(len(rows))
+    kinds = (("ls", "least squares (eq. 4), Hessian interval", "C3", "s", -0.22),
+             ("post", "posterior, 94 % HDI", "C0", "o", 0.0), ("honest", "honest interval", "C1", "^", 0.22))
+    for key, label, color, marker, dx in kinds:
+        lo = np.array([_ratio(r.get(f"b_{key}_3%"), b) for r, b in zip(rows, ref)])
+        hi = np.array([_ratio(r.get(f"b_{key}_97%"), b) for r, b in zip(rows, ref)])
+        mid_key = {"ls": "b_ls", "post": "b_post_mean", "honest": None}[key]
+        mid = (np.array([_ratio(r.get(mid_key), b) for r, b in zip(rows, ref)]) if mid_key
+               else np.sqrt(lo * hi))
+        ok = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(mid)
+        if ok.any():
+            ax.errorbar(x[ok] + dx, mid[ok], yerr=[mid[ok] - lo[ok], hi[ok] - mid[ok]], fmt=marker, color=color,
+                        ms=4, capsize=2, lw=1, label=label)
+    ax.axhline(1.0, color="k", lw=0.8)
+    low, high = ax.get_ylim()
+    if low > 0 and high / low > 3:  # a log scale only where the records' b's spread that far
+        ax.set_yscale("log")
+    ax.set_xticks(x, [f"{r['setting']} {r['freq_hz']:g}" if r.get("freq_hz") is not None else r["record"]
+                      for r in rows], rotation=90, fontsize=7)
+    ax.set_ylabel("b / " + ("generating b" if truth else "paper's identified b"))
+    ax.set_title("b per record (setting, Hz)", fontsize=10)
+    ax.legend(fontsize=7, loc="upper right")
+    paper = np.array([_num(r.get("phi_paper")) for r in rows])
+    for key, label, color, marker in (("phi_ls", "least squares (unfiltered, as the paper)", "C3", "s"),
+                                      ("phi_post", "posterior mean (low-passed)", "C0", "o")):
+        ax2.plot(paper, [_num(r.get(key)) for r in rows], marker, color=color, ms=4, label=label)
+    ax2.plot([0, 1], [0, 1], "k-", lw=0.8)
+    ax2.set_xlim(0, 1)
+    ax2.set_ylim(min(0.0, np.nanmin([_num(r.get("phi_ls")) for r in rows] + [0.0])), 1)
+    ax2.set_xlabel("phi, paper's Table 2")
+    ax2.set_ylabel("phi, this study")
+    ax2.set_title("fit accuracy phi (eq. 5)", fontsize=10)
+    ax2.legend(fontsize=7, loc="lower right")
+    if own:
+        fig.tight_layout()
+    return fig
+
+
+def _num(v) -> float:
+    return float(v) if v is not None and v != "" else float("nan")
+
+
+def _ratio(v, ref) -> float:
+    return _num(v) / ref if ref else float("nan")
 
 
 def plot_phi_map(rows: list[dict], *, ax=None):

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from ..inference.sampler import Convergence
 from .analysis import is_joint
+from .least_squares import least_squares_section
 from .markdown import table
 from .report_text import (
     AMBIGUITY,
@@ -266,6 +267,8 @@ def write_report(out: Path, plan, tables: dict, outcomes: list[dict], versions: 
         lines += _joint_section(tables["joint"], tables["joint_info"], None, truth_b, gains)
     if phi:
         lines += _phi_section(phi)
+    if tables.get("least_squares"):
+        lines += least_squares_section(tables["least_squares"])
     if comp:
         lines += _comparison_section(comp)
     if contr:

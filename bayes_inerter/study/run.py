@@ -30,6 +30,7 @@ from .analysis import (
     write_csv,
 )
 from .honest import honest_columns
+from .least_squares import least_squares_table, run_least_squares
 from .plan import StudyPlan, record_name
 from .runner import run_jobs
 
@@ -131,7 +132,7 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
 
 
 def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None = None, on_done=None,
-              on_jobs=None, on_joint_step=None) -> StudyResult:
+              on_jobs=None, on_joint_step=None, on_identified=None) -> StudyResult:
     """Run ``plan`` into ``out``: records, fits, tables (CSV), figures (PNG), REPORT.md.
 
     ``processes`` local worker processes (one fit each) or a Dask ``scheduler`` address.
@@ -139,6 +140,8 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     hears each one as it ends. Fits finished by an earlier run are reused. The joint
     model (``plan.joint``) runs here after them, its walkers on ``processes`` local
     processes (also with a scheduler); ``on_joint_step(iteration, target)`` hears its steps.
+    With ``plan.identify`` every record's least-squares fit (``study.least_squares``)
+    then runs on ``processes`` local processes; ``on_identified(name)`` hears each end.
     """
     import matplotlib
 
@@ -150,10 +153,11 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     check_output_folder(out)
     with folder_lock(out):
         return _run_study(plan, out, processes=processes, scheduler=scheduler, on_done=on_done, on_jobs=on_jobs,
-                          on_joint_step=on_joint_step)
+                          on_joint_step=on_joint_step, on_identified=on_identified)
 
 
-def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_jobs, on_joint_step) -> StudyResult:
+def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_jobs, on_joint_step,
+               on_identified) -> StudyResult:
     """:func:`run_study`'s work, with the folder locked."""
     from ..inference.fit import versions as fit_versions  # one list of versions for fits and studies
     from .report import write_report
@@ -169,16 +173,22 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
     fits = collect(out / "fits")
     joint = run_joint(plan, out, fits, records, processes=processes, progress=on_joint_step) if plan.joint else None
     t_joint = time.perf_counter()
+    ls = (run_least_squares(records, out, seed=plan.seed, processes=processes, on_done=on_identified)
+          if plan.identify else None)
+    t_ls = time.perf_counter()
     truth_b, truth_app = _truths(plan, records)
     tables, files = _tables(plan, fits, joint, truth_b, truth_app)
+    if ls:
+        tables["least_squares"] = least_squares_table(ls, fits, truth_b)
+        files["least_squares"] = "least_squares.csv"
     for key, name in files.items():
         write_csv(out / name, tables[key])
     _write_figures(out, tables)
     versions = fit_versions()
     report = write_report(out, plan, tables, outcomes, versions, truth_b, truth_app)
     t3 = time.perf_counter()
-    seconds = {"records": t1 - t0, "fits": t2 - t1, "joint": t_joint - t2, "analysis_and_report": t3 - t_joint,
-               "total": t3 - t0}
+    seconds = {"records": t1 - t0, "fits": t2 - t1, "joint": t_joint - t2, "least_squares": t_ls - t_joint,
+               "analysis_and_report": t3 - t_ls, "total": t3 - t0}
     _write_study_json(out, plan, versions, seconds, processes, scheduler, outcomes)
     return StudyResult(out, outcomes, tables, report, seconds)
 
@@ -236,10 +246,11 @@ def _write_figures(out: Path, tables: dict) -> None:
     """The study's figures beside its tables, each closed once saved."""
     import matplotlib.pyplot as plt
 
-    from .plots import plot_inertance, plot_models, plot_phi_map
+    from .plots import plot_inertance, plot_least_squares, plot_models, plot_phi_map
 
     figures = {"theory_vs_identified.png": (plot_inertance, tables["inertance"]),
-               "phi_map.png": (plot_phi_map, tables["phi"]), "model_comparison.png": (plot_models, tables["models"])}
+               "phi_map.png": (plot_phi_map, tables["phi"]), "model_comparison.png": (plot_models, tables["models"]),
+               "least_squares.png": (plot_least_squares, tables.get("least_squares"))}
     for name, (plot, rows) in figures.items():
         if rows:
             fig = plot(rows)
