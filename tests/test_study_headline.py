@@ -32,6 +32,12 @@ records table
 
 ![phi heat map](phi_map.png)
 
+### The paper's least squares beside the posterior
+
+least squares table
+
+![least squares beside the posterior](least_squares.png)
+
 ### Model comparison
 
 loo table
@@ -60,6 +66,18 @@ def test_headline_leads_and_the_study_becomes_the_control(folders):
     assert "](paper-like/theory_vs_identified.png)" in text and "](paper-like/phi_map.png)" in text
     assert "records table" not in text and "loo table" not in text
     assert f"]({CONTROL_FILE})" in text
+
+
+def test_the_least_squares_and_other_studies_sections_are_taken_in(folders):
+    structure = folders.parent / "structure"
+    structure.mkdir()
+    (structure / "SECTION.md").write_text("## Why b differs from theory\n\n![fit](structure.png)\n")
+    text = write_headline(folders, folders / "paper-like", title="T", summary="S",
+                          more=[structure / "SECTION.md", folders / "missing.md"]).read_text()
+    order = [text.index(s) for s in ("least squares table", "## Limitations", "## Why b differs from theory",
+                                     "## The ideal-device control")]
+    assert order == sorted(order)
+    assert "](paper-like/least_squares.png)" in text and "](../structure/structure.png)" in text
 
 
 def test_composing_again_keeps_the_control(folders):

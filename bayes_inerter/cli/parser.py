@@ -176,7 +176,7 @@ def _add_study(sub) -> argparse.ArgumentParser:
                    help="steps of the joint model's chain (full study; default: until converged)")
     p.add_argument("--no-joint", action="store_true", help="skip the joint model of all records")
     p.add_argument("--identify", action=argparse.BooleanOptionalAction, default=None,
-                   help="also fit every record by the paper's least squares (eq. 4; about 10 s a record) and set it "
+                   help="also fit every record by the paper's least squares (eq. 4; about 20 s a 10 s record on one core) and set it "
                         "beside the posterior in least_squares.csv (default: full study yes, quick no)")
     p.add_argument("--sensor-uncertainty", type=_non_negative_float, nargs=2, metavar=("FORCE_%", "ACCEL_%"),
                    help="relative standard uncertainty of the load cell's and accelerometer's sensitivities, "

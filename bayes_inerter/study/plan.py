@@ -82,7 +82,7 @@ class StudyPlan:
     figures : each fit draws its own figures as it ends (several seconds a fit); by
         default they are drawn afterwards, for the fits one wants, by
         ``bayes-inerter report`` (``study.redraw``).
-    identify : also fit every record by the paper's least squares (eq. 4, about 10 s a
+    identify : also fit every record by the paper's least squares (eq. 4, about 20 s a 10 s
         record; ``study.least_squares``) and set it beside the posterior in
         ``least_squares.csv``.
     """

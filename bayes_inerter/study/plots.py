@@ -14,7 +14,7 @@ import numpy as np
 from ..device import FREQUENCIES_HZ, SETTINGS
 from .analysis import is_joint
 
-__all__ = ["plot_inertance", "plot_least_squares", "plot_phi_map", "plot_models", "plot_design", "plot_ranks", "plot_coverage"]
+__all__ = ["plot_inertance", "plot_least_squares", "plot_structure", "plot_phi_map", "plot_models", "plot_design", "plot_ranks", "plot_coverage"]
 
 
 def _figure(fig, figsize):
@@ -120,8 +120,9 @@ def plot_least_squares(rows: list[dict], *, fig=None):
             ax.errorbar(x[ok] + dx, mid[ok], yerr=[mid[ok] - lo[ok], hi[ok] - mid[ok]], fmt=marker, color=color,
                         ms=4, capsize=2, lw=1, label=label)
     ax.axhline(1.0, color="k", lw=0.8)
-    low, high = ax.get_ylim()
-    if low > 0 and high / low > 3:  # a log scale only where the records' b's spread that far
+    drawn = np.concatenate([np.ravel(line.get_ydata()) for line in ax.lines] + [np.ones(1)]).astype(float)
+    drawn = drawn[np.isfinite(drawn) & (drawn > 0)]
+    if drawn.max() / drawn.min() > 3:  # a log scale only where the records' b's spread that far
         ax.set_yscale("log")
     ax.set_xticks(x, [f"{r['setting']} {r['freq_hz']:g}" if r.get("freq_hz") is not None else r["record"]
                       for r in rows], rotation=90, fontsize=7)
@@ -139,6 +140,50 @@ def plot_least_squares(rows: list[dict], *, fig=None):
     ax2.set_ylabel("phi, this study")
     ax2.set_title("fit accuracy phi (eq. 5)", fontsize=10)
     ax2.legend(fontsize=7, loc="lower right")
+    if own:
+        fig.tight_layout()
+    return fig
+
+
+def plot_structure(fits: dict, *, fig=None):
+    """The paper's Fig. 9 with the structural model (``study.structure``): per setting,
+    each of ``fits`` (label -> ``StructureFit``) drawn as its identified b's 94 %
+    interval and the structure's fit (median, 94 % band), beside the geometry's theory
+    and the paper's identified values; left in kg, right over the theory."""
+    from ..device import theoretical_inertance
+
+    fig, own = _figure(fig, (12, 4.8))
+    ax, ax2 = fig.subplots(1, 2)
+    names = [s for s in SETTINGS if any(s in f.identified.settings for f in fits.values())]
+    x = np.arange(len(names))
+    theory = np.array([theoretical_inertance(s) for s in names])
+    paper = np.array([SETTINGS[s].b_paper for s in names])
+    for a, scale in ((ax, np.ones(len(names))), (ax2, theory)):
+        a.plot(x, theory / scale, "k_", ms=14, mew=2, label="theory (geometry)")
+        a.plot(x, paper / scale, "kx", ms=7, label="paper, Table 2")
+    for i, (label, fit) in enumerate(fits.items()):
+        dx = (i - (len(fits) - 1) / 2) * 0.25
+        idx = [names.index(s) for s in fit.identified.settings]
+        ident, sd = fit.identified.mean, fit.identified.sd
+        lo, hi = np.exp(ident - 1.8808 * sd), np.exp(ident + 1.8808 * sd)
+        band = np.array([np.percentile(fit.b[s], [3, 50, 97]) for s in fit.identified.settings])
+        for a, scale in ((ax, np.ones(len(names))), (ax2, theory)):
+            sc = scale[idx]
+            a.errorbar(np.array(idx) + dx, np.exp(ident) / sc, yerr=[(np.exp(ident) - lo) / sc, (hi - np.exp(ident)) / sc],
+                       fmt="o", color=f"C{2 * i}", ms=4, capsize=2, label=f"identified, {label}")
+            a.errorbar(np.array(idx) + dx + 0.08, band[:, 1] / sc,
+                       yerr=[(band[:, 1] - band[:, 0]) / sc, (band[:, 2] - band[:, 1]) / sc], fmt="s",
+                       mfc="none", color=f"C{2 * i + 1}", ms=5, capsize=2, label=f"structural fit, {label}")
+    ax.set_yscale("log")
+    ax.set_ylabel("inertance b (kg)")
+    ax2.axhline(1.0, color="k", lw=0.6)
+    ax2.set_ylabel("b / theory")
+    for a in (ax, ax2):
+        a.set_xticks(x, names)
+        a.set_xlabel("flywheel setting")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title("inertance per setting", fontsize=10)
+    ax2.set_title("over the geometry's theory", fontsize=10)
     if own:
         fig.tight_layout()
     return fig

@@ -1,0 +1,100 @@
+"""Tests of the structural model of inertance across settings (bayes_inerter.study.structure)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from bayes_inerter.device import DEFAULT_GEOMETRY, SETTINGS
+from bayes_inerter.study.structure import (
+    EXPLANATIONS,
+    StructurePriors,
+    explanations,
+    fit_structure,
+    frequency_shares,
+    identified_from_draws,
+    identified_from_intervals,
+)
+
+
+def _made(lead=0.0201, dJ_0=0.002, kappa_big=0.9, kappa_small=1.0):
+    """b per setting made by the structure itself (identical flywheels at the disc's inertia)."""
+    g = DEFAULT_GEOMETRY
+    gain = (2 * math.pi / lead) ** 2
+    return {s: gain * (g.J_screw + dJ_0 + kappa_small * v.n_small * g.J_small + kappa_big * v.n_big * g.J_big)
+            for s, v in SETTINGS.items()}
+
+
+def _identified(b: dict, rel_sd=1e-3, seed=0):
+    rng = np.random.default_rng(seed)
+    draws = {f"b_{s}": v * np.exp(rel_sd * rng.standard_normal(4000)) for s, v in b.items()}
+    return identified_from_draws(draws)
+
+
+def test_the_explanations_find_the_structure_that_made_the_b_s():
+    rows = explanations(_identified(_made()))
+    assert [r["explanation"] for r in rows] == [name for name, _ in EXPLANATIONS]
+    chi2 = {r["explanation"]: r["chi2"] for r in rows}
+    # nine settings with 0.1 % sds: the geometry as given and a lead alone miss by far,
+    # the explanation that made them fits them (chi-square of the order of its dof or less)
+    assert chi2["the geometry as given"] > 1e4 and chi2["the lead is off"] > 1e3
+    made = rows[3]
+    assert made["explanation"].startswith("+ big flywheels") and made["chi2"] < 9
+    # kappa_big and the lead are told apart only by the lead's prior: the product holds
+    gain = (2 * math.pi / 0.0201) ** 2
+    assert made["b_per_big"] == pytest.approx(gain * 0.9 * DEFAULT_GEOMETRY.J_big, rel=2e-3)
+    assert made["b_base"] == pytest.approx(gain * (DEFAULT_GEOMETRY.J_screw + 0.002), rel=2e-3)
+    assert rows[-1]["chi2"] <= made["chi2"] + 1e-6  # a richer explanation never fits worse at its mode
+
+
+def test_the_posterior_holds_the_terms_and_the_b_s_obey_the_structure():
+    fit = fit_structure(_identified(_made()), seed=1, steps=2500, burn=800)
+    gain = (2 * math.pi / 0.0201) ** 2
+    lo, hi = np.percentile(fit.terms["b_per_big"], [3, 97])
+    assert lo < gain * 0.9 * DEFAULT_GEOMETRY.J_big < hi
+    lo, hi = np.percentile(fit.terms["b_base"], [3, 97])
+    assert lo < gain * (DEFAULT_GEOMETRY.J_screw + 0.002) < hi
+    assert fit.ppc > 0.05 and 0.1 < fit.acceptance < 0.9
+    assert set(fit.b) == set(SETTINGS)
+
+
+def test_b_s_that_break_the_structure_are_flagged():
+    b = _made()
+    b["A3"] *= 1.05  # one setting 5 % off the line the others lie on, 0.1 % sds
+    rows = explanations(_identified(b), StructurePriors(J_each_sd=1e-4))  # identical flywheels
+    assert rows[-1]["chi2"] > 100 and rows[-1]["worst_setting"] in ("A3", "A2", "A4")
+
+
+def test_identified_b_s_keep_their_correlation_or_come_from_intervals():
+    rng = np.random.default_rng(2)
+    common = rng.standard_normal(5000)
+    draws = {"b_A0": 750 * np.exp(0.01 * common), "b_A1": 1670 * np.exp(0.01 * common + 0.001 * rng.standard_normal(
+        5000)), "other": np.ones(5000)}
+    got = identified_from_draws(draws)
+    assert got.settings == ("A0", "A1")
+    corr = got.cov[0, 1] / (got.sd[0] * got.sd[1])
+    assert corr > 0.99
+    rows = [{"setting": "A0", "lo": 740.0, "hi": 760.0}, {"setting": "A1", "lo": 1600.0, "hi": 1700.0},
+            {"setting": "B2", "lo": None, "hi": None}]
+    got = identified_from_intervals(rows, "lo", "hi")
+    assert got.settings == ("A0", "A1") and got.cov[0, 1] == 0
+    assert got.sd[0] == pytest.approx(math.log(760 / 740) / (2 * 1.880793608151251))
+    with pytest.raises(ValueError, match="fewer than two"):
+        identified_from_intervals(rows[:1], "lo", "hi")
+
+
+def test_frequency_shares_tell_a_share_that_moves_with_frequency():
+    def rows(per_big):
+        out = []
+        for f, big in zip((0.5, 1.0, 1.5), per_big):
+            for s, v in SETTINGS.items():
+                b = 750 + 950 * v.n_small + big * v.n_big
+                out.append({"setting": s, "freq_hz": f, "lo": b - 10.0, "hi": b + 10.0})
+        return out
+
+    same = frequency_shares(rows((9700, 9700, 9700)), "lo", "hi")
+    assert [r["freq_hz"] for r in same] == [0.5, 1.0, 1.5, "agree?"]
+    assert same[1]["b_per_big"] == pytest.approx(9700) and same[1]["b_per_small"] == pytest.approx(950)
+    assert same[-1]["b_per_big_p"] > 0.99
+    moving = frequency_shares(rows((9500, 9700, 9900)), "lo", "hi")
+    assert moving[-1]["b_per_big_p"] < 1e-6 and moving[-1]["b_per_small_p"] > 0.99
