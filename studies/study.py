@@ -31,6 +31,9 @@ from bayes_inerter.study import write_headline
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "full"
 HEADLINE = OUT / "paper-like"
+#: Studies made from these results whose SECTION.md the report takes in (run them, then
+#: this again: every fit is reused).
+MORE = [OUT.parent / "structure"]
 
 TITLE = "The inertance of each flywheel setting, from records of a paper-like device"
 SUMMARY = ("The records: the paper's 27 (nine flywheel settings at 0.5, 1 and 1.5 Hz), made by a device richer than "
@@ -66,5 +69,6 @@ if __name__ == "__main__":
     _run(["study", "--records", str(records), "--out", str(HEADLINE), "--no-joint",
           "--steps", str(args.paper_like_steps), *pool])
     path = write_headline(OUT, HEADLINE, title=TITLE, summary=SUMMARY.format(seed=args.seed,
-                                                                             steps=args.paper_like_steps))
+                                                                             steps=args.paper_like_steps),
+                          more=[p / "SECTION.md" for p in MORE])
     print(f"wrote {path}")

@@ -1,0 +1,204 @@
+"""Why identified inertance differs from theory: the structural model across settings
+(``bayes_inerter.study.structure``) fitted to the full study's identified b's.
+
+Two sets of identified b's (both from results/full, which ``python studies/study.py``
+makes):
+
+- **control**: the joint model's draws of the nine b's (results/full/joint/b_draws.npz;
+  their correlations kept). Its records are generated at the paper's Table 2 values, so
+  this asks which explanation the paper's own identified inertances support.
+- **paper-like**: each setting's honest interval from one paper-like laboratory's
+  records (results/full/paper-like/inertance.csv), as a user with a real device would
+  have them.
+
+Writes into results/structure: explanations.csv (the nested explanations' misfit),
+terms.csv (each term's posterior), frequency.csv (the flywheels' shares per drive
+frequency, from each record alone: the compliant-hub test), structure.png (Fig. 9 with
+the structural fit) and summary.txt.
+
+    python studies/structure.py [--seed 0] [--steps 6000]
+"""
+
+import argparse
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from bayes_inerter.study.plots import plot_structure
+from bayes_inerter.study.structure import (
+    StructurePriors,
+    explanations,
+    fit_structure,
+    frequency_shares,
+    identified_from_draws,
+    identified_from_intervals,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+FULL = ROOT / "results" / "full"
+OUT = ROOT / "results" / "structure"
+
+
+def _rows(path: Path) -> list[dict]:
+    def num(v):
+        try:
+            return float(v)
+        except ValueError:
+            return v or None
+
+    with open(path, newline="") as f:
+        return [{k: (v if k in ("setting", "record") else num(v)) for k, v in r.items()} for r in csv.DictReader(f)]
+
+
+def _write(path: Path, rows: list[dict]) -> None:
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--steps", type=int, default=6000)
+    args = ap.parse_args()
+    for need in (FULL / "joint" / "b_draws.npz", FULL / "paper-like" / "inertance.csv",
+                 FULL / "inertance_records.csv", FULL / "paper-like" / "least_squares.csv"):
+        if not need.is_file():
+            print(f"error: {need} is missing; run python studies/study.py first", file=sys.stderr)
+            return 1
+    OUT.mkdir(parents=True, exist_ok=True)
+    priors = StructurePriors()
+    with np.load(FULL / "joint" / "b_draws.npz") as npz:
+        control = identified_from_draws({k: npz[k] for k in npz.files}, "control: joint posterior draws")
+    paper_like = identified_from_intervals(_rows(FULL / "paper-like" / "inertance.csv"), "b_honest_3%",
+                                           "b_honest_97%", "paper-like: honest intervals")
+    sets = {"control": control, "paper-like": paper_like}
+    expl, terms, fits = [], [], {}
+    for label, ident in sets.items():
+        print(f"{label}: {len(ident.settings)} settings; explanations ...", flush=True)
+        expl += [{"identified": label, **r} for r in explanations(ident, priors)]
+        print(f"{label}: sampling the structural model ({args.steps} steps) ...", flush=True)
+        fit = fit_structure(ident, priors, seed=args.seed, steps=args.steps, burn=args.steps // 4)
+        fits[label] = fit
+        print(f"{label}: acceptance {fit.acceptance:.2f}, tau {fit.tau:.0f} steps, ppc {fit.ppc:.2f}", flush=True)
+        for name, v in fit.terms.items():
+            lo, med, hi = np.percentile(v, [3, 50, 97])
+            terms.append({"identified": label, "term": name, "median": med, "3%": lo, "97%": hi})
+        terms.append({"identified": label, "term": "ppc (posterior predictive p of the b's misfit)", "median": fit.ppc})
+        terms.append({"identified": label, "term": "tau (steps; chain of 40 walkers)", "median": fit.tau,
+                      "3%": None, "97%": None})
+    _write(OUT / "explanations.csv", expl)
+    _write(OUT / "terms.csv", terms)
+    freq = ([{"identified": "control (posterior HDI)", **r} for r in
+             frequency_shares(_rows(FULL / "inertance_records.csv"), "b_hdi_3%", "b_hdi_97%")]
+            + [{"identified": "paper-like (honest, identified records)", **r} for r in
+               frequency_shares(_rows(FULL / "paper-like" / "least_squares.csv"), "b_honest_3%", "b_honest_97%")])
+    _write(OUT / "frequency.csv", freq)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plot_structure(fits)
+    fig.savefig(OUT / "structure.png", dpi=110)
+    plt.close(fig)
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                            text=True).stdout.strip()
+    (OUT / "summary.json").write_text(json.dumps({"commit": commit, "seed": args.seed, "steps": args.steps,
+                                                  "priors": {k: getattr(priors, k) for k in priors.__dataclass_fields__},
+                                                  "sources": {k: v.source for k, v in sets.items()}}, indent=2) + "\n")
+    (OUT / "SECTION.md").write_text(_section(expl, fits, freq, priors))
+    for r in expl:
+        print(f"{r['identified']:>10}: {r['explanation']:<48} chi2 {r['chi2']:>12.1f} worst {r['worst_setting']} "
+              f"z {r['worst_z']:+.1f} max error {100 * r['max_rel_error']:.2f} %")
+    for r in freq:
+        if r["freq_hz"] == "agree?":
+            print(f"{r['identified']}: shares agree across frequencies? p base {r['b_base_p']:.3g}, "
+                  f"per small {r['b_per_small_p']:.3g}, per big {r['b_per_big_p']:.3g}")
+        else:
+            print(f"{r['identified']} {r['freq_hz']:g} Hz: base {r['b_base']:.1f} +- {r['b_base_sd']:.1f}, per small "
+                  f"{r['b_per_small']:.1f} +- {r['b_per_small_sd']:.1f}, per big {r['b_per_big']:.1f} +- "
+                  f"{r['b_per_big_sd']:.1f} (chi2 {r['chi2']:.1f} on {r['dof']})")
+    print(f"wrote {OUT}")
+    return 0
+
+
+def _ci(fit, name, scale=1.0, fmt="{:.3g}"):
+    lo, med, hi = np.percentile(fit.terms[name], [3, 50, 97]) * scale
+    return f"{fmt.format(med)} ({fmt.format(lo)} to {fmt.format(hi)})"
+
+
+def _section(expl, fits, freq, priors) -> str:
+    """REPORT.md's section on this study, written from its numbers."""
+    from bayes_inerter.study.markdown import table
+
+    c, pl = fits["control"], fits["paper-like"]
+    by = {(r["identified"], r["explanation"]): r for r in expl}
+    names = list(dict.fromkeys(r["explanation"] for r in expl))
+    rows = [{"explanation": n, "control chi2": by[("control", n)]["chi2"],
+             "control worst error": f"{100 * by[('control', n)]['max_rel_error']:.2f} % "
+                                    f"({by[('control', n)]['worst_setting']})",
+             "paper-like chi2": by[("paper-like", n)]["chi2"],
+             "paper-like worst error": f"{100 * by[('paper-like', n)]['max_rel_error']:.1f} % "
+                                       f"({by[('paper-like', n)]['worst_setting']})"} for n in names]
+    same = by[("control", names[4])]["chi2"]
+    agree = {r["identified"]: r for r in freq if r["freq_hz"] == "agree?"}
+    dj = np.percentile(c.terms["dJ_0"], [3, 97])
+    kb = np.percentile(c.terms["kappa_big"], [3, 97])
+    lines = [
+        "## Why identified inertance differs from theory", "",
+        "A structural model of b across the nine settings (`study.structure`, results/structure): "
+        "b = (2 pi / p)^2 (J_screw + dJ_0 + kappa_small sum J_small,k + kappa_big sum J_big,k), with priors from "
+        f"the geometry (lead {1e3 * priors.lead:.3f} +- {1e3 * priors.lead_sd:.1f} mm, each flywheel's inertia "
+        f"+- {100 * priors.J_each_sd:.0f} % about the solid disc's), fitted to the control's joint posterior "
+        "(records made at the paper's Table 2 values, so this asks what the paper's own identified b's support) "
+        "and to the paper-like study's honest intervals. Each explanation below adds to the one before; chi2 is "
+        "the identified b's misfit at its posterior mode (nine settings).", "",
+        table(rows, list(rows[0]), {"control chi2": "{:.1f}", "paper-like chi2": "{:.1f}"}), "",
+        f"- **Ruled out:** the geometry as given (worst {100 * by[('control', names[0])]['max_rel_error']:.0f} % off, "
+        f"A0) and a wrong lead alone (worst {100 * by[('control', names[1])]['max_rel_error']:.0f} %): a lead scales "
+        "every setting alike, while A0 lies above theory and B1, B2 below.",
+        f"- **Supported:** rotating parts the geometry leaves out, dJ_0 = {_ci(c, 'dJ_0', 1e3)} g m^2 "
+        f"(94 %; the bare screw's own is {1e3 * priors.J_screw:.2f} g m^2), which lift the base to "
+        f"{_ci(c, 'b_base', 1, '{:.1f}')} kg; and big flywheels that add only kappa_big = {_ci(c, 'kappa_big')} "
+        "of a solid disc's inertia. The records cannot tell a flywheel that turns less than the screw (slip on "
+        "its hub) from one whose inertia is below a solid disc's (a bore, spokes): only the product enters b."
+        if dj[0] > 0 and kb[1] < 1 else
+        f"- dJ_0 = {_ci(c, 'dJ_0', 1e3)} g m^2, kappa_big = {_ci(c, 'kappa_big')} (94 %).",
+        f"- **Lack of fit:** with identical flywheels the control's b's miss the structure by chi2 {same:.0f} on "
+        "nine settings: the small flywheels' increments differ more than the records' precision allows. Giving "
+        "each flywheel its own inertia has more terms than there are settings, so it fits any nine b's "
+        f"(posterior predictive p {c.ppc:.2f}); what it says is the spread it needs: the small flywheels' "
+        f"inertias differ by {_ci(c, 'j_small_spread', 100, '{:.2f}')} % (sd), against the "
+        f"{100 * priors.J_each_sd:.0f} % assumed for their manufacture, so Table 2's increments ask slightly more "
+        f"of the flywheels than the prior allows. kappa_small = {_ci(c, 'kappa_small')}.",
+        f"- **Paper-like device:** its honest intervals are wide enough that the explanations from kappa_big on fit "
+        f"them (chi2 {by[('paper-like', names[3])]['chi2']:.1f} with kappa_big, p {pl.ppc:.2f} as built); "
+        f"kappa_big = {_ci(pl, 'kappa_big')}, dJ_0 = {_ci(pl, 'dJ_0', 1e3)} g m^2. Its A0 interval misses the "
+        "generating b (the headline's limitation), and the structure, pulled by the other settings, moves A0 "
+        "towards it.",
+    ]
+    if "control (posterior HDI)" in agree:
+        a = agree["control (posterior HDI)"]
+        b = agree.get("paper-like (honest, identified records)")
+        lines.append(
+            "- **A flywheel on a compliant hub** would turn differently at higher frequency, so the flywheels' "
+            "shares of b would move with the drive frequency. Fitted at each frequency alone, they agree across "
+            f"0.5, 1 and 1.5 Hz (control: p {a['b_per_small_p']:.2f} per small, {a['b_per_big_p']:.2f} per big"
+            + (f"; paper-like: {b['b_per_small_p']:.2f}, {b['b_per_big_p']:.2f}" if b else "") + "). Both devices "
+            "were generated without such a hub, so this shows the test raises no false alarm here, not what the "
+            "paper's device does: the paper gives one b per setting, which cannot answer it; a user's records at "
+            "several frequencies can (`study.structure.frequency_shares`).")
+    lines += ["", "![Fig. 9 with the structural fit](structure.png)", ""]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
