@@ -293,6 +293,7 @@ def test_regularised_solver_converges_to_exact_kernel():
     assert errs[1] < errs[0] / 3
 
 
+@pytest.mark.slow  # 16 s: the stiff solver on extreme draws; the quick subset keeps the kernel's own sweeps
 @settings(max_examples=8, deadline=None)
 @given(
     st.sampled_from(sorted(NETWORKS)),

@@ -73,3 +73,18 @@ def test_earlier_fits_are_reused_and_a_failure_does_not_stop_the_others(tmp_path
     assert got["a"]["made"] == "before" and got["b"]["made"] == "now" and got["b"]["seed"] == 1
     assert "the simulation gave up" in got["bad"]["error"]
     assert sorted(heard) == ["b", "bad"]
+
+
+def test_identify_one_fits_a_record_and_keeps_what_a_rerun_checks(tmp_path):
+    from bayes_inerter.records import write_record
+    from bayes_inerter.records.generator import GeneratorSettings, paper_record
+
+    path = tmp_path / "A3_1.5Hz.csv"
+    write_record(path, paper_record("A3", 1.5, settings=GeneratorSettings(duration=3.0, ramp=0.8), seed=0))
+    got = ls_mod.identify_one(str(path), str(tmp_path / "A3.json"), starts=1, seed=3)
+    assert json.loads((tmp_path / "A3.json").read_text()) == got
+    assert (got["record"], got["starts"], got["seed"], got["interval"]) == ("A3_1.5Hz.csv", 1, 3, "hessian")
+    lo, hi = got["b_interval"]
+    assert lo < got["b"] < hi and got["b"] == pytest.approx(SETTINGS["A3"].b_paper, rel=0.02)
+    assert ls_mod._earlier(tmp_path / "A3.json", str(path), 1, 3) == got
+    assert ls_mod._earlier(tmp_path / "A3.json", str(path), 4, 3) is None
