@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bayes_inerter.study.analysis import write_csv
+
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = {"control": ROOT / "results" / "full" / "least_squares.csv",
            "paper-like": ROOT / "results" / "full" / "paper-like" / "least_squares.csv"}
@@ -64,12 +66,7 @@ def main() -> int:
         for f in sorted({r["freq_hz"] for r in rows}):
             table.append(_summary(device, [r for r in rows if r["freq_hz"] == f], f"{f:g}"))
         table.append(_summary(device, rows, "all"))
-    OUT.mkdir(parents=True, exist_ok=True)
-    with open(OUT / "summary.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(table[0]))
-        w.writeheader()
-        for r in table:
-            w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()})
+    write_csv(OUT / "summary.csv", table)
     import matplotlib
 
     matplotlib.use("Agg")
