@@ -11,7 +11,7 @@ from scipy import integrate
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
 from bayes_inerter.inference.coordinates import default_coordinates
-from bayes_inerter.inference.fit import fit_joint
+from bayes_inerter.inference.fit import ALL_DRAWS_FILE, fit_joint
 from bayes_inerter.inference.joint import JointModel, ar1_marginal
 from bayes_inerter.inference.identity import run_identity
 from bayes_inerter.records import GeneratorSettings, generate_record
@@ -125,8 +125,11 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     names = [r["name"] for r in res.summary]
     assert names[:2] == ["b_A0", "b_A2"] and "phi" in names
     assert {"b_app_A0", "b_app_A2"} <= set(names)  # the inertance each setting shows through the nut
-    again = fit_joint(records, tmp_path / "joint", centres=centres, steps=9, plots=False)
+    again = fit_joint(records, tmp_path / "joint", centres=centres, steps=9, plots=False, all_draws=True)
     assert again.iterations == 9  # continued the checkpoint, not started over
+    with np.load(tmp_path / "joint" / ALL_DRAWS_FILE) as every:  # every sampled parameter, b's as b_draws.npz's
+        assert set(every.files) == set(JointModel(tuple(records)).names)
+        assert np.array_equal(every["b_A0"], again.draws["b_A0"])
     # the sampling time of the chain adds up over the two runs that built it
     assert again.timings["sampling_all_runs"] == pytest.approx(res.timings["sampling"] + again.timings["sampling"])
     assert again.timings["steps_timed"] == 9

@@ -48,7 +48,7 @@ def test_the_explanations_find_the_structure_that_made_the_b_s():
 
 
 def test_the_posterior_holds_the_terms_and_the_b_s_obey_the_structure():
-    fit = fit_structure(_identified(_made()), seed=1, steps=2500, burn=800)
+    fit = fit_structure(_identified(_made()), seed=1, steps=1500, burn=500)
     gain = (2 * math.pi / 0.0201) ** 2
     lo, hi = np.percentile(fit.terms["b_per_big"], [3, 97])
     assert lo < gain * 0.9 * DEFAULT_GEOMETRY.J_big < hi

@@ -30,12 +30,15 @@ from .optimize import laplace_covariance
 from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
 from .sampler import Adaptation, Convergence, check_run_options, run_sampler
 
-__all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions", "DRAWS_FILE"]
+__all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions", "DRAWS_FILE",
+           "ALL_DRAWS_FILE"]
 
 #: The joint model's kept draws of each b (``b_<setting>``: walkers x draws), numpy's npz:
 #: what the study's regression per flywheel needs, kept beside the summary because the
 #: chain itself is too large to keep with the results.
 DRAWS_FILE = "b_draws.npz"
+#: Every sampled parameter's kept draws of a joint fit, by name (``fit_joint(all_draws=True)``).
+ALL_DRAWS_FILE = "draws.npz"
 
 
 @dataclass
@@ -188,11 +191,13 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
               steps: int | None = None, seed: int = 0, processes: int = 1, likelihood: LikelihoodSettings | None = None,
               priors: dict | None = None, convergence: Convergence | None = None, progress=None, report=None,
               plots: bool = True, coordinates: str = "impedance",
-              adaptation: Adaptation | None = Adaptation()) -> FitResult:
+              adaptation: Adaptation | None = Adaptation(), all_draws: bool = False) -> FitResult:
     """Sample the joint posterior of several records (``joint.JointModel``: shared
     frictions and deformations, one b per flywheel setting) into ``out``: chain.h5,
     summary.csv, fit.json, b_draws.npz (``DRAWS_FILE``), corner.png (the b's), trace.png.
-    ``model``: each record's model (``JointModel.model``).
+    ``model``: each record's model (``JointModel.model``). ``all_draws``: also write
+    every sampled parameter's kept draws, by name, to ``ALL_DRAWS_FILE`` (what a
+    prediction of another record needs; megabytes for a study's 27 records).
 
     ``centres``: one dict of single-record posterior centres (sampled values by name) per
     record; the run starts from the joint optimum that Nelder-Mead, restarted while it
@@ -231,6 +236,8 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
         nb = len(jm.settings)
         draws = {name: sample.values[:, :, i] for i, name in enumerate(jm.names[:nb])}
         np.savez_compressed(out / DRAWS_FILE, **draws)
+        if all_draws:
+            np.savez_compressed(out / ALL_DRAWS_FILE, **{n: sample.values[:, :, i] for i, n in enumerate(jm.names)})
         if plots:
             _write_joint_plots(out, jm, sample)
         info = _run_info("joint", jm, got, seed, {"records": joint_records(jm), "record_model": model})
