@@ -16,7 +16,7 @@ def cmd_identify(args) -> int:
     from .records import load_record
 
     rec, device, masses = load_record(args, need_masses=True)  # refused here, before any work
-    if args.bootstrap and args.bootstrap < 20:
+    if args.bootstrap and args.bootstrap < 50:
         raise ValueError(f"--bootstrap {args.bootstrap} replicates are too few for a 94 % interval; give 50 or more")
     if args.out and Path(args.out).suffix.lower() != ".json":
         raise ValueError(f"--out {args.out}: give a .json file name")
