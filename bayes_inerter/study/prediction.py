@@ -5,8 +5,9 @@ A setting's records at two frequencies are fitted together (the joint model,
 ``inference.fit_joint(all_draws=True)``: one b, shared frictions and deformations); the
 third record's low-passed acceleration is then predicted from its own measured force,
 draw by draw. :func:`predict_record` gives the 94 % predictive band (each draw's
-simulation plus a normal noise draw whose sd is the fitted records' residual sd at the
-posterior median: **assumption**, the held-out record's noise is the fitted ones'),
+simulation plus a normal noise draw whose sd is the fitted records' residual sd about
+their median simulation: **assumption**, the held-out record's noise and misfit are, in
+m/s^2, the fitted ones'),
 how much of the held-out record (its likelihood window, low-passed) the band covers,
 and phi (eq. 5 on the low-passed record) of the median prediction.
 """
@@ -66,13 +67,15 @@ def _values(draws: dict, setting: str, i: int) -> dict:
     return got
 
 
-def residual_sd(models: list[PosteriorModel], values: dict) -> float:
-    """The root mean square of the low-passed residual over ``models``' windows at
-    ``values`` (the fitted records at the posterior median)."""
+def residual_sd(models: list[PosteriorModel], draws: dict, setting: str, picks) -> float:
+    """The root mean square over ``models``' windows (the fitted records) of the
+    low-passed residual of the median simulation over the draws ``picks``: the noise and
+    misfit the fit leaves where it was fitted."""
     sq, n = 0.0, 0
     for m in models:
         w = m.window
-        r = m.simulate_lp(_theta(m, values))[w] - m.measured_lp[w]
+        sims = np.array([m.simulate_lp(_theta(m, _values(draws, setting, int(i))))[w] for i in picks])
+        r = np.median(sims, axis=0) - m.measured_lp[w]
         sq, n = sq + float(np.sum(r * r)), n + len(w)
     return float(np.sqrt(sq / n))
 
@@ -88,9 +91,7 @@ def predict_record(held_out: PosteriorModel, fitted: list[PosteriorModel], draws
     picks = rng.choice(total, size=min(n_draws, total), replace=False)
     w = held_out.window
     sims = np.array([held_out.simulate_lp(_theta(held_out, _values(draws, setting, int(i))))[w] for i in picks])
-    median_values = {k: float(np.median(np.ravel(v))) for k, v in draws.items()}
-    median_values["b"] = median_values[f"b_{setting}"]
-    sd = residual_sd(fitted, median_values)
+    sd = residual_sd(fitted, draws, setting, picks)
     noisy = sims + sd * rng.standard_normal(sims.shape)
     q = [(1 - LEVEL) / 2, 0.5, (1 + LEVEL) / 2]
     lo, med, hi = np.quantile(noisy, q, axis=0)
