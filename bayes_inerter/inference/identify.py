@@ -136,9 +136,10 @@ def identify(model: PosteriorModel, *, starts: int = STARTS, seed: int = 0, inte
     lo, hi = bounds[: model.n_phys, 0], bounds[: model.n_phys, 1]
     noise = bounds[model.n_phys:].mean(axis=1)
     measured = np.asarray(model.record.accel, dtype=float)
-    fits = [_polish(model, x, measured, noise, lo, hi) for x in _starts(model, starts, rng, lo, hi)]
-    sse = [float(np.sum(_residual(model, x, measured, noise) ** 2)) for x in fits]
-    best = fits[int(np.argmin(sse))]
+    fits = [_least_squares(model, x, measured, noise, lo, hi) for x in _starts(model, starts, rng, lo, hi)]
+    sse = [2.0 * float(f.cost) for f in fits]  # least_squares' cost is half the sum of squares
+    chosen = fits[int(np.argmin(sse))]
+    best = chosen.x
     theta = np.concatenate([best, noise])
     w = model.window
     m = measured[w]
@@ -151,8 +152,7 @@ def identify(model: PosteriorModel, *, starts: int = STARTS, seed: int = 0, inte
         draws = tuple(_bootstrap_b(model, best, fitted, measured, noise, lo, hi, bootstrap, rng, blocks))
         b_interval = tuple(float(q) for q in np.quantile(draws, [(1 - level) / 2, (1 + level) / 2]))
     elif interval == "hessian":
-        jac = _least_squares(model, best, measured, noise, lo, hi).jac  # at the best point: no moves left
-        b_interval, why = _sandwich_interval(model, best, jac, measured[w] - fitted[w], blocks, level)
+        b_interval, why = _sandwich_interval(model, best, chosen.jac, measured[w] - fitted[w], blocks, level)
     return Identification({k: float(v) for k, v in values.items()}, phi,
                           model.phi(model.simulate_lp(theta)), min(sse), starts, b_interval,
                           level if interval else None, draws, interval, len(blocks), why)
