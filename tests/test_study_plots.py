@@ -12,9 +12,11 @@ from bayes_inerter.study.plots import (  # noqa: E402
     plot_coverage,
     plot_design,
     plot_inertance,
+    plot_least_squares,
     plot_models,
     plot_phi_map,
     plot_ranks,
+    plot_structure,
 )
 
 
@@ -131,4 +133,43 @@ def test_coverage_draws_into_the_given_figure():
     assert [ax.get_ylabel() for ax in fig.axes] == ["coverage of the central 50 % interval",
                                                     "coverage of the central 90 % interval"]
     assert fig.axes[1].get_legend().get_texts()[0].get_text() == "model-ar1 (50)"
+    plt.close(fig)
+
+
+def _ls_row(record, setting, freq, b_ls, truth=1000.0):
+    return {"record": record, "setting": setting, "freq_hz": freq, "b_ls": b_ls, "b_ls_3%": 0.9 * b_ls,
+            "b_ls_97%": 1.1 * b_ls, "phi_ls": 0.5, "b_post_mean": b_ls, "b_post_3%": 0.95 * b_ls,
+            "b_post_97%": 1.05 * b_ls, "phi_post": 0.8, "b_paper": truth, "phi_paper": 0.6, "b_truth": truth}
+
+
+def test_least_squares_figure_draws_each_record_and_goes_log_only_when_b_spreads():
+    near = [_ls_row("A3_1Hz", "A3", 1.0, 1010.0), _ls_row("A3_0.5Hz", "A3", 0.5, 980.0)]
+    fig = plot_least_squares(near)
+    ax, ax2 = fig.axes
+    assert ax.get_yscale() == "linear" and [t.get_text() for t in ax.get_xticklabels()] == ["A3 1", "A3 0.5"]
+    assert len(ax2.lines) == 3  # least squares, posterior, the diagonal
+    plt.close(fig)
+    far = near + [{"record": "odd", "setting": None, "freq_hz": None, "b_ls": 15000.0, "b_ls_3%": 13000.0,
+                   "b_ls_97%": 17000.0, "b_truth": 1000.0}]
+    fig = plot_least_squares(far)
+    assert fig.axes[0].get_yscale() == "log" and fig.axes[0].get_xticklabels()[-1].get_text() == "odd"
+    plt.close(fig)
+
+
+def test_structure_figure_draws_identified_and_fitted_b_per_setting():
+    from bayes_inerter.study.structure import Identified, StructureFit, StructurePriors
+
+    settings = ("A0", "A3", "B2")
+    b = np.array([750.0, 3500.0, 20000.0])
+    ident = Identified(settings, np.log(b), np.diag([1e-4] * 3), "test")
+    fit = StructureFit(ident, StructurePriors(), {}, {s: np.full(50, v) for s, v in zip(settings, b)},
+                       np.zeros(50), 0.5, 0.3, 10.0)
+    fig = plot_structure({"control": fit})
+    ax, ax2 = fig.axes
+    assert [t.get_text() for t in ax.get_xticklabels()] == list(settings)
+    # right panel: over the theory; the structural fit's markers at b / theory
+    from bayes_inerter import theoretical_inertance
+
+    fitted = [c for c in ax2.containers if c.get_label() == "structural fit, control"][0]
+    assert np.allclose(fitted.lines[0].get_ydata(), b / [theoretical_inertance(s) for s in settings])
     plt.close(fig)

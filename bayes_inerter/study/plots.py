@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..device import FREQUENCIES_HZ, SETTINGS
-from .analysis import is_joint
+from .analysis import Z94, is_joint
 
 __all__ = ["plot_inertance", "plot_least_squares", "plot_structure", "plot_phi_map", "plot_models", "plot_design", "plot_ranks", "plot_coverage"]
 
@@ -165,7 +165,7 @@ def plot_structure(fits: dict, *, fig=None):
         dx = (i - (len(fits) - 1) / 2) * 0.25
         idx = [names.index(s) for s in fit.identified.settings]
         ident, sd = fit.identified.mean, fit.identified.sd
-        lo, hi = np.exp(ident - 1.8808 * sd), np.exp(ident + 1.8808 * sd)
+        lo, hi = np.exp(ident - Z94 * sd), np.exp(ident + Z94 * sd)
         band = np.array([np.percentile(fit.b[s], [3, 50, 97]) for s in fit.identified.settings])
         for a, scale in ((ax, np.ones(len(names))), (ax2, theory)):
             sc = scale[idx]

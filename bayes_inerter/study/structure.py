@@ -37,12 +37,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..device import DEFAULT_GEOMETRY, SETTINGS
+from .analysis import Z94
 
 __all__ = ["StructurePriors", "Identified", "StructureFit", "identified_from_draws", "identified_from_intervals",
            "fit_structure", "explanations", "frequency_shares", "EXPLANATIONS", "TERMS"]
 
-#: Half-width of a central 94 % normal interval, in sd.
-Z94 = 1.880793608151251
 #: How many of each kind of flywheel the settings use at most.
 N_SMALL = max(s.n_small for s in SETTINGS.values())
 N_BIG = max(s.n_big for s in SETTINGS.values())
