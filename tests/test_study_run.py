@@ -20,7 +20,7 @@ TINY = GeneratorSettings(duration=2.0, ramp=0.6)
 
 def tiny_plan(**changes):
     settings = dict(settings=("A0", "A2"), frequencies=(1.0,), steps=8, generator=TINY, comparison=(("A2",), (1.0,)),
-                    joint=True, joint_steps=6, identify=True)
+                    joint=True, joint_steps=6)
     return quick_plan(**{**settings, **changes})
 
 
@@ -40,7 +40,7 @@ def study(tmp_path_factory):
     out = tmp_path_factory.mktemp("study")
     with pytest.MonkeyPatch.context() as mp:  # the worker processes are forked from here
         mp.setattr(least_squares_module, "identify_one", _quick_identify)
-        return run_study(tiny_plan(), out, processes=2)
+        return run_study(tiny_plan(identify=True), out, processes=2)
 
 
 def report_head(out):
