@@ -10,41 +10,79 @@ __all__ = ["cmd_identify"]
 
 
 def cmd_identify(args) -> int:
+    from ..inference.end_state import PHI_WARNING
     from ..inference.identify import identify
     from ..inference.model import PosteriorModel
-    from . import EXIT_OK
+    from ..inference.plots import UNITS
+    from . import EXIT_OK, CliError
     from .records import load_record
 
     rec, device, masses = load_record(args, need_masses=True)  # refused here, before any work
     if args.bootstrap and args.bootstrap < 50:
-        raise ValueError(f"--bootstrap {args.bootstrap} replicates are too few for a 94 % interval; give 50 or more")
-    if args.out and Path(args.out).suffix.lower() != ".json":
-        raise ValueError(f"--out {args.out}: give a .json file name")
+        raise CliError(f"--bootstrap {args.bootstrap} replicates are too few for a 94 % interval; give 50 or more")
+    if args.seed < 0:
+        raise CliError(f"--seed {args.seed}: give a whole number of 0 or more")
+    if args.out:
+        _check_writable(Path(args.out))
     print(f"masses: {masses.describe()}", flush=True)
     model = PosteriorModel(rec, args.model, m_s=masses.m_s, m_B=masses.m_B)
-    how = f"bootstrap over cycles, {args.bootstrap} refits" if args.bootstrap else "Hessian, cycle-clustered"
-    print(f"least squares from {args.starts} starts; b's interval: {how} ...", flush=True)
+    how = (f"a bootstrap over drive cycles, {args.bootstrap} refits" if args.bootstrap
+           else "the least-squares Jacobian, clustered over drive cycles")
+    print(f"least squares from {args.starts} starts; b's interval from {how} ...", flush=True)
     got = identify(model, starts=args.starts, seed=args.seed, bootstrap=args.bootstrap)
     if got.b_interval is not None:
         lo, hi = got.b_interval
+        source = "bootstrap refits" if got.interval == "bootstrap" else "the Jacobian"
         print(f"b = {got.b:.6g} kg (least squares; {got.level * 100:.0f} % interval {lo:.6g} to {hi:.6g}, "
-              f"{got.interval} over {got.cycles} drive cycles)")
+              f"from {source} over {got.cycles} drive cycles)")
     else:
         print(f"b = {got.b:.6g} kg (least squares; no interval: {got.why})")
-    print(f"phi = {got.phi:.2%} (eq. 5 on the record as measured; {got.phi_filtered:.2%} on the low-passed one)")
+    print(f"phi = {got.phi:.2%}: the fit accuracy of eq. 5, 1 - |a_fit - a| / |a - mean a|, on the record as "
+          f"measured ({got.phi_filtered:.2%} on the low-passed one)")
     if device is not None and device.theoretical_inertance is not None:
         theory = device.theoretical_inertance
         print(f"theory (device file geometry): b = {theory:.6g} kg ({(got.b - theory) / theory:+.1%} identified)")
-    print("parameters: " + ", ".join(f"{k} {v:.4g}" for k, v in got.values.items()))
+    print("parameters: " + ", ".join(f"{k} {v:.4g}{_unit(k, UNITS)}" for k, v in got.values.items()))
+    print("  (f_0, c_f: the frictions' sums, f_share, c_share: the plate's shares of them; f1_0, c_f1 the plate's, "
+          "f2_0, c_f2 the rotation's; b_app: the inertance seen through the nut; docs/inference.md)")
+    if not got.phi_filtered >= PHI_WARNING:
+        print(f"warning: the model reproduces {got.phi_filtered:.0%} of the low-passed record (below "
+              f"{PHI_WARNING:.0%}): friction and what the model lacks can pose as inertance, so b may be far off "
+              "whatever its interval says; bayes-inerter fit reports such a record's b as not identified")
+    for name in got.at_bounds:
+        print(f"warning: {name} ended on a bound of its prior; the least-squares point is not an optimum there "
+              "and b may move with it")
     print("note: a point estimate and how far the record's own noise and misfit move it; "
           "bayes-inerter fit gives the posterior and the honest interval")
     if args.out:
         info = {"record": str(args.record), "model": args.model, "b": got.b, "b_interval": got.b_interval,
                 "level": got.level, "interval": got.interval, "cycles": got.cycles, "why_no_interval": got.why,
                 "phi": got.phi, "phi_filtered": got.phi_filtered, "sse": got.sse, "starts": got.starts,
-                "seed": args.seed, "values": got.values, "b_draws": list(got.b_draws),
-                "masses": {"m_s": masses.m_s, "m_B": masses.m_B}}
-        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+                "seed": args.seed, "values": got.values, "at_bounds": list(got.at_bounds),
+                "b_draws": list(got.b_draws), "masses": {"m_s": masses.m_s, "m_B": masses.m_B}}
         Path(args.out).write_text(json.dumps(info, indent=2) + "\n")
         print(f"wrote {args.out}")
     return EXIT_OK
+
+
+def _unit(name: str, units: dict) -> str:
+    if name in units or name == "b_app":
+        return " " + units.get(name, "kg")
+    return ""  # a share: a fraction
+
+
+def _check_writable(path: Path) -> None:
+    """Refuse an --out that cannot be written, before the fit (which takes seconds)."""
+    from . import CliError
+
+    if path.suffix.lower() != ".json":
+        raise CliError(f"--out {path}: give a .json file name")
+    import os
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CliError(f"--out {path}: cannot make its folder ({exc.strerror}); give a file in a folder you can "
+                       "write to") from None
+    if path.is_dir() or not os.access(path.parent, os.W_OK):
+        raise CliError(f"--out {path}: cannot write there; give a file in a folder you can write to")

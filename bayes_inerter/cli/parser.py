@@ -163,7 +163,7 @@ def _add_identify(sub) -> argparse.ArgumentParser:
 def _add_study(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("study", help="posteriors of many records, theory against identification, a report")
     p.add_argument("--quick", action="store_true",
-                   help="the quick study: 3 settings at 1 Hz, short chains (minutes, not converged)")
+                   help="the quick study: 3 settings at 1 Hz, short chains (about a minute, not converged)")
     p.add_argument("--out", help="output folder (default runs/quick or runs/full); finished fits there are reused")
     p.add_argument("--skip-check", action="append", default=[], choices=RECORD_CHECKS, metavar="CHECK",
                    help="with --records: skip a physical-sense check of your records")

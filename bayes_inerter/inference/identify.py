@@ -64,7 +64,8 @@ class Identification:
     unfiltered record; ``phi_filtered``: the same on the likelihood's low-passed
     signals; ``b_interval``: b's ``level`` interval made by ``interval`` (None where
     none could be made, ``why`` then says why); ``b_draws``: the bootstrap's b's;
-    ``cycles``: the whole drive cycles the interval used.
+    ``cycles``: the whole drive cycles the interval used; ``at_bounds``: the parameters
+    whose least-squares value lies on a bound of their prior (the fit would go further).
     """
 
     values: dict
@@ -78,6 +79,7 @@ class Identification:
     interval: str | None = None
     cycles: int = 0
     why: str = ""
+    at_bounds: tuple = ()
 
     @property
     def b(self) -> float:
@@ -123,6 +125,8 @@ def identify(model: PosteriorModel, *, starts: int = STARTS, seed: int = 0, inte
         raise ValueError(f"starts must be a whole number of at least 1, got {starts!r}")
     if not (isinstance(bootstrap, int) and bootstrap >= 0):
         raise ValueError(f"bootstrap replicates must be a whole number, got {bootstrap!r}")
+    if not (isinstance(seed, (int, np.integer)) and seed >= 0):
+        raise ValueError(f"the seed must be a whole number of 0 or more, got {seed!r}")
     if bootstrap:
         interval = "bootstrap"
     if interval is not None and interval not in INTERVALS:
@@ -153,9 +157,11 @@ def identify(model: PosteriorModel, *, starts: int = STARTS, seed: int = 0, inte
         b_interval = tuple(float(q) for q in np.quantile(draws, [(1 - level) / 2, (1 + level) / 2]))
     elif interval == "hessian":
         b_interval, why = _sandwich_interval(model, best, chosen.jac, measured[w] - fitted[w], blocks, level)
+    edge = 1e-6 * (hi - lo)
+    at_bounds = tuple(n for n, x, a, z, e in zip(model.names, best, lo, hi, edge) if x <= a + e or x >= z - e)
     return Identification({k: float(v) for k, v in values.items()}, phi,
                           model.phi(model.simulate_lp(theta)), min(sse), starts, b_interval,
-                          level if interval else None, draws, interval, len(blocks), why)
+                          level if interval else None, draws, interval, len(blocks), why, at_bounds)
 
 
 def _cycles(model: PosteriorModel, n: int) -> list[slice]:
