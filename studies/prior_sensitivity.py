@@ -141,7 +141,7 @@ def _section(rows) -> str:
         r["device"], r["record"], "default"))["b_mean"] - 1) for r in rows if r["prior"] != "default"]
     held = [x["holds b"] for x in shown]
     honest = [x["honest holds b"] for x in shown if x["honest holds b"] is not None]
-    lines += [f"The posterior mean of b moves by at most {100 * max(moved):.2f} % between priors (median "
+    lines += [f"The posterior mean of b moves by at most {100 * max(moved):.2f} % from the default priors (median "
               f"{100 * float(sorted(moved)[len(moved) // 2]):.2f} %). The posterior's 94 % interval holds the "
               f"generating b in {sum(held)} of {len(held)} fits, the honest interval in {sum(honest)} of "
               f"{len(honest)} where it identifies b.", "", table(shown, list(shown[0])), "",
