@@ -1,6 +1,18 @@
 import numpy as np
 import pytest
 
+#: Generations of the sampler's start search in the tests: twenty, where the package's
+#: default (``optimize.DE_MAXITER``) is forty. The tests check what the pipeline does with
+#: a start, not how good the start is (tests/test_inference_optimize.py checks that with
+#: its own settings); forty would add about a minute to the quick subset.
+TEST_DE_MAXITER = 20
+
+
+def pytest_configure(config):
+    from bayes_inerter.inference import optimize
+
+    optimize.DE_MAXITER = TEST_DE_MAXITER  # read at call time; forked workers inherit it
+
 
 def inverse_dynamics_force(params, freq, *, amplitude=0.01, duration=3.0, fs=1000.0, ramp=1.0):
     """A force record that drives the rigid device roughly through a sinusoid.
