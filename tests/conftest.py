@@ -6,16 +6,11 @@ import pytest
 #: a start, not how good the start is (tests/test_inference_optimize.py checks that with
 #: its own settings); forty would add about a minute to the quick subset.
 TEST_DE_MAXITER = 20
-#: The package's own, kept for a test that compares with a run in a fresh interpreter
-#: (a command run as a subprocess does not read this file).
-PACKAGE_DE_MAXITER = None
 
 
 def pytest_configure(config):
-    global PACKAGE_DE_MAXITER
     from bayes_inerter.inference import optimize
 
-    PACKAGE_DE_MAXITER = optimize.DE_MAXITER
     optimize.DE_MAXITER = TEST_DE_MAXITER  # read at call time; forked workers inherit it
 
 

@@ -11,6 +11,7 @@ import emcee
 import h5py
 import numpy as np
 import pytest
+from conftest import TEST_DE_MAXITER
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.cli import main
@@ -119,6 +120,14 @@ def test_same_seed_same_summary(tmp_path, record_file):
 
 
 
+#: The command line in a process of its own, as ``python -m bayes_inerter.cli`` runs it,
+#: with the tests' start search (conftest's TEST_DE_MAXITER: a fresh interpreter does not
+#: read conftest), so a killed command's chain can be compared with one run here.
+COMMAND = [sys.executable, "-c",
+           "import sys; from bayes_inerter.inference import optimize; "
+           f"optimize.DE_MAXITER = {TEST_DE_MAXITER}; "
+           "from bayes_inerter.cli import main; sys.exit(main(sys.argv[1:]))"]
+
 #: The kill tests stop runs at a step count they watch in chain.h5: they write every step.
 EVERY_STEP = ("--checkpoint-seconds", "0")
 
@@ -147,14 +156,8 @@ def _finish_and_compare(cmd, chain_file, before, tmp_path, record_file) -> None:
     assert len(after) == steps
     np.testing.assert_array_equal(after[: len(before)], before)
     ref = tmp_path / "uninterrupted"
-    import conftest
-
-    from bayes_inerter.inference import optimize
-
-    with pytest.MonkeyPatch.context() as mp:  # the killed runs ran as commands: the package's own start search
-        mp.setattr(optimize, "DE_MAXITER", conftest.PACKAGE_DE_MAXITER)
-        assert main(["fit", str(record_file), "--out", str(ref), "--steps", str(steps), "--walkers", "24",
-                     "--processes", "1", "--no-plots", "--seed", "3"]) == 0
+    assert main(["fit", str(record_file), "--out", str(ref), "--steps", str(steps), "--walkers", "24",
+                 "--processes", "1", "--no-plots", "--seed", "3"]) == 0
     np.testing.assert_array_equal(_chain(ref / "chain.h5"), after)
 
 
@@ -162,7 +165,7 @@ def test_resume_after_sigkill(tmp_path, record_file):
     """Killed part-way and run again: exactly the requested steps, earlier steps kept, and
     the same chain as a run that was never interrupted."""
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
+    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out), *EVERY_STEP,
            "--steps", str(RESUME_STEPS), "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     _run_until_killed(cmd, out / "chain.h5", 8)
     before = read_chain(out / "chain.h5")
@@ -176,7 +179,7 @@ def test_resume_after_sigkill_with_steps_held_between_writes(tmp_path, record_fi
     last write are lost and taken again, and the finished chain is the uninterrupted one
     (whose run writes at the default interval)."""
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out),
+    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out),
            "--checkpoint-seconds", "0.02", "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     _run_until_killed(cmd, out / "chain.h5", 8)
     before = read_chain(out / "chain.h5")
@@ -190,7 +193,7 @@ def test_ctrl_c_on_worker_processes_ends_the_run_with_130_and_keeps_its_steps(tm
     run must stop (it used to wait for ever for a worker that died of it), say so with
     exit status 130, and leave a checkpoint that a second run continues."""
     out = tmp_path / "interrupted"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
+    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out), *EVERY_STEP,
            "--steps", "400", "--walkers", "24", "--processes", "2", "--seed", "3", "--no-plots"]
     # a test run in the background of a non-interactive shell (as CI may be) inherits
     # SIGINT ignored, and Python then never turns it into KeyboardInterrupt: give the
@@ -222,7 +225,7 @@ def test_resume_after_sigkill_several_times(tmp_path, record_file):
     """Killed three times in a row at random steps and run again: exactly the requested
     steps, every earlier step kept, and the same chain as a run never interrupted."""
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
+    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out), *EVERY_STEP,
            "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     chain_file = out / "chain.h5"
     before = None
@@ -242,7 +245,7 @@ def test_resume_after_many_kills_at_random_moments(tmp_path, record_file):
     after the run wrote a new step), run again each time: every intact step is kept and
     the finished chain is the uninterrupted one."""
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record_file), "--out", str(out), *EVERY_STEP,
+    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out), *EVERY_STEP,
            "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     chain_file = out / "chain.h5"
     rng = np.random.default_rng(7)

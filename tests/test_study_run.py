@@ -319,6 +319,7 @@ def test_report_answers_first_and_flags_its_limits(study):
     assert report.count("These intervals take the sensors' sensitivities as exact") == 1
 
 
+@pytest.mark.slow  # 7 s: per-fit figures drawn again; test_fit_writes_every_output draws them in the quick subset
 def test_report_command_draws_the_figures_again(study, capsys):
     fit = study.out / "fits" / "two-port" / "A0_1Hz"
     for png in fit.glob("*.png"):
