@@ -55,11 +55,8 @@ def cmd_identify(args) -> int:
     print("note: a point estimate and how far the record's own noise and misfit move it; "
           "bayes-inerter fit gives the posterior and the honest interval")
     if args.out:
-        info = {"record": str(args.record), "model": args.model, "b": got.b, "b_interval": got.b_interval,
-                "level": got.level, "interval": got.interval, "cycles": got.cycles, "why_no_interval": got.why,
-                "phi": got.phi, "phi_filtered": got.phi_filtered, "sse": got.sse, "starts": got.starts,
-                "seed": args.seed, "values": got.values, "at_bounds": list(got.at_bounds),
-                "b_draws": list(got.b_draws), "masses": {"m_s": masses.m_s, "m_B": masses.m_B}}
+        info = {"record": str(args.record), "model": args.model, "seed": args.seed, **got.as_dict(),
+                "masses": {"m_s": masses.m_s, "m_B": masses.m_B}}
         Path(args.out).write_text(json.dumps(info, indent=2) + "\n")
         print(f"wrote {args.out}")
     return EXIT_OK

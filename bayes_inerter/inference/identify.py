@@ -85,6 +85,13 @@ class Identification:
     def b(self) -> float:
         return float(self.values["b"])
 
+    def as_dict(self) -> dict:
+        """The fit as JSON takes it (what the command line and the study write)."""
+        return {"b": self.b, "b_interval": list(self.b_interval) if self.b_interval else None, "level": self.level,
+                "interval": self.interval, "cycles": self.cycles, "why_no_interval": self.why, "phi": self.phi,
+                "phi_filtered": self.phi_filtered, "sse": self.sse, "starts": self.starts, "values": self.values,
+                "at_bounds": list(self.at_bounds), "b_draws": list(self.b_draws)}
+
 
 def _residual(model: PosteriorModel, phys, target: np.ndarray, noise: np.ndarray) -> np.ndarray:
     theta = np.concatenate([phys, noise])
@@ -185,9 +192,10 @@ def _sandwich_interval(model: PosteriorModel, best, jac, resid, blocks, level):
     a = js.T @ js
     if np.linalg.cond(a) > MAX_CONDITION:
         return None, "the record leaves a direction of the parameters flat at the least-squares point"
-    # each cycle's share of the estimate's move, x_b - x_b(true) ~ sum over cycles (in
-    # the columns' scaled coordinates, then back)
-    gains = [float(np.linalg.solve(a, js[c].T @ resid[c])[k] / scale[k]) for c in blocks]
+    # each cycle's share of the estimate's move, x_b - x_b(true) ~ sum over cycles of
+    # row' J_c' r_c, row = (J'J)^-1 e_b (in the columns' scaled coordinates, then back)
+    row = np.linalg.solve(a, np.eye(len(a))[k]) / scale[k]
+    gains = [float(row @ (js[c].T @ resid[c])) for c in blocks]
     n_c = len(blocks)
     sd = math.sqrt(n_c / (n_c - 1) * sum(v * v for v in gains))
     t = float(stats.t.ppf((1 + level) / 2, n_c - 1))

@@ -17,6 +17,7 @@ import json
 from pathlib import Path
 
 from ..device import SETTINGS
+from ..inference.identify import STARTS  # least-squares starts per record
 from .fits import RecordFit
 from .honest import record_interval
 
@@ -24,8 +25,6 @@ __all__ = ["FOLDER", "STARTS", "identify_one", "run_least_squares", "least_squar
 
 #: Where the fits are kept, under the study's folder.
 FOLDER = "least_squares"
-#: Least-squares starts per record (``inference.identify.STARTS``).
-STARTS = 4
 
 
 def identify_one(record: str, out: str, starts: int = STARTS, seed: int = 0) -> dict:
@@ -39,10 +38,7 @@ def identify_one(record: str, out: str, starts: int = STARTS, seed: int = 0) -> 
     rec = read_record(record)
     masses = resolve_masses(rec)
     got = identify(PosteriorModel(rec, m_s=masses.m_s, m_B=masses.m_B), starts=starts, seed=seed)
-    info = {"record": Path(record).name, "starts": starts, "seed": seed, "b": got.b,
-            "b_interval": list(got.b_interval) if got.b_interval else None, "level": got.level,
-            "interval": got.interval, "cycles": got.cycles, "why_no_interval": got.why, "phi": got.phi,
-            "phi_filtered": got.phi_filtered, "sse": got.sse, "values": got.values}
+    info = {"record": Path(record).name, "seed": seed, **got.as_dict()}
     Path(out).write_text(json.dumps(info, indent=2) + "\n")
     return info
 
