@@ -47,7 +47,7 @@ from ..inference.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
-__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_calibration", "coverage_table", "compare_calibrations"]
+__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "run_calibration", "coverage_table", "compare_calibrations"]
 
 _P = paper_parameters("A1")
 #: The calibration prior (see module docstring).
@@ -100,6 +100,9 @@ class CalibrationSettings:
 
     def model(self, record) -> PosteriorModel:
         return PosteriorModel(record, priors=SBC_PRIORS, likelihood=LikelihoodSettings(residual=self.residual))
+
+    def replicate(self, k: int) -> dict:
+        return replicate(self, k)
 
 
 def _draw(model: PosteriorModel, rng: np.random.Generator) -> np.ndarray:
@@ -170,7 +173,7 @@ def _replicate_file(out: Path, k: int) -> Path:
 def _worker(args):
     cs, k, out = args
     try:
-        result = replicate(cs, k)
+        result = cs.replicate(k)
     except Exception as exc:  # one replicate's failure is reported, the others go on
         result = {"replicate": k, "error": f"{type(exc).__name__}: {exc}"}
     path = _replicate_file(out, k)
@@ -191,17 +194,18 @@ def _with_defaults(saved: dict, defaults: dict) -> dict:
     return out
 
 
-def run_calibration(cs: CalibrationSettings, out, replicates: int, *, processes: int = 1, progress=None) -> dict:
-    """Run ``replicates`` replicates into ``out`` (one JSON each; those already there are
-    reused) and write ranks.csv, coverage.csv, ranks.png and REPORT.md."""
-    from ..inference.fit import check_output_folder, versions
+def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=None) -> list[dict]:
+    """Run replicates 0..``replicates``-1 of ``cs`` (any frozen settings dataclass with a
+    ``replicate(k)`` method) into ``out``/replicates, one JSON each, those already there
+    reused, and return them all in order. A replicate that raised holds ``error``."""
+    from ..inference.fit import check_output_folder
 
     out = Path(out)
     check_output_folder(out)
     (out / "replicates").mkdir(parents=True, exist_ok=True)
     settings_file = out / "settings.json"
     mine = json.loads(json.dumps(asdict(cs), default=str))
-    defaults = json.loads(json.dumps(asdict(CalibrationSettings()), default=str))
+    defaults = json.loads(json.dumps(asdict(type(cs)()), default=str))
     if settings_file.exists() and _with_defaults(json.loads(settings_file.read_text()), defaults) != mine:
         raise ValueError(f"{out} holds replicates of other calibration settings; choose another output folder")
     settings_file.write_text(json.dumps(mine, indent=2) + "\n")
@@ -217,8 +221,16 @@ def run_calibration(cs: CalibrationSettings, out, replicates: int, *, processes:
             done += 1
             if progress:
                 progress(done, replicates)
-    results = [json.loads(_replicate_file(out, k).read_text()) for k in range(replicates)]
-    return write_calibration(out, cs, results, versions())
+    return [json.loads(_replicate_file(out, k).read_text()) for k in range(replicates)]
+
+
+def run_calibration(cs: CalibrationSettings, out, replicates: int, *, processes: int = 1, progress=None) -> dict:
+    """Run ``replicates`` replicates into ``out`` (one JSON each; those already there are
+    reused) and write ranks.csv, coverage.csv, ranks.png and REPORT.md."""
+    from ..inference.fit import versions
+
+    results = run_replicates(cs, out, replicates, processes=processes, progress=progress)
+    return write_calibration(Path(out), cs, results, versions())
 
 
 def coverage_table(results: list[dict]) -> list[dict]:
