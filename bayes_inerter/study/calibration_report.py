@@ -6,9 +6,11 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
+
 from .markdown import table as markdown_table  # a report's argument is called table
 
-__all__ = ["calibration_report", "calibration_comparison"]
+__all__ = ["calibration_report", "calibration_comparison", "study_calibration_report"]
 
 
 def calibration_report(out: Path, cs, table: list[dict], n_ok: int, failed: list[dict], versions: dict) -> Path:
@@ -70,3 +72,70 @@ def calibration_comparison(root: Path, cases: dict) -> Path:
     path = Path(root) / "REPORT.md"
     path.write_text("\n".join(lines))
     return path
+
+
+def _off(row: dict, key: str, q: int) -> str:
+    """'low'/'high' where the coverage lies more than 2 se from nominal, else ''."""
+    got, se = row[f"{key}_{q}"], row[f"se_{q}"]
+    return "" if abs(got - q / 100) <= 2 * se else ("low" if got < q / 100 else "high")
+
+
+def study_calibration_report(out: Path, cs, rows: list[dict], results: list[dict], versions: dict, *,
+                             long_enough: int) -> tuple[Path, Path]:
+    """``out``/REPORT.md and ``out``/SECTION.md of a calibration in the study's
+    configuration (``study.study_calibration``), written from its coverage rows and
+    replicates. Returns both paths."""
+    from .study_calibration import LEVELS, STUDY_SBC_PRIORS
+
+    n = len(results)
+    failed = [r for r in results if "error" in r]
+    ok = [r for r in results if "ranks" in r]
+    levels = [round(100 * q) for q in LEVELS]
+    taus = [r["tau_max"] for r in ok if r.get("tau_max")]
+    head = (f"{n} replicates: {cs.describe()}. {len(failed)} failed"
+            + (" (" + "; ".join(f"{r['replicate']}: {r['error']}" for r in failed) + ")" if failed else "")
+            + "; a failed replicate counts as a miss at every level. "
+            + f"{long_enough} of {len(ok)} chains ran at least 50 times their longest autocorrelation time"
+            + (f" (median longest tau {np.median(taus):.0f} steps, largest {max(taus):.0f})" if taus else "")
+            + f"; {sum(r['redraws'] for r in ok)} prior draws were refused by the simulator and drawn again.")
+    verdict = []
+    if rows:
+        by = {r["parameter"]: r for r in rows}
+        b = by.get("b")
+        if b:
+            verdict.append("b's highest-density intervals hold the truth in "
+                           + " and ".join(f"{b[f'hdi_{q}']:.3f} of the replicates at {q} % (se {b[f'se_{q}']:.3f})"
+                                          for q in levels) + ".")
+        for q in levels:
+            off = [f"{r['parameter']} ({_off(r, 'hdi', q)}, {r[f'hdi_{q}']:.2f})" for r in rows if _off(r, "hdi", q)]
+            verdict.append(f"At {q} %, " + (f"more than 2 se from nominal: {', '.join(off)}." if off else
+                                           "every parameter lies within 2 se of nominal."))
+        bad = [r["parameter"] for r in rows if r["rank_chi2_p"] < 0.01]
+        verdict.append(f"Ranks not uniform (chi-square p < 0.01): {', '.join(bad)}." if bad else
+                       "No rank histogram departs from uniform at p < 0.01.")
+    cols = ["parameter", "replicates", "failed"] + [c for q in levels for c in (f"hdi_{q}", f"central_{q}", f"se_{q}")]
+    cols.append("rank_chi2_p")
+    fmt = {c: "{:.3f}" for c in cols[3:]}
+    table = markdown_table(rows, cols, fmt) if rows else "(no replicate ran)"
+    prior = "\n".join(f"- {name}: {p.describe()}" for name, p in STUDY_SBC_PRIORS.items())
+    report = ["# Simulation-based calibration in the study's configuration", "",
+              "**Question.** Do the intervals the study reports hold the truth as often as they say, where its "
+              "numbers come from: 10 s generator records, the joint model, the package's start and the 94 % "
+              "interval?", "", head, "", " ".join(verdict), "",
+              "Columns: `hdi_<q>` is the coverage of the highest-density interval the study reports, `central_<q>` "
+              "of the equal-tailed one, `se_<q>` the binomial standard error at the nominal level.", "",
+              table, "", "![coverage](coverage.png)", "", "![ranks](ranks.png)", "",
+              "The prior each device is drawn from and fitted under:", "", prior, "",
+              "Versions: " + ", ".join(f"{k} {v}" for k, v in versions.items()) + ".", "",
+              f"Settings: `{cs!r}`", ""]
+    section = ["## Calibration in the study's configuration", "",
+               "Simulation-based calibration where the study's numbers come from (results/study-calibration): "
+               "devices drawn from a wide physical prior, 10 s generator records, the joint model and the package's "
+               "start, the 94 % and 50 % intervals checked directly. " + head, "", " ".join(verdict), "",
+               markdown_table(rows, ["parameter"] + [f"hdi_{q}" for q in levels] + ["rank_chi2_p"],
+                              {c: "{:.3f}" for c in [f"hdi_{q}" for q in levels] + ["rank_chi2_p"]})
+               if rows else "", "", "![coverage](coverage.png)", ""]
+    path, spath = Path(out) / "REPORT.md", Path(out) / "SECTION.md"
+    path.write_text("\n".join(report))
+    spath.write_text("\n".join(section))
+    return path, spath

@@ -321,17 +321,18 @@ def plot_ranks(ranks: dict, L: int, *, bins: int = 10, title: str = "", fig=None
     return fig
 
 
-def plot_coverage(cases: dict, *, fig=None):
-    """Coverage of the 50 % and 90 % intervals per parameter, one marker per calibration
-    case, with bars of 2 binomial se (at the nominal level) around each. ``fig``: draw
-    the two panels into this (empty) figure."""
+def plot_coverage(cases: dict, *, levels=(50, 90), interval: str = "central", fig=None):
+    """Coverage of the ``levels`` (per cent) intervals per parameter, one marker per
+    calibration case (rows with ``coverage_<q>`` and ``se_<q>``), with bars of 2 binomial
+    se (at the nominal level) around each. ``interval`` names the intervals in the
+    labels. ``fig``: draw the panels into this (empty) figure."""
     names = []
     for rows in cases.values():
         names += [r["parameter"] for r in rows if r["parameter"] not in names]
     fig, made = _figure(fig, (12, 4.2))
-    axes = fig.subplots(1, 2, sharey=False)
+    axes = fig.subplots(1, len(levels), sharey=False, squeeze=False)[0]
     width = 0.8 / max(len(cases), 1)
-    for ax, q in zip(axes, (50, 90)):
+    for ax, q in zip(axes, levels):
         for j, (case, rows) in enumerate(cases.items()):
             by = {r["parameter"]: r for r in rows}
             x = [i - 0.4 + width * (j + 0.5) for i, n in enumerate(names) if n in by]
@@ -341,10 +342,10 @@ def plot_coverage(cases: dict, *, fig=None):
         ax.axhline(q / 100, color="k", lw=1)
         ax.set_xticks(range(len(names)))
         ax.set_xticklabels(names, rotation=45, ha="right")
-        ax.set_ylabel(f"coverage of the central {q} % interval")
+        ax.set_ylabel(f"coverage of the {interval} {q} % interval")
         ax.set_title(f"{q} % intervals (bars: 2 binomial se)")
         ax.grid(alpha=0.3)
-    axes[1].legend(fontsize=8, loc="lower left")
+    axes[-1].legend(fontsize=8, loc="lower left")
     if made:
         fig.tight_layout()
     return fig

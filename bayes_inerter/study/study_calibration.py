@@ -52,7 +52,8 @@ from ..inference.priors import LogUniform, Uniform
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
-__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "study_replicate", "coverage_rows", "hdi"]
+__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "study_replicate", "coverage_rows", "hdi",
+           "chains_long_enough", "write_study_calibration", "run_study_calibration"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -206,3 +207,58 @@ def coverage_rows(results: list[dict]) -> list[dict]:
         row["rank_chi2_p"] = float(stats.chisquare(counts).pvalue)
         rows.append(row)
     return rows
+
+
+def chains_long_enough(results: list[dict], factor: float = 50.0) -> int:
+    """How many replicates ran a chain of at least ``factor`` times its longest
+    autocorrelation time (emcee's rule of thumb, the study's convergence rule's first
+    part)."""
+    return sum(1 for r in results if r.get("tau_max") and r["iterations"] >= factor * r["tau_max"])
+
+
+def write_study_calibration(out, cs: StudyCalibration, results: list[dict], versions: dict) -> dict:
+    """``out``/coverage.csv, ranks.csv, coverage.png, ranks.png, REPORT.md and
+    SECTION.md (the report's summary for results/full/REPORT.md) from the replicates."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .analysis import write_csv
+    from .calibration_report import study_calibration_report
+    from .plots import plot_coverage, plot_ranks
+
+    out = Path(out)
+    ok = [r for r in results if "ranks" in r]
+    rows = coverage_rows(results)
+    write_csv(out / "coverage.csv", rows)
+    write_csv(out / "ranks.csv", [{"replicate": r["replicate"], **r["ranks"], "iterations": r["iterations"],
+                                    "tau_max": r["tau_max"], "redraws": r["redraws"]} for r in ok])
+    if ok:
+        names = list(ok[0]["ranks"])
+        fig = plot_ranks({n: [r["ranks"][n] for r in ok] for n in names}, ok[0]["L"],
+                         title=f"SBC in the study's configuration: rank histograms, {len(ok)} replicates")
+        fig.savefig(out / "ranks.png", dpi=90)
+        plt.close(fig)
+        levels = [round(100 * q) for q in LEVELS]
+        cases = {kind: [{"parameter": r["parameter"], "replicates": r["replicates"],
+                         **{f"coverage_{q}": r[f"{key}_{q}"] for q in levels},
+                         **{f"se_{q}": r[f"se_{q}"] for q in levels}} for r in rows]
+                 for kind, key in (("highest density", "hdi"), ("equal-tailed", "central"))}
+        fig = plot_coverage(cases, levels=levels, interval="highest-density or equal-tailed")
+        fig.savefig(out / "coverage.png", dpi=90)
+        plt.close(fig)
+    report, section = study_calibration_report(out, cs, rows, results, versions,
+                                               long_enough=chains_long_enough(results))
+    return {"coverage": rows, "replicates": len(results), "failed": [r for r in results if "error" in r],
+            "report": report, "section": section}
+
+
+def run_study_calibration(cs: StudyCalibration, out, replicates: int, *, processes: int = 1, progress=None) -> dict:
+    """Run ``replicates`` replicates into ``out`` (one JSON each; those already there are
+    reused) and write the tables, figures and reports (:func:`write_study_calibration`)."""
+    from ..inference.fit import versions
+    from .calibration import run_replicates
+
+    results = run_replicates(cs, out, replicates, processes=processes, progress=progress)
+    return write_study_calibration(out, cs, results, versions())

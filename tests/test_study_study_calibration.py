@@ -1,0 +1,84 @@
+"""Simulation-based calibration in the study's configuration: the interval, the counts
+(failed replicates are misses), the reports, and one real replicate (slow)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from bayes_inerter.records import GeneratorSettings
+from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
+                                                  coverage_rows, hdi, study_replicate, write_study_calibration)
+
+NAMES = ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B"]
+
+
+def test_hdi_is_arviz_highest_density_interval():
+    import arviz as az
+
+    x = np.random.default_rng(3).gamma(2.0, size=4001)  # skewed: the HDI is not the central interval
+    for level in (0.94, 0.5):
+        assert np.allclose(hdi(x, level), az.hdi(x, hdi_prob=level), rtol=0, atol=1e-12)
+    lo, hi = hdi(x, 0.5)
+    assert lo < np.quantile(x, 0.25)  # shifted towards the mode of a right-skewed law
+
+
+def test_the_prior_draws_the_paper_settings_inertances():
+    lo, hi = np.exp(STUDY_SBC_PRIORS["b"].bounds)
+    assert lo < 753.34 and 20287.0 < hi  # A0 and B2 of Table 2
+    assert list(STUDY_SBC_PRIORS) == NAMES
+
+
+def test_settings_are_checked():
+    with pytest.raises(ValueError, match="two drive frequencies"):
+        StudyCalibration(frequencies=(1.0,))
+    with pytest.raises(ValueError, match="steps"):
+        StudyCalibration(steps=5)
+    assert StudyCalibration(frequencies=[0.5, 1]).frequencies == (0.5, 1.0)
+
+
+def _fake(k, held: bool, rank=5, tau=10.0):
+    inside = {n: held for n in NAMES}
+    return {"replicate": k, "redraws": 0, "iterations": 600, "tau_max": tau, "L": 9, "kept": 100,
+            "truth": {n: 1.0 for n in NAMES}, "ranks": {n: rank for n in NAMES},
+            "hdi": {str(round(100 * q)): inside for q in LEVELS}, "central": {str(round(100 * q)): inside for q in LEVELS}}
+
+
+def test_a_failed_replicate_counts_as_a_miss():
+    results = [_fake(0, True), _fake(1, True), _fake(2, False), {"replicate": 3, "error": "RuntimeError: no"}]
+    rows = coverage_rows(results)
+    assert [r["parameter"] for r in rows] == NAMES
+    b = rows[0]
+    assert b["replicates"] == 4 and b["failed"] == 1
+    assert b["hdi_94"] == b["central_50"] == 0.5  # two of four: the failed one is not dropped
+    assert b["se_94"] == pytest.approx(np.sqrt(0.94 * 0.06 / 4))
+
+
+def test_chains_long_enough_counts_fifty_taus():
+    results = [_fake(0, True, tau=10.0), _fake(1, True, tau=13.0), {"replicate": 2, "error": "x"}]
+    assert chains_long_enough(results) == 1  # 600 >= 50 * 10, 600 < 50 * 13
+
+
+def test_reports_say_what_failed_and_what_missed(tmp_path):
+    results = [_fake(k, k % 5 != 0, rank=k % 10) for k in range(20)] + [{"replicate": 20, "error": "RuntimeError: boom"}]
+    got = write_study_calibration(tmp_path, StudyCalibration(), results, {"numpy": np.__version__})
+    for name in ("coverage.csv", "ranks.csv", "coverage.png", "ranks.png", "REPORT.md", "SECTION.md"):
+        assert (tmp_path / name).is_file()
+    text = got["report"].read_text()
+    assert "1 failed (20: RuntimeError: boom)" in text
+    assert "0.762 of the replicates at 94 %" in text  # 16 of 21 held b
+    assert "b (low, 0.76)" in text
+    assert got["section"].read_text().startswith("## Calibration in the study's configuration")
+
+
+@pytest.mark.slow
+def test_one_replicate_ranks_every_physical_parameter():
+    cs = StudyCalibration(steps=40, draws=9, generator=GeneratorSettings(duration=3.0, ramp=1.0))
+    rep = study_replicate(cs, 0)
+    assert list(rep["ranks"]) == NAMES
+    assert all(0 <= r <= cs.draws for r in rep["ranks"].values())
+    assert all(rep["central"]["50"][n] <= rep["central"]["94"][n] for n in NAMES)  # nested by construction
+    assert rep["iterations"] == 40
+    assert json.loads(json.dumps(rep)) == rep
+    lo, hi = np.exp(STUDY_SBC_PRIORS["b"].bounds)
+    assert lo <= rep["truth"]["b"] <= hi
