@@ -33,7 +33,8 @@ OUT = Path(__file__).resolve().parents[1] / "results" / "full"
 HEADLINE = OUT / "paper-like"
 #: Studies made from these results whose SECTION.md the report takes in (run them, then
 #: this again: every fit is reused).
-MORE = [OUT.parent / "structure", OUT.parent / "leave-one-frequency-out", OUT.parent / "prior-sensitivity"]
+MORE = [OUT.parent / "structure", OUT.parent / "leave-one-frequency-out", OUT.parent / "prior-sensitivity",
+        OUT.parent / "study-calibration"]
 
 TITLE = "The inertance of each flywheel setting, from records of a paper-like device"
 SUMMARY = ("The records: the paper's 27 (nine flywheel settings at 0.5, 1 and 1.5 Hz), made by a device richer than "
