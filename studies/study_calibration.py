@@ -8,9 +8,16 @@ already there. About a minute per replicate and process on a 2-core machine.
 
     python studies/study_calibration.py [--replicates 200] [--steps 600] [--processes 2]
         [--seed 0] [--out FOLDER]
+    python studies/study_calibration.py --inspect K [--steps N]
+
+``--inspect K`` runs replicate K again with its fit kept (runs/study-calibration/K_<steps>)
+and prints the joint log posterior at the truth and at the posterior medians, and each
+parameter's truth beside its interval: a chain far below the truth's log posterior is
+in a wrong basin, one above it has a posterior that excludes the truth.
 """
 
 import argparse
+import json
 import os
 import sys
 from dataclasses import replace
@@ -18,9 +25,10 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from bayes_inerter.study.study_calibration import StudyCalibration, run_study_calibration
+from bayes_inerter.study.study_calibration import StudyCalibration, inspect_replicate, run_study_calibration
 
-RESULTS = Path(__file__).resolve().parents[1] / "results" / "study-calibration"
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "results" / "study-calibration"
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -29,6 +37,7 @@ if __name__ == "__main__":
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--processes", type=int, default=min(2, os.cpu_count() or 1))
     ap.add_argument("--out", default=str(RESULTS))
+    ap.add_argument("--inspect", type=int, default=None, metavar="K", help="run replicate K again, its fit kept")
     args = ap.parse_args()
     try:
         if args.replicates < 1:
@@ -37,6 +46,10 @@ if __name__ == "__main__":
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)
+    if args.inspect is not None:
+        got = inspect_replicate(cs, args.inspect, ROOT / "runs" / "study-calibration" / f"{args.inspect}_{cs.steps}")
+        print(json.dumps(got, indent=1))
+        sys.exit(0)
     bar = tqdm(total=args.replicates, desc="calibration", unit="replicate", file=sys.stderr, mininterval=10)
 
     def progress(done, total):

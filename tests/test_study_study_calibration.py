@@ -8,7 +8,8 @@ import pytest
 
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
-                                                  coverage_rows, hdi, study_replicate, write_study_calibration)
+                                                  coverage_rows, hdi, inspect_replicate, study_replicate,
+                                                  write_study_calibration)
 
 NAMES = ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B"]
 
@@ -82,3 +83,16 @@ def test_one_replicate_ranks_every_physical_parameter():
     assert json.loads(json.dumps(rep)) == rep
     lo, hi = np.exp(STUDY_SBC_PRIORS["b"].bounds)
     assert lo <= rep["truth"]["b"] <= hi
+
+
+@pytest.mark.slow
+def test_inspecting_a_replicate_remakes_its_device(tmp_path):
+    cs = StudyCalibration(steps=30, draws=9, generator=GeneratorSettings(duration=3.0, ramp=1.0))
+    got = inspect_replicate(cs, 1, tmp_path / "fit")
+    by = {r["parameter"]: r for r in got["parameters"]}
+    assert list(by) == ["b_A3", *NAMES[1:], "rho_0.5Hz", "rho_1.5Hz"]
+    assert by["rho_0.5Hz"]["truth"] is None  # the generator's noise has no AR(1) coefficient
+    assert np.isfinite(got["log_posterior_truth"]) and np.isfinite(got["log_posterior_median"])
+    rep = study_replicate(cs, 1)
+    assert by["b_A3"]["truth"] == rep["truth"]["b"]  # the same seed, the same device
+    assert all(r["q3"] <= r["median"] <= r["q97"] for r in got["parameters"])

@@ -53,7 +53,7 @@ from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "study_replicate", "coverage_rows", "hdi",
-           "chains_long_enough", "write_study_calibration", "run_study_calibration"]
+           "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -262,3 +262,33 @@ def run_study_calibration(cs: StudyCalibration, out, replicates: int, *, process
 
     results = run_replicates(cs, out, replicates, processes=processes, progress=progress)
     return write_study_calibration(out, cs, results, versions())
+
+
+def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
+    """Replicate ``k`` again with its fit kept in ``out``, to tell a wrong basin from a
+    posterior that excludes the truth: the joint log posterior at the truth (each rho at
+    its posterior median, rho having no true value) and at the posterior medians, and
+    every sampled parameter's truth beside its median and 94 % equal-tailed interval.
+    The same seed gives the same device, records and start as :func:`study_replicate`."""
+    from ..inference.joint import JointModel
+
+    rng = np.random.default_rng([cs.seed, k])
+    truth, records, _ = _draw_device(cs, rng)
+    seed = int(rng.integers(2**31))
+    out = Path(out)
+    res = fit_joint(records, out, steps=cs.steps, seed=seed, priors=STUDY_SBC_PRIORS, plots=False, all_draws=True)
+    with np.load(out / ALL_DRAWS_FILE) as f:
+        kept = {n: f[n].ravel() for n in f.files}
+    jm = JointModel(tuple(records), priors=STUDY_SBC_PRIORS)
+    median = {n: float(np.median(x)) for n, x in kept.items()}
+    at_truth = {f"b_{cs.setting}": truth["b"], **{n: truth[n] for n in jm.shared},
+                **{n: median[n] for n in jm.rhos}}
+
+    def log_post(values):
+        theta = [math.log(values[n]) if jm.all_priors[n].log_scale else values[n] for n in jm.names]
+        return float(jm.log_prob(theta)[0])
+
+    rows = [{"parameter": n, "truth": at_truth[n] if n not in jm.rhos else None, "median": median[n],
+             "q3": float(np.quantile(kept[n], 0.03)), "q97": float(np.quantile(kept[n], 0.97))} for n in jm.names]
+    return {"replicate": k, "steps": int(res.iterations), "tau_max": float(np.nanmax(res.tau)),
+            "log_posterior_truth": log_post(at_truth), "log_posterior_median": log_post(median), "parameters": rows}
