@@ -92,8 +92,11 @@ def study_calibration_report(out: Path, cs, rows: list[dict], results: list[dict
     ok = [r for r in results if "ranks" in r]
     levels = [round(100 * q) for q in LEVELS]
     taus = [r["tau_max"] for r in ok if r.get("tau_max")]
+    why: dict = {}
+    for r in failed:  # one line per distinct error, the replicates it stopped beside it
+        why.setdefault(r["error"], []).append(str(r["replicate"]))
     head = (f"{n} replicates: {cs.describe()}. {len(failed)} failed"
-            + (" (" + "; ".join(f"{r['replicate']}: {r['error']}" for r in failed) + ")" if failed else "")
+            + (" (" + "; ".join(f"{', '.join(ks)}: {e}" for e, ks in why.items()) + ")" if failed else "")
             + "; a failed replicate counts as a miss at every level. "
             + f"{long_enough} of {len(ok)} chains ran at least 50 times their longest autocorrelation time"
             + (f" (median longest tau {np.median(taus):.0f} steps, largest {max(taus):.0f})" if taus else "")
@@ -103,9 +106,10 @@ def study_calibration_report(out: Path, cs, rows: list[dict], results: list[dict
         by = {r["parameter"]: r for r in rows}
         b = by.get("b")
         if b:
+            ran = [f"{sum(r['hdi'][str(q)]['b'] for r in ok)} of the {len(ok)} that ran at {q} %" for q in levels]
             verdict.append("b's highest-density intervals hold the truth in "
                            + " and ".join(f"{b[f'hdi_{q}']:.3f} of the replicates at {q} % (se {b[f'se_{q}']:.3f})"
-                                          for q in levels) + ".")
+                                          for q in levels) + f" ({' and '.join(ran)}).")
         for q in levels:
             off = [f"{r['parameter']} ({_off(r, 'hdi', q)}, {r[f'hdi_{q}']:.2f})" for r in rows if _off(r, "hdi", q)]
             verdict.append(f"At {q} %, " + (f"more than 2 se from nominal: {', '.join(off)}." if off else

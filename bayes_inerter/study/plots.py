@@ -342,7 +342,7 @@ def plot_coverage(cases: dict, *, levels=(50, 90), interval: str = "central", fi
         ax.axhline(q / 100, color="k", lw=1)
         ax.set_xticks(range(len(names)))
         ax.set_xticklabels(names, rotation=45, ha="right")
-        ax.set_ylabel(f"coverage of the {interval} {q} % interval")
+        ax.set_ylabel(" ".join(w for w in ("coverage of the", interval, f"{q} % interval") if w))
         ax.set_title(f"{q} % intervals (bars: 2 binomial se)")
         ax.grid(alpha=0.3)
     axes[-1].legend(fontsize=8, loc="lower left")

@@ -245,7 +245,7 @@ def write_study_calibration(out, cs: StudyCalibration, results: list[dict], vers
                          **{f"coverage_{q}": r[f"{key}_{q}"] for q in levels},
                          **{f"se_{q}": r[f"se_{q}"] for q in levels}} for r in rows]
                  for kind, key in (("highest density", "hdi"), ("equal-tailed", "central"))}
-        fig = plot_coverage(cases, levels=levels, interval="highest-density or equal-tailed")
+        fig = plot_coverage(cases, levels=levels, interval="")  # the legend names the two kinds
         fig.savefig(out / "coverage.png", dpi=90)
         plt.close(fig)
     report, section = study_calibration_report(out, cs, rows, results, versions,
