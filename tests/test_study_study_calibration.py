@@ -8,20 +8,10 @@ import pytest
 
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
-                                                  coverage_rows, hdi, inspect_replicate, study_replicate,
+                                                  coverage_rows, inspect_replicate, study_replicate,
                                                   write_study_calibration)
 
 NAMES = ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B"]
-
-
-def test_hdi_is_arviz_highest_density_interval():
-    import arviz as az
-
-    x = np.random.default_rng(3).gamma(2.0, size=4001)  # skewed: the HDI is not the central interval
-    for level in (0.94, 0.5):
-        assert np.allclose(hdi(x, level), az.hdi(x, hdi_prob=level), rtol=0, atol=1e-12)
-    lo, hi = hdi(x, 0.5)
-    assert lo < np.quantile(x, 0.25)  # shifted towards the mode of a right-skewed law
 
 
 def test_the_prior_draws_the_paper_settings_inertances():

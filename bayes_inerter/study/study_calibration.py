@@ -46,13 +46,14 @@ from pathlib import Path
 import numpy as np
 
 from ..device import TABLE_I, paper_parameters
+from ..inference.convergence import Convergence
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint
 from ..inference.model import PosteriorModel
 from ..inference.priors import LogUniform, Uniform
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
-__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "study_replicate", "coverage_rows", "hdi",
+__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "study_replicate", "coverage_rows",
            "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
@@ -119,17 +120,6 @@ class StudyCalibration:
                 f"ranks among {self.draws} draws, seed {self.seed}")
 
 
-def hdi(x: np.ndarray, level: float) -> tuple[float, float]:
-    """The narrowest interval holding ``level`` of the draws ``x`` (what arviz.hdi
-    gives for one mode)."""
-    s = np.sort(np.asarray(x, dtype=float).ravel())
-    n = len(s)
-    m = max(1, int(math.floor(level * n)))
-    widths = s[m:] - s[: n - m]
-    i = int(np.argmin(widths))
-    return float(s[i]), float(s[i + m])
-
-
 def _draw_device(cs: StudyCalibration, rng: np.random.Generator):
     """A device from the prior and its records (a draw the simulator refuses is drawn
     again: the posterior gives it zero density too)."""
@@ -149,18 +139,27 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator):
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
 
+def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
+    """Replicate ``k``'s device, drawn and fitted into ``out``: (its generator, the
+    device's true values, its records, the redraws, the fit, every kept draw by name).
+    The same ``k`` gives the same device, records, start and chain."""
+    rng = np.random.default_rng([cs.seed, k])
+    truth, records, redraws = _draw_device(cs, rng)
+    res = fit_joint(records, out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=STUDY_SBC_PRIORS,
+                    plots=False, all_draws=True)
+    with np.load(out / ALL_DRAWS_FILE) as f:
+        kept = {n: f[n].ravel() for n in f.files}
+    return rng, truth, records, redraws, res, kept
+
+
 def study_replicate(cs: StudyCalibration, k: int) -> dict:
     """Replicate ``k``: the truth's rank among ``cs.draws`` posterior draws per physical
     parameter, whether each of the :data:`LEVELS` intervals (highest-density and
     equal-tailed) holds it, and the chain's diagnostics."""
-    rng = np.random.default_rng([cs.seed, k])
-    truth, records, redraws = _draw_device(cs, rng)
-    seed = int(rng.integers(2**31))
+    import arviz as az
+
     with tempfile.TemporaryDirectory() as tmp:
-        res = fit_joint(records, Path(tmp) / "fit", steps=cs.steps, seed=seed, priors=STUDY_SBC_PRIORS,
-                        plots=False, all_draws=True)
-        with np.load(Path(tmp) / "fit" / ALL_DRAWS_FILE) as f:
-            kept = {n: f[n].ravel() for n in f.files}
+        rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(tmp) / "fit")
     kept["b"] = kept.pop(f"b_{cs.setting}")
     n_kept = len(kept["b"])
     if n_kept < cs.draws:
@@ -175,7 +174,7 @@ def study_replicate(cs: StudyCalibration, k: int) -> dict:
         out["ranks"][name] = int(np.sum(x[pick] < t))
         for level in LEVELS:
             key = f"{round(100 * level)}"
-            lo, hi = hdi(x, level)
+            lo, hi = az.hdi(x, hdi_prob=level)
             out["hdi"].setdefault(key, {})[name] = bool(lo <= t <= hi)
             lo, hi = np.quantile(x, [0.5 - level / 2, 0.5 + level / 2])
             out["central"].setdefault(key, {})[name] = bool(lo <= t <= hi)
@@ -209,10 +208,10 @@ def coverage_rows(results: list[dict]) -> list[dict]:
     return rows
 
 
-def chains_long_enough(results: list[dict], factor: float = 50.0) -> int:
+def chains_long_enough(results: list[dict], factor: float = Convergence.n_tau) -> int:
     """How many replicates ran a chain of at least ``factor`` times its longest
-    autocorrelation time (emcee's rule of thumb, the study's convergence rule's first
-    part)."""
+    autocorrelation time (the first part of the study's convergence rule,
+    ``Convergence.n_tau``)."""
     return sum(1 for r in results if r.get("tau_max") and r["iterations"] >= factor * r["tau_max"])
 
 
@@ -272,13 +271,7 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     The same seed gives the same device, records and start as :func:`study_replicate`."""
     from ..inference.joint import JointModel
 
-    rng = np.random.default_rng([cs.seed, k])
-    truth, records, _ = _draw_device(cs, rng)
-    seed = int(rng.integers(2**31))
-    out = Path(out)
-    res = fit_joint(records, out, steps=cs.steps, seed=seed, priors=STUDY_SBC_PRIORS, plots=False, all_draws=True)
-    with np.load(out / ALL_DRAWS_FILE) as f:
-        kept = {n: f[n].ravel() for n in f.files}
+    _, truth, records, _, res, kept = _fit_replicate(cs, k, Path(out))
     jm = JointModel(tuple(records), priors=STUDY_SBC_PRIORS)
     median = {n: float(np.median(x)) for n, x in kept.items()}
     at_truth = {f"b_{cs.setting}": truth["b"], **{n: truth[n] for n in jm.shared},
