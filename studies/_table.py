@@ -50,3 +50,20 @@ def write_rows(path, rows: list[dict]) -> Path:
     for row in rows:
         print(", ".join(f"{k} {v}" for k, v in row.items()))
     return path
+
+
+def run_with_bar(run, total: int, desc: str, **bar):
+    """``run(progress)`` with a progress bar of ``total`` steps on standard error
+    (``progress(done, total)`` moves it; ``bar``: more tqdm options); a ValueError ends
+    the script with a one-line error (exit 1)."""
+    from tqdm import tqdm
+
+    with tqdm(total=total, desc=desc, unit="replicate", file=sys.stderr, **bar) as shown:
+        def progress(done, _total):
+            shown.update(done - shown.n)
+
+        try:
+            return run(progress)
+        except ValueError as exc:
+            shown.close()
+            sys.exit(f"error: {exc}")

@@ -16,8 +16,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from tqdm import tqdm
-
+from _table import run_with_bar
 from bayes_inerter.study.calibration import CalibrationSettings, compare_calibrations, run_calibration
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "calibration"
@@ -47,18 +46,8 @@ if __name__ == "__main__":
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)
-    bar = tqdm(total=args.replicates, desc="calibration", unit="replicate", file=sys.stderr)
-
-    def progress(done, total):
-        bar.update(done - bar.n)
-
-    try:
-        res = run_calibration(cs, out, args.replicates, processes=args.processes, progress=progress)
-    except ValueError as exc:
-        bar.close()
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(1)
-    bar.close()
+    res = run_with_bar(lambda progress: run_calibration(cs, out, args.replicates, processes=args.processes, progress=progress),
+                       args.replicates, "calibration")
     print(f"wrote {res['report']} ({res['replicates']} replicates, {len(res['failed'])} failed)")
     print(f"wrote {compare_calibrations(out.parent)} (every case in {out.parent}, side by side)")
     sys.exit(1 if res["failed"] else 0)

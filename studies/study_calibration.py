@@ -23,8 +23,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from tqdm import tqdm
-
+from _table import run_with_bar
 from bayes_inerter.study.study_calibration import StudyCalibration, inspect_replicate, run_study_calibration
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -50,16 +49,6 @@ if __name__ == "__main__":
         got = inspect_replicate(cs, args.inspect, ROOT / "runs" / "study-calibration" / f"{args.inspect}_{cs.steps}")
         print(json.dumps(got, indent=1))
         sys.exit(0)
-    bar = tqdm(total=args.replicates, desc="calibration", unit="replicate", file=sys.stderr, mininterval=10)
-
-    def progress(done, total):
-        bar.update(done - bar.n)
-
-    try:
-        res = run_study_calibration(cs, args.out, args.replicates, processes=args.processes, progress=progress)
-    except ValueError as exc:
-        bar.close()
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(1)
-    bar.close()
+    res = run_with_bar(lambda progress: run_study_calibration(cs, args.out, args.replicates, processes=args.processes, progress=progress),
+                       args.replicates, "calibration", mininterval=10)
     print(f"wrote {res['report']} ({res['replicates']} replicates, {len(res['failed'])} failed)")
