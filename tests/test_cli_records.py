@@ -16,9 +16,10 @@ from bayes_inerter.lock import folder_lock
 from bayes_inerter.records import read_record
 
 
-def _daq(tmp_path, force_scale=1e-3, name="daq.csv"):
+def _daq(tmp_path, force_scale=1e-3, name="daq.csv", metadata=True):
     """A DAQ export of a rigid 3,100 kg device at 1 Hz: time in ms, force in kN (or
-    ``force_scale`` of N), acceleration in g, semicolons, an extra channel."""
+    ``force_scale`` of N), acceleration in g, semicolons, an extra channel; with the
+    drive frequency and m_s in its header, or (``metadata`` False) nothing but the table."""
     t = np.arange(3001) / 1000.0
     w = 2 * math.pi
     x = 0.01 * np.sin(w * t)
@@ -27,7 +28,8 @@ def _daq(tmp_path, force_scale=1e-3, name="daq.csv"):
     rows = [f"{ti * 1000:.3f};{fi * force_scale:.9g};{ai / 9.80665:.9g};{xi * 1000:.9g};21.5"
             for ti, fi, ai, xi in zip(t, f, a, x)]
     p = tmp_path / name
-    p.write_text("# drive_frequency_hz: 1\n# m_s: 21.7\nZeit;Kraft;Beschl;Weg;Temp\n" + "\n".join(rows) + "\n")
+    head = "# drive_frequency_hz: 1\n# m_s: 21.7\n" if metadata else ""
+    p.write_text(head + "Zeit;Kraft;Beschl;Weg;Temp\n" + "\n".join(rows) + "\n")
     return p
 
 
@@ -182,3 +184,59 @@ def test_a_closed_pipe_ends_quietly(tmp_path):
     proc.stdout.close()  # as `| head -0` does
     err = proc.stderr.read().decode()
     assert proc.wait() in (0, 141) and "Broken pipe" not in err and "Traceback" not in err
+
+
+def test_a_daq_file_without_metadata_fits_as_the_readme_says_and_goes_on(tmp_path, capsys):
+    """The README's own example on a file with no metadata: the drive frequency is
+    estimated before sampling and printed with its source; the interval at the end needs
+    nothing more. Given in the metadata afterwards, or fitted through the Python API, the
+    same chain goes on: 1 Hz and the estimate differ by far less than the record's
+    resolution."""
+    from bayes_inerter.inference import fit_record
+    from bayes_inerter.records import read_record as read
+
+    p = _daq(tmp_path, metadata=False)
+    out = tmp_path / "fits" / "run1"
+    common = [*MAP, "--out", str(out), "--processes", "1", "--walkers", "24", "--no-plots"]
+    assert main(["fit", str(p), *common, "--m-s", "21.7", "--steps", "4"]) == 0
+    text = capsys.readouterr().out
+    line = next(x for x in text.splitlines() if x.startswith("drive frequency: "))
+    estimated = float(line.split()[2])
+    assert "(estimated from the record's spectrum)" in line and estimated == pytest.approx(1.0, rel=1e-4)
+    info = json.loads((out / "fit.json").read_text())
+    assert info["drive_frequency"]["hz"] == pytest.approx(estimated, rel=1e-6)
+    assert "estimated" in info["drive_frequency"]["source"]
+    assert info["b_interval"]["method"] == "honest"
+    # the same frequency, now in the metadata: the checkpoint is continued, not refused
+    p.with_suffix(".json").write_text(json.dumps({"drive_frequency_hz": 1.0, "m_s": 21.7}))
+    assert main(["fit", str(p), *common, "--steps", "6"]) == 0
+    captured = capsys.readouterr()
+    assert "drive frequency: 1 Hz (record metadata drive_frequency_hz)" in captured.out
+    assert json.loads((out / "fit.json").read_text())["iterations"] == 6
+    # and through the API, on the record without metadata
+    p.with_suffix(".json").unlink()
+    rec = read(p, columns="time=Zeit,force=Kraft,accel=Beschl,disp=Weg", units="time=ms,force=kN,accel=g,disp=mm")
+    assert rec.drive_frequency is None
+    got = fit_record(rec, out, m_s=21.7, steps=8, walkers=24, plots=False)
+    assert got.iterations == 8 and got.drive.hz == pytest.approx(1.0, rel=1e-4) and got.b_interval is not None
+
+
+def test_freq_overrides_the_estimate(tmp_path, capsys):
+    p = _daq(tmp_path, metadata=False)
+    assert main(["inspect", str(p), *MAP, "--freq", "1.0"]) == 0
+    assert "drive 1 Hz (option --freq)" in capsys.readouterr().out
+    assert main(["inspect", str(p), *MAP]) == 0
+    text = capsys.readouterr().out
+    assert "Hz (estimated from the record's spectrum)" in text
+
+
+def test_a_drive_that_cannot_be_settled_fails_before_the_folder_is_touched(tmp_path):
+    from bayes_inerter.inference import fit_record
+    from bayes_inerter.records import read_record as read
+
+    rec = read(_daq(tmp_path, metadata=False), columns="time=Zeit,force=Kraft,accel=Beschl,disp=Weg",
+               units="time=ms,force=kN,accel=g,disp=mm")
+    out = tmp_path / "fit"
+    with pytest.raises(ValueError, match="positive number of Hz"):
+        fit_record(rec, out, m_s=21.7, steps=4, freq=-1.0)
+    assert not out.exists()

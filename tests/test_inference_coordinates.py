@@ -200,3 +200,19 @@ def test_run_sampler_in_impedance_coordinates_samples_theta(two_port, tmp_path):
     theta = run.chain(discard=300).reshape(-1, len(centre))
     assert np.all(np.abs(theta.mean(axis=0) - centre) < 0.25 * sd)
     assert np.all(np.abs(theta.std(axis=0) / sd - 1) < 0.25)
+
+
+def test_a_checkpoint_within_the_records_resolution_goes_on_in_its_own_coordinates(two_port):
+    from bayes_inerter.inference.coordinates import continue_at, reference_tolerance
+    from bayes_inerter.inference.identity import _coordinates
+
+    coords = default_coordinates(two_port)
+    tol = reference_tolerance(two_port)
+    assert tol == pytest.approx(math.pi / two_port.record.duration)  # half a bin of the record's spectrum
+    near = dict(_coordinates(coords), impedance={**_coordinates(coords)["impedance"],
+                                                 "omega": coords.impedance.omega + 0.5 * tol})
+    adopted = continue_at(coords, near, tol)
+    assert adopted.impedance.omega == near["impedance"]["omega"] and adopted.kind == coords.kind
+    far = dict(near, impedance={**near["impedance"], "omega": coords.impedance.omega + 2 * tol})
+    assert continue_at(coords, far, tol) is coords  # refused by the identity as before
+    assert continue_at(coords, None, tol) is coords

@@ -41,8 +41,9 @@ def cmd_fit(args) -> int:
     from .records import load_record
 
     # refused here, before the output folder is touched
-    rec, device, masses = load_record(args, need_masses=True)
+    rec, device, masses, drive = load_record(args, need_masses=True)
     print(f"masses: {masses.describe()}", flush=True)
+    print(f"drive frequency: {drive.describe()}", flush=True)
     bar = StepProgress("sampling", total=args.steps, check_interrupt=_check_interrupt)
     processes = args.processes or min(2, os.cpu_count() or 1)
     try:

@@ -17,7 +17,7 @@ def cmd_identify(args) -> int:
     from . import EXIT_OK, CliError
     from .records import load_record
 
-    rec, device, masses = load_record(args, need_masses=True)  # refused here, before any work
+    rec, device, masses, drive = load_record(args, need_masses=True)  # refused here, before any work
     if args.bootstrap and args.bootstrap < 50:
         raise CliError(f"--bootstrap {args.bootstrap} replicates are too few for a 94 % interval; give 50 or more")
     if args.seed < 0:
@@ -25,6 +25,7 @@ def cmd_identify(args) -> int:
     if args.out:
         _check_writable(Path(args.out))
     print(f"masses: {masses.describe()}", flush=True)
+    print(f"drive frequency: {drive.describe()}", flush=True)
     model = PosteriorModel(rec, args.model, m_s=masses.m_s, m_B=masses.m_B)
     how = (f"a bootstrap over drive cycles, {args.bootstrap} refits" if args.bootstrap
            else "the least-squares Jacobian, clustered over drive cycles")

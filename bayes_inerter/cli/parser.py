@@ -87,6 +87,8 @@ def _add_record_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--m-b", type=_positive_float,
                    help="plate mass m_B, kg (else metadata, then --device, then the paper's 57.2)")
     g.add_argument("--device", metavar="DEVICE.toml", help="your device: masses and geometry (see README)")
+    g.add_argument("--freq", type=_positive_float,
+                   help="drive frequency, Hz (else the metadata's drive_frequency_hz, else estimated from the record)")
     g.add_argument("--skip-check", action="append", default=[], choices=RECORD_CHECKS, metavar="CHECK",
                    help=f"skip a physical-sense check you know to be wrong for your record ({', '.join(RECORD_CHECKS)})")
 

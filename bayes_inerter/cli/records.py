@@ -76,14 +76,19 @@ def cmd_generate(args) -> int:
 
 def load_record(args, *, need_masses: bool):
     """The record of ``args`` (read with --columns and --units), its device file, its
-    masses (None when m_s is unknown and not ``need_masses``), checked for physical
-    sense (--skip-check). What ``inspect`` and ``fit`` start from."""
+    masses (None when m_s is unknown and not ``need_masses``) and its drive frequency
+    (``records.drive.DriveFrequency``: --freq, else the metadata's, else estimated; the
+    record returned holds it in its metadata), checked for physical sense
+    (--skip-check). What ``inspect``, ``identify`` and ``fit`` start from."""
     from ..device_file import read_device
     from ..masses import resolve_masses
     from ..records import read_record
     from ..records.checks import b_range_for, require_physical
+    from ..records.drive import resolve_drive, with_drive
 
     rec = read_record(args.record, columns=args.columns, units=args.units)
+    if args.freq is not None:  # the checks look at the drive the user names
+        rec = with_drive(rec, resolve_drive(rec, args.freq))
     device = read_device(args.device) if args.device else None
     try:
         masses = resolve_masses(rec, m_s=args.m_s, m_B=args.m_b, device=device)
@@ -93,39 +98,49 @@ def load_record(args, *, need_masses: bool):
         masses = None
     require_physical(rec, m_s=masses and masses.m_s, m_B=masses and masses.m_B, b_range=b_range_for(rec, device),
                      skip=tuple(args.skip_check), where=args.record)
-    return rec, device, masses
+    try:
+        drive = resolve_drive(rec)
+    except ValueError as exc:
+        from . import CliError
+
+        raise CliError(str(exc)) from None
+    return with_drive(rec, drive), device, masses, drive
 
 
 def cmd_inspect(args) -> int:
     import math
 
     from ..records import write_record
-    from ..records.checks import drive_frequency, fundamental
+    from ..records.checks import fundamental
+    from ..records.drive import SOURCE_KEY
     from . import EXIT_OK
 
-    rec, device, masses = load_record(args, need_masses=False)
+    rec, device, masses, drive = load_record(args, need_masses=False)
     print(f"{args.record}: valid record")
     print(f"  samples {len(rec.time)}, duration {rec.duration:g} s, rate {rec.fs:g} Hz")
     for name, x, unit in (("force", rec.force, "N"), ("accel", rec.accel, "m/s^2"), ("disp", rec.disp, "m")):
         if x is not None:
             print(f"  {name:6s} min {x.min():.6g} {unit}, max {x.max():.6g} {unit}, rms {x.std():.6g} {unit}")
-    freq = drive_frequency(rec)
+    freq = drive.hz
     z = fundamental(rec.time, rec.force, freq) / fundamental(rec.time, rec.accel, freq)
-    source = "metadata" if rec.drive_frequency is not None else "from the spectrum"
     # F/a = M + iD at the drive: M the inertial mass; F/v = i omega F/a, whose real part
     # -omega D is the resistance (friction and damping, positive for a dissipating device)
-    print(f"  drive {freq:.4g} Hz ({source}); at it, inertial mass Re(F/a) {z.real:.5g} kg, "
+    print(f"  drive {drive.describe()}; at it, inertial mass Re(F/a) {z.real:.5g} kg, "
           f"resistance Re(F/v) {-z.imag * 2 * math.pi * freq:.5g} N s/m")
     print("  physical-sense checks: passed" + (f" (skipped: {', '.join(args.skip_check)})" if args.skip_check else ""))
     print(f"  masses: {masses.describe()}" if masses else
           "  masses: m_s unknown (give --m-s, a --device file, or m_s or setting in the metadata when fitting)")
     if device is not None and device.theoretical_inertance is not None:
         print(f"  theoretical inertance (device file): {device.theoretical_inertance:.6g} kg")
-    shown = {k: v for k, v in rec.metadata.items() if k not in ("true_parameters", "generator")}
+    # the file's own metadata: not the drive frequency this command settled (printed above)
+    hidden = {"true_parameters", "generator", SOURCE_KEY}
+    if not drive.source.startswith("record metadata"):
+        hidden.add("drive_frequency_hz")
+    shown = {k: v for k, v in rec.metadata.items() if k not in hidden}
     for key, value in shown.items():
         text = json.dumps(value) if isinstance(value, (dict, list)) else str(value)
         print(f"  {key}: {text}")
-    if not rec.metadata:
+    if not shown:
         print("  no metadata (give m_s or the setting when fitting)")
     if args.normalise:
         path, side = write_record(args.normalise, rec)

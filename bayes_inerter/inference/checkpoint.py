@@ -37,6 +37,7 @@ from .twin_backend import (GROUP, WRITE_SECONDS, TwinBackend, check_write_second
                            twin_path, write_empty)
 
 __all__ = ["CheckpointError", "Checkpoint", "open_checkpoint", "new_checkpoint", "read_chain", "steps_written",
+           "stored_identity",
            "twin_path", "WRITE_SECONDS", "check_write_seconds", "IDENTITY_ATTR"]
 
 #: The attribute of each file's chain group that holds its run's identity (JSON).
@@ -76,6 +77,16 @@ def _inspect(path: Path) -> _Inspection:
             return _Inspection(path, "intact", n, identity=identity)
     except Exception as exc:  # h5py raises OSError, KeyError, ValueError for damaged files
         return _Inspection(path, "damaged", why=f"it is unreadable or truncated ({type(exc).__name__})")
+
+
+def stored_identity(path) -> dict | None:
+    """The run identity (:func:`.identity.run_identity`) that the checkpoint at ``path``
+    (or its twin) was written with, or None where neither holds one that can be read."""
+    path = Path(path)
+    for s in (_inspect(path), _inspect(twin_path(path))):
+        if s.status == "intact":
+            return s.identity
+    return None
 
 
 def _copy_atomically(src: Path, dst: Path) -> None:

@@ -38,6 +38,7 @@ The impedance map, and the domain it restricts the prior to: :mod:`.impedance`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -46,6 +47,7 @@ import numpy as np
 from .impedance import EDGE_WARNING, MAX_SENSITIVITY_CHANGE, ImpedanceMap, driving_point
 
 __all__ = ["Coordinates", "ImpedanceMap", "driving_point", "default_coordinates", "COORDINATES", "drive_omega",
+           "reference_tolerance", "continue_at",
            "MAX_SENSITIVITY_CHANGE", "EDGE_WARNING"]
 
 #: The coordinate systems a fit can use (``--coordinates``).
@@ -126,16 +128,34 @@ class Coordinates:
 
 
 def drive_omega(record) -> float:
-    """Angular drive frequency of a record, rad/s: its metadata's, or else the peak of
-    its force spectrum (the drive dominates the force)."""
-    f = record.drive_frequency
-    if f is None:
-        x = np.asarray(record.force, dtype=float) - np.mean(record.force)
-        spec = np.abs(np.fft.rfft(x))
-        freqs = np.fft.rfftfreq(len(x), 1.0 / record.fs)
-        spec[0] = 0.0
-        f = float(freqs[int(np.argmax(spec))])
-    return 2.0 * math.pi * f
+    """Angular drive frequency of a record, rad/s: its metadata's, or else the record's
+    own estimate (``records.drive.resolve_drive``, the same everywhere in a fit)."""
+    from ..records.drive import resolve_drive
+
+    return 2.0 * math.pi * resolve_drive(record).hz
+
+
+def reference_tolerance(model) -> float:
+    """rad/s: how far the impedance coordinates' reference frequency may move and still be
+    the same drive to the model's records: half a bin of the shortest record's spectrum,
+    pi / T (``records.drive.DriveFrequency.resolution_hz``). A drive frequency given in
+    the metadata and the same estimated from the record differ by far less."""
+    parts = getattr(model, "parts", None) or [model]
+    return min(math.pi / p.record.duration for p in parts)
+
+
+def continue_at(coords: Coordinates, stored: dict | None, tolerance: float) -> Coordinates:
+    """``coords`` at the reference frequency of a checkpoint's coordinates ``stored``
+    (its identity's "coordinates" entry) where that frequency is within ``tolerance``
+    (rad/s) of this run's: the reference is a choice, not a measurement, and any
+    frequency that near the drive makes an equally good map, so the chain is continued
+    in the coordinates it was written in. Else ``coords`` as they are (a checkpoint that
+    differs further, or in anything else, is refused as before)."""
+    imp = coords.impedance
+    then = ((stored or {}).get("impedance") or {}).get("omega")
+    if imp is None or not isinstance(then, (int, float)) or then == imp.omega or abs(then - imp.omega) > tolerance:
+        return coords
+    return dataclasses.replace(coords, impedance=dataclasses.replace(imp, omega=float(then)))
 
 
 def _source(model, fixed: dict) -> dict:

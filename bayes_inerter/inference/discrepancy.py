@@ -146,9 +146,7 @@ def harmonic_discrepancy(model, theta, *, cov=None, harmonics: int = HARMONICS, 
     holds the other parameters."""
     _check(harmonics, decay)
     rec = model.record
-    freq = rec.drive_frequency
-    if not freq or not math.isfinite(freq):
-        raise ValueError("the record's drive frequency is unknown: the discrepancy needs it")
+    freq = rec.drive_frequency  # settled by the model (``PosteriorModel.drive``), as everywhere in a fit
     w = model.window
     t = rec.time[w] - rec.time[w[0]]
     theta = np.asarray(theta, dtype=float)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..records.drive import resolve_drive, with_drive
 from ..records.record import Record
 from .checkpoint import WRITE_SECONDS
 from ..lock import folder_lock
@@ -66,6 +67,9 @@ class FitResult:
     b_theory: float | None = None
     #: b's reported interval (``interval.InertanceInterval``; None for the joint model)
     b_interval: object = None
+    #: the drive frequency used and where it came from (``records.drive.DriveFrequency``;
+    #: None for the joint model)
+    drive: object = None
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -116,7 +120,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                convergence: Convergence | None = None, progress=None, report=None, plots: bool = True,
                coordinates: str = "impedance", adaptation: Adaptation | None = Adaptation(),
                checkpoint_seconds: float = WRITE_SECONDS,
-               interval: str | IntervalSettings = DEFAULT_INTERVAL) -> FitResult:
+               interval: str | IntervalSettings = DEFAULT_INTERVAL, freq: float | None = None) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
     ``interval``: how b's reported interval is made, a name of ``interval.INTERVALS``
@@ -136,12 +140,19 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     ``masses.resolve_masses`` (option, metadata, device file, paper default); fit.json
     records each with its source, and the device file's theoretical inertance.
 
+    ``freq``: the drive frequency, Hz; else the record's metadata's, else estimated from
+    the record (``records.drive.resolve_drive``). It is settled here, before sampling,
+    and every step uses the same: the sampler's coordinates, the discrepancy, the
+    interval, the figures; fit.json and ``FitResult.drive`` say where it came from.
+
     Everything that can be checked is checked before sampling starts (record, masses,
     options, output folder); the folder is not touched if any check fails. The
     record's physical sense (``records.checks``) is the caller's to check first.
     """
     out = Path(out)
     interval_settings = _interval_settings(interval)
+    drive = resolve_drive(record, freq)
+    record = with_drive(record, drive)
     masses = resolve_masses(record, m_s=m_s, m_B=m_B, device=device)
     b_theory = device.theoretical_inertance if device is not None else None
     pm = PosteriorModel(record, model, m_s=masses.m_s, m_B=masses.m_B, priors=priors or {},
@@ -169,6 +180,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                                         settings=interval_settings, rng=np.random.default_rng(seed + 2))
         info = _run_info(model, pm, got, seed, {
             "m_s": pm.m_s, "m_B": pm.m_B, "masses": masses.as_dict(), "b_theory_device_file": b_theory,
+            "drive_frequency": drive.as_dict(),
             "stride": pm.stride, "record_metadata": record.metadata, "b_interval": b_interval.as_dict(),
             "interval_settings": dataclasses.asdict(interval_settings)})
         info["timings_s"] = {"sampling": got.seconds, "posterior_draws": t_post, "total": time.perf_counter() - t0,
@@ -176,7 +188,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
         return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, idata,
                          info["timings_s"], got.shrink, run.recovered, warnings=got.ended, masses=masses,
-                         b_theory=b_theory, b_interval=b_interval)
+                         b_theory=b_theory, b_interval=b_interval, drive=drive)
 
 
 def _interval_settings(interval) -> IntervalSettings:

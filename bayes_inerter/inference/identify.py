@@ -173,8 +173,8 @@ def identify(model: PosteriorModel, *, starts: int = STARTS, seed: int = 0, inte
 
 def _cycles(model: PosteriorModel, n: int) -> list[slice]:
     """The whole drive cycles in the likelihood's window (of ``n`` samples), as slices."""
-    freq = model.record.metadata.get("drive_frequency_hz")
-    period = int(round(model.fs / freq)) if freq else n // 10
+    freq = model.record.drive_frequency  # settled by the model (``PosteriorModel.drive``)
+    period = int(round(model.fs / freq))
     return [slice(i, i + period) for i in range(0, n - period + 1, period)]
 
 

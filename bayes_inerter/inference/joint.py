@@ -71,22 +71,23 @@ class JointModel:
         self.records = tuple(self.records)
         if len(self.records) < 2:
             raise ValueError("the joint model needs at least two records")
-        settings, freqs = [], []
+        settings = []
         for i, rec in enumerate(self.records):
             s = str(rec.metadata.get("setting") or "").upper()
             if s not in SETTINGS:
                 raise ValueError(f"record {i}: its metadata must name a flywheel setting ({', '.join(SETTINGS)})")
             settings.append(s)
-            freqs.append(float(rec.drive_frequency))
-        self.setting_of = settings
-        self.freq_of = freqs
-        self.settings = [s for s in SETTINGS if s in settings]
-        self.frequencies = sorted(set(freqs))
         if not self.model.startswith("two-port"):
             raise ValueError(f"the joint model shares the two-port model's parameters; got model {self.model!r}")
         parts = [PosteriorModel(rec, self.model, priors=self.priors, likelihood=self.likelihood)
                  for rec in self.records]
         self.parts = parts
+        self.records = tuple(p.record for p in parts)  # each with its drive frequency settled
+        freqs = [p.drive.hz for p in parts]
+        self.setting_of = settings
+        self.freq_of = freqs
+        self.settings = [s for s in SETTINGS if s in settings]
+        self.frequencies = sorted(set(freqs))
         first = parts[0]
         shared = [n for n in first.names[: first.n_phys] if n != "b"]
         self.shared = shared

@@ -30,6 +30,7 @@ from ..models import FIELDS, linear_chain
 from ..network.compile import chain_state_space
 from ..records.conditioning import lowpass
 from ..masses import resolve_masses
+from ..records.drive import resolve_drive, with_drive
 from ..records.record import Record
 from ..simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate, simulate_network
 from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
@@ -91,6 +92,9 @@ class PosteriorModel:
     share where they crawl along the curved ridge of the raw pair. The priors are then
     on the sums (log-uniform) and the shares (uniform): a documented choice. The four
     raw values are reported as derived quantities. ``split=False`` samples them directly.
+
+    The drive frequency (``drive``, ``records.drive.DriveFrequency``) is the record's
+    metadata's, else its own estimate; ``record`` holds it in its metadata from then on.
     """
 
     record: Record
@@ -107,6 +111,9 @@ class PosteriorModel:
         rec = self.record
         check_record(rec.time, rec.force, rec.accel, names=("force", "accel"))
         self.m_s, self.m_B = record_masses(rec, self.m_s, self.m_B)
+        # settled once: every step that needs it reads the record's metadata
+        self.drive = resolve_drive(rec)
+        self.record = rec = with_drive(rec, self.drive)
         self.network, self.free = MODELS[self.model]
         self._set_parameters()
         self.fs = rec.fs

@@ -36,9 +36,9 @@ import numpy as np
 
 from ..executor import Executor, make_executor
 from .adaptation import Adaptation, Schedule
-from .checkpoint import WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint
+from .checkpoint import WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint, stored_identity
 from .convergence import WARMUP, Check, Convergence, Monitor, check_chain, is_converged, transient, why_not
-from .coordinates import Coordinates, default_coordinates
+from .coordinates import Coordinates, continue_at, default_coordinates, reference_tolerance
 from .identity import run_identity
 from .model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
@@ -209,6 +209,9 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     conv = convergence or Convergence()
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
     coords = coordinates if isinstance(coordinates, Coordinates) else default_coordinates(model, coordinates)
+    if not fresh:  # a checkpoint at a reference frequency within the records' resolution goes on in its own
+        coords = continue_at(coords, (stored_identity(checkpoint) or {}).get("coordinates"),
+                             reference_tolerance(model))
     target = Target(model, coords)
     schedule = Schedule(moves or default_moves(model, coordinates=coords), adaptation)
     identity = run_identity(model, coords, adaptation, schedule.base, nwalkers)

@@ -119,22 +119,11 @@ def _peak(time, x) -> tuple[float, float]:
 
 
 def drive_frequency(record: Record) -> float:
-    """The drive frequency, Hz: the metadata's, or else the spectral peak of the most
-    sinusoidal channel, refined to the frequency whose fundamental is largest."""
-    if record.drive_frequency is not None:
-        return record.drive_frequency
-    channels = [x for x in (record.accel, record.force, record.disp) if x is not None]
-    peaks = [_peak(record.time, x) for x in channels]
-    j = int(np.argmax([share for _, share in peaks]))
-    f0, x = peaks[j][0], channels[j]
-    if f0 <= 0:
-        return f0
-    step = 1.0 / record.duration
-    for _ in range(2):  # two grids, each a tenth as wide
-        grid = np.linspace(max(f0 - step, step / 10), f0 + step, 21)
-        f0 = float(grid[int(np.argmax([abs(fundamental(record.time, x, f)) for f in grid]))])
-        step /= 10
-    return f0
+    """The drive frequency, Hz: the metadata's, or else the record's own estimate
+    (:func:`.drive.resolve_drive`, the one every step of a fit uses)."""
+    from .drive import resolve_drive
+
+    return resolve_drive(record).hz
 
 
 def _rms(x) -> float:
