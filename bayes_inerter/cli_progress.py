@@ -23,9 +23,12 @@ class StepProgress:
     sampler's ``progress``), ``status(SamplerStatus)`` at its start and checks (its
     ``report``); ``close()`` at the end."""
 
-    def __init__(self, desc: str, total=None, stream=None, interval: float = LINE_SECONDS, check_interrupt=None):
+    def __init__(self, desc: str, total=None, stream=None, interval: float = LINE_SECONDS, check_interrupt=None,
+                 cap: int | None = None):
         self.stream = stream or sys.stderr
         self.desc = desc
+        #: the step cap of a run until converged (``Convergence.max_steps``): no estimate beyond it is promised
+        self.cap = cap
         self.interval = interval
         self.check_interrupt = check_interrupt
         self.last = None
@@ -47,7 +50,12 @@ class StepProgress:
         if s is not None and math.isfinite(s.acceptance):
             parts.append(f"acceptance {s.acceptance:.2f}")
         if s is not None and s.steps_needed is not None and not self.target:
-            parts.append(f"about {s.steps_needed} more steps needed" if s.steps_needed else "checking convergence")
+            if not s.steps_needed:
+                parts.append("checking convergence")
+            elif self.cap is not None and self.iteration + s.steps_needed > self.cap:
+                parts.append(f"more steps needed than the cap of {self.cap} leaves")
+            else:
+                parts.append(f"about {s.steps_needed} more steps needed")
         return ", ".join(parts)
 
     def _say(self, text: str) -> None:
@@ -63,9 +71,20 @@ class StepProgress:
             self.target = status.target
         if status.iteration == status.resumed_at and math.isnan(status.tau_max):  # the run's start
             if status.resumed_at:
-                total = status.target if status.target else "until converged"
-                self._say(f"{self.desc}: continuing from step {status.resumed_at} of {total} (the checkpoint's)")
+                self._say(f"{self.desc}: {self._resume(status.resumed_at, status.target)}")
             self.iteration = status.iteration
+
+    def _resume(self, done: int, target) -> str:
+        """The line that says how a run goes on from a checkpoint of ``done`` steps."""
+        held = f"the checkpoint holds {done} steps"
+        if target is not None:
+            if done >= target:
+                return f"{held}, as many as --steps {target} asks or more: nothing more to sample"
+            return f"{held}; continuing to step {target}"
+        if self.cap is not None and done >= self.cap:
+            return (f"{held}, the cap of {self.cap}: nothing more to sample (a higher --max-steps continues it)")
+        cap = f" (at most {self.cap} steps)" if self.cap is not None else ""
+        return f"{held}; continuing until converged{cap}"
 
     def step(self, iteration: int, target) -> None:
         if self.check_interrupt:

@@ -10,7 +10,7 @@ import pytest
 
 from bayes_inerter.cli_progress import StepProgress
 from bayes_inerter.cli import main
-from bayes_inerter.cli.fit import _mixing, _percent_interval
+from bayes_inerter.cli.fit import _percent_interval
 from bayes_inerter.inference.sampler import SamplerStatus
 from bayes_inerter.lock import folder_lock
 from bayes_inerter.records import read_record
@@ -93,21 +93,25 @@ def test_fit_prints_the_masses_and_their_sources_and_device_theory(tmp_path, cap
     assert "m_s = 21.7 kg (record metadata m_s), m_B = 50 kg (device file" in text
     theory = (2 * math.pi / 0.02) ** 2 * 0.03  # (2 pi / lead)^2 J_screw
     assert f"theory (device file geometry): b = {theory:.6g} kg" in text
-    # four steps cannot converge, nor tell how b mixes: the warning says so
-    assert "do not trust these intervals yet" in text
-    assert "b's own chain: too short to judge" in text
+    # four steps cannot converge, nor tell how b mixes: the warning says so, and what to do
+    assert "the chain is too short to judge how b mixes: trust no interval yet" in text
+    assert "run again without --steps" in text
     info = json.loads((out / "fit.json").read_text())
+    # fit.json and summary.csv say what the console said
+    printed = [line[len("warning: "):] for line in text.splitlines() if line.startswith("warning: ")]
+    assert printed and [w["message"] for w in info["warnings"]] == printed
+    import csv
+
+    rows = {r["name"]: r for r in csv.DictReader(open(out / "summary.csv"))}
+    for w in info["warnings"]:
+        for name in (w["name"], *w["also"]):
+            assert w["flag"] in rows[name]["flag"], (name, w["flag"])
+    assert "not converged" in rows["b"]["flag"]
+    # the priors listed are those sampled; the raw frictions are derived from sums and shares
+    assert "c_f1" not in info["priors"] and "c_f" in info["priors"] and "c_f1" in info["derived"]
+    assert rows["c_f1"]["kind"] == "derived" and rows["b"]["kind"] == "sampled"
     assert info["masses"]["m_B"] == {"kg": 50.0, "source": f"device file {dev}"}
     assert info["b_theory_device_file"] == pytest.approx((2 * math.pi / 0.02) ** 2 * 0.03)
-
-
-def test_an_unconverged_fit_names_how_b_mixes_and_the_slowest_parameters():
-    tau = {"b": 40.0, "c_n": 224.0, "k_B": 204.0, "k_n": 145.0, "sigma": float("nan")}
-    got = _mixing({"r_hat": 1.0293, "ess_bulk": 811.9}, tau)
-    assert got == ("b's own chain: R-hat 1.029, bulk ESS 812; slowest to mix: c_n (tau 224 steps), "
-                   "k_B (tau 204 steps), k_n (tau 145 steps)")
-    assert _mixing({"r_hat": float("nan"), "ess_bulk": float("nan")}, {}) == (
-        "b's own chain: too short to judge; slowest to mix: not known yet")
 
 
 def test_percent_interval_has_digits_enough_to_differ():
@@ -133,7 +137,7 @@ def test_progress_in_a_log_file_prints_lines_at_most_every_interval(monkeypatch)
             bar.status(SamplerStatus(300, 250, None, tau_max=42.0, acceptance=0.31, steps_needed=3000))
     bar.close()
     lines = log.getvalue().splitlines()
-    assert lines[0] == "sampling: continuing from step 250 of until converged (the checkpoint's)"
+    assert lines[0] == "sampling: the checkpoint holds 250 steps; continuing until converged"
     steps = [ln for ln in lines[1:] if ln.startswith("sampling: step")]
     assert len(steps) == 1 + 149 // 30 + 1  # the first step, one every 30 s, the end
     assert "tau 42 steps, acceptance 0.31, about 3000 more steps needed" in lines[-1]
@@ -240,3 +244,26 @@ def test_a_drive_that_cannot_be_settled_fails_before_the_folder_is_touched(tmp_p
     with pytest.raises(ValueError, match="positive number of Hz"):
         fit_record(rec, out, m_s=21.7, steps=4, freq=-1.0)
     assert not out.exists()
+
+
+@pytest.mark.parametrize("done, target, cap, said", [
+    (1000, None, 20000, "the checkpoint holds 1000 steps; continuing until converged (at most 20000 steps)"),
+    (20000, None, 20000, "the checkpoint holds 20000 steps, the cap of 20000: nothing more to sample "
+                         "(a higher --max-steps continues it)"),
+    (15491, 1, 20000, "the checkpoint holds 15491 steps, as many as --steps 1 asks or more: nothing more to sample"),
+    (300, 600, 20000, "the checkpoint holds 300 steps; continuing to step 600"),
+])
+def test_resume_lines_read_naturally(done, target, cap, said):
+    log = io.StringIO()
+    bar = StepProgress("sampling", total=target, stream=log, cap=cap)
+    bar.status(SamplerStatus(done, done, target))
+    assert log.getvalue().splitlines() == [f"sampling: {said}"]
+
+
+def test_progress_never_promises_steps_past_the_cap():
+    log = io.StringIO()
+    bar = StepProgress("sampling", stream=log, interval=0.0, cap=20000)
+    bar.status(SamplerStatus(15000, 0, None, tau_max=300.0, acceptance=0.3, steps_needed=23360))
+    bar.step(15000, None)
+    assert "more steps needed than the cap of 20000 leaves" in log.getvalue()
+    assert "23360" not in log.getvalue()

@@ -46,7 +46,7 @@ def test_fit_writes_every_output(tmp_path, record_file, capsys):
                  "phi.png", "fit.json"):
         assert (out / name).exists(), name
     header = (out / "summary.csv").read_text().splitlines()[0]
-    assert header == "name,mean,sd,hdi_3%,hdi_97%,r_hat,ess_bulk,ess_tail,flag"
+    assert header == "name,kind,mean,sd,hdi_3%,hdi_97%,r_hat,ess_bulk,ess_tail,flag"
     import arviz as az
 
     idata = az.from_netcdf(str(out / "posterior.nc"))

@@ -130,6 +130,8 @@ def _add_fit(sub) -> argparse.ArgumentParser:
                         "(docs/inference.md)")
     p.add_argument("--walkers", type=_positive_int, help="walkers (default 2 x parameters + 2)")
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
+    p.add_argument("--max-steps", type=_positive_int,
+                   help="until converged, but at most this many steps in all (default 20000; a checkpoint is continued)")
     p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")
     p.add_argument("--residual", choices=("ar1", "iid"), default="ar1", help="residual model (%(default)s)")
     p.add_argument("--upsample", type=_positive_int, default=1,

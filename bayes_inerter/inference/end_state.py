@@ -11,31 +11,55 @@ trusting an interval.
 - **poor fit**: the posterior median of phi (the paper's fit accuracy) below
   :data:`PHI_WARNING`: the model reproduces less than half of the record, and its
   intervals describe the model, not the device.
+- **prior-limited** (:func:`prior_limited_warning`): the other parameters whose 94 %
+  HDI reaches a prior bound (in the same sense): the record leaves them to the prior,
+  and their intervals are the prior's. Expected for the nut's and the bearing's
+  parameters; one warning names them all.
+- **not converged** (:func:`convergence_warning`): the rule's reason, whether b's own
+  chain has mixed, which parameters mix slowest, and what would change the outcome
+  (no steps asked: run until converged; at the step cap: a higher cap, where the chain's
+  own tau says that would be enough; else that the record leaves those parameters
+  open). Every row whose own R-hat or ESS fails the rule, or whose tau the chain is
+  too short for, is flagged.
 
-Both thresholds are assumptions of this package, module constants.
+The thresholds are assumptions of this package, module constants. Each warning is one
+line: ``fit`` prints it as it is and fit.json keeps it, with the rows it flags.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["EndWarning", "end_state_warnings", "BOUND_LOG_TOL", "BOUND_SHARE", "PHI_WARNING"]
+__all__ = ["EndWarning", "end_state_warnings", "prior_limited_warning", "convergence_warning", "BOUND_LOG_TOL",
+           "BOUND_SHARE", "PHI_WARNING", "NOT_CONVERGED", "PRIOR_LIMITED", "CAP_FACTOR"]
 
 BOUND_LOG_TOL = 0.01
 BOUND_SHARE = 0.03
 PHI_WARNING = 0.5
+#: The flags of the two warnings that name several rows.
+NOT_CONVERGED = "not converged"
+PRIOR_LIMITED = "at prior bound (prior-limited)"
+#: A higher step cap is advised only where the chain's own tau says it would converge
+#: within this many times the current cap; beyond, the advice is about the record.
+CAP_FACTOR = 4.0
 
 
 @dataclass(frozen=True)
 class EndWarning:
-    """A warning about one summary row: the row's ``name``, a short ``flag`` for the
-    summary's flag column and a one-line ``message``."""
+    """A warning about summary rows: the row's ``name`` (and the ``also`` rows it flags
+    too), a short ``flag`` for the summary's flag column and a one-line ``message``."""
 
     name: str
     flag: str
     message: str
+    also: tuple = ()
+
+    @property
+    def names(self) -> tuple:
+        return (self.name,) + tuple(self.also)
 
 
 def _inertances(names) -> list[int]:
@@ -51,6 +75,98 @@ def _hdi(x) -> tuple[float, float]:
         warnings.simplefilter("ignore")
         lo, hi = az.hdi(np.asarray(x), hdi_prob=0.94)
     return float(lo), float(hi)
+
+
+def _at_bound(x, lo: float, hi: float) -> str | None:
+    """"lower" or "upper" where the draws ``x`` (in the sampled scale) press on that bound
+    of [lo, hi] (see module docstring), else None."""
+    h_lo, h_hi = _hdi(x)
+    if np.mean(x <= lo + BOUND_LOG_TOL) >= BOUND_SHARE or h_lo <= lo + BOUND_LOG_TOL:
+        return "lower"
+    if np.mean(x >= hi - BOUND_LOG_TOL) >= BOUND_SHARE or h_hi >= hi - BOUND_LOG_TOL:
+        return "upper"
+    return None
+
+
+def prior_limited_warning(model, sample) -> EndWarning | None:
+    """One warning naming the parameters other than the inertances and the noise whose
+    draws press on a prior bound (log-scale priors only), or None."""
+    bounds = np.asarray(model.bounds(), dtype=float)
+    skip = set(_inertances(sample.names)) | {i for i, n in enumerate(sample.names) if n in ("sigma", "rho")}
+    found = []
+    for i, name in enumerate(sample.names):
+        if i in skip or not model.all_priors[name].log_scale:
+            continue
+        side = _at_bound(sample.theta[..., i].ravel(), *bounds[i])
+        if side:
+            found.append(f"{name} ({side})")
+    if not found:
+        return None
+    names = [f.split(" (")[0] for f in found]
+    return EndWarning(names[0], PRIOR_LIMITED,
+                      f"the record leaves {', '.join(found)} to the prior: their intervals reach its bounds and "
+                      "are the prior's, not a measurement", tuple(names[1:]))
+
+
+def _needed_steps(tau_max: float, conv) -> int:
+    """The chain length at which the rule's tau part would hold for ``tau_max``."""
+    return math.ceil(conv.n_tau * tau_max / (1.0 - conv.warmup))
+
+
+def convergence_warning(*, converged: bool, reason: str, iteration: int, tau: dict, rows: list, conv,
+                        steps: int | None, b_identified: bool = True) -> EndWarning | None:
+    """The warning of a chain that has not converged (see module docstring), or None.
+
+    ``tau``: name -> autocorrelation time (steps); ``rows``: the summary rows (R-hat and
+    bulk ESS by name); ``conv``: the rule (``convergence.Convergence``); ``steps``: the
+    steps asked for (None: until converged); ``b_identified``: False where b's interval
+    says the record does not identify it."""
+    if converged:
+        return None
+    by_name = {r["name"]: r for r in rows}
+    finite = {n: t for n, t in tau.items() if math.isfinite(t)}
+    kept = iteration * (1.0 - conv.warmup)
+    flagged = [n for n in tau if n in by_name and (
+        not by_name[n]["r_hat"] < conv.max_rhat or not by_name[n]["ess_bulk"] >= conv.min_ess
+        or not math.isfinite(tau[n]) or conv.n_tau * tau[n] > kept)] or list(tau)
+    b = by_name.get("b")
+    parts = [reason]
+    if b is not None:
+        rhat, ess = b["r_hat"], b["ess_bulk"]
+        if rhat < conv.max_rhat and ess >= conv.min_ess:
+            parts.append(f"b's own chain has mixed (R-hat {rhat:.3f}, bulk ESS {ess:.0f}): its interval can be "
+                         "quoted, the flagged parameters' not yet")
+        elif math.isfinite(rhat) and math.isfinite(ess):
+            parts.append(f"b's own chain has not mixed (R-hat {rhat:.3f}, bulk ESS {ess:.0f}): trust no interval yet")
+        else:
+            parts.append("the chain is too short to judge how b mixes: trust no interval yet")
+    slow = sorted(((t, n) for n, t in finite.items()), reverse=True)[:3]
+    if slow:
+        parts.append("slowest to mix: " + ", ".join(f"{n} (tau {t:.0f} steps)" for t, n in slow))
+    parts.append(_advice(iteration, max(finite.values()) if finite else math.nan, conv, steps,
+                         [n for _, n in slow]))
+    if not b_identified:
+        parts.append("and the record does not identify b (phi below the interval's threshold): no chain length "
+                     "changes that, a longer record or another drive frequency may")
+    return EndWarning(flagged[0], NOT_CONVERGED, "; ".join(parts), tuple(flagged[1:]))
+
+
+def _advice(iteration: int, tau_max: float, conv, steps: int | None, slow: list) -> str:
+    """What would change the outcome of an unconverged chain of ``iteration`` steps."""
+    cap = conv.max_steps
+    if steps is not None and steps < cap:
+        return f"to go on until converged (at most {cap} steps), run again without --steps"
+    if not math.isfinite(tau_max):
+        return "its autocorrelation time cannot be estimated yet: run again with a higher --max-steps"
+    needed = _needed_steps(tau_max, conv)
+    if needed <= CAP_FACTOR * cap:
+        higher = max(needed, iteration + conv.check_every)
+        higher = int(math.ceil(1.2 * higher / 1000.0) * 1000)
+        return (f"it needs about {needed} steps in all at its current tau: run again with --max-steps {higher} to "
+                "continue it")
+    return (f"at its current tau it would need about {needed} steps, more than {CAP_FACTOR:g} times the cap: the "
+            f"record leaves {', '.join(slow) or 'some parameters'} nearly unidentified; a longer record or another "
+            "drive frequency changes that more than a longer chain")
 
 
 def end_state_warnings(model, sample) -> list[EndWarning]:
@@ -70,6 +186,9 @@ def end_state_warnings(model, sample) -> list[EndWarning]:
                                       f"the 94 % interval of {sample.names[i]} reaches its prior's {side} bound "
                                       f"{np.exp(bound):g} kg: the data push it out of the prior; check "
                                       "the record's units and masses, or widen the prior"))
+    limited = prior_limited_warning(model, sample)
+    if limited is not None:
+        out.append(limited)
     phi = float(np.median(sample.phi))
     if not phi >= PHI_WARNING:
         out.append(EndWarning("phi", "poor fit",

@@ -24,7 +24,8 @@ from .checkpoint import WRITE_SECONDS
 from ..lock import folder_lock
 from ..masses import resolve_masses
 from .coordinates import default_coordinates
-from .end_state import end_state_warnings
+from .coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
+from .end_state import EndWarning, convergence_warning, end_state_warnings
 from .interval import DEFAULT_INTERVAL, INTERVALS, IntervalSettings, inertance_interval
 from .model import LikelihoodSettings, PosteriorModel
 from .optimize import laplace_covariance
@@ -70,6 +71,10 @@ class FitResult:
     #: the drive frequency used and where it came from (``records.drive.DriveFrequency``;
     #: None for the joint model)
     drive: object = None
+    #: the draws kept: those after step ``burn_in`` (the ``warmup`` and 2 tau), every ``thin``th
+    burn_in: int = 0
+    warmup: int = 0
+    thin: int = 1
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -120,7 +125,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                convergence: Convergence | None = None, progress=None, report=None, plots: bool = True,
                coordinates: str = "impedance", adaptation: Adaptation | None = Adaptation(),
                checkpoint_seconds: float = WRITE_SECONDS,
-               interval: str | IntervalSettings = DEFAULT_INTERVAL, freq: float | None = None) -> FitResult:
+               interval: str | IntervalSettings = DEFAULT_INTERVAL, freq: float | None = None,
+               name: str | None = None) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
     ``interval``: how b's reported interval is made, a name of ``interval.INTERVALS``
@@ -139,6 +145,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     ``m_s``, ``m_B``, ``device`` (a ``device_file.DeviceFile``): the masses, resolved by
     ``masses.resolve_masses`` (option, metadata, device file, paper default); fit.json
     records each with its source, and the device file's theoretical inertance.
+
+    ``name``: the record's name in the figures' titles (``fit`` gives its file's name).
 
     ``freq``: the drive frequency, Hz; else the record's metadata's, else estimated from
     the record (``records.drive.resolve_drive``). It is settled here, before sampling,
@@ -171,13 +179,14 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         t_post = time.perf_counter() - t0 - got.seconds
         idata.to_netcdf(str(out / "posterior.nc"))
         write_loo(out, idata)
-        if plots:
-            _write_plots(out, pm, sample, sims)
         best = sample.theta.reshape(-1, pm.ndim)[int(np.argmax(sample.lp))]
         b_interval = inertance_interval(pm, sample.values[..., pm.names.index("b")], best,
                                         cov=laplace_covariance(pm, best) if interval_settings.others == "free"
                                         else None, phi=float(np.median(sample.phi)),
                                         settings=interval_settings, rng=np.random.default_rng(seed + 2))
+        got = _finish(out, pm, got, steps, convergence, b_identified=b_interval.identified)
+        if plots:
+            _write_plots(out, pm, sample, sims, label=_label(pm, name), b_interval=b_interval, b_theory=b_theory)
         info = _run_info(model, pm, got, seed, {
             "m_s": pm.m_s, "m_B": pm.m_B, "masses": masses.as_dict(), "b_theory_device_file": b_theory,
             "drive_frequency": drive.as_dict(),
@@ -188,7 +197,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
         return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, idata,
                          info["timings_s"], got.shrink, run.recovered, warnings=got.ended, masses=masses,
-                         b_theory=b_theory, b_interval=b_interval, drive=drive)
+                         b_theory=b_theory, b_interval=b_interval, drive=drive, burn_in=sample.burn,
+                         warmup=int(run.warmup), thin=sample.thin)
 
 
 def _interval_settings(interval) -> IntervalSettings:
@@ -244,6 +254,7 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
         got = _sample_into(out, jm, nwalkers=walkers, steps=steps, seed=seed, processes=processes,
                            convergence=convergence, progress=progress, report=report, start=start,
                            coordinates=coords, adaptation=adaptation)
+        got = _finish(out, jm, got, steps, convergence)
         run, sample = got.run, got.sample
         nb = len(jm.settings)
         draws = {name: sample.values[:, :, i] for i, name in enumerate(jm.names[:nb])}
@@ -257,7 +268,8 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
                              **_sampling_all_runs(out, got.seconds, run, run.start_theta is not None)}
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
         return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"],
-                         got.shrink, run.recovered, draws, warnings=got.ended)
+                         got.shrink, run.recovered, draws, warnings=got.ended, burn_in=sample.burn,
+                         warmup=int(run.warmup), thin=sample.thin)
 
 
 @dataclass(frozen=True)
@@ -274,15 +286,43 @@ class _Sampled:
 
 def _sample_into(out: Path, model, **options) -> _Sampled:
     """Run the sampler into ``out``/chain.h5 (``options``: ``run_sampler``'s), keep its
-    draws, flag its end state and write summary.csv."""
+    draws and read its summary rows and end-state warnings (``_finish`` completes them)."""
     t0 = time.perf_counter()
     run = run_sampler(model, out / "chain.h5", **options)
     seconds = time.perf_counter() - t0
     sample = posterior_sample(model, run)
-    rows = summary_rows(sample)
-    ended = _flag(rows, end_state_warnings(model, sample))
-    write_summary(out / "summary.csv", rows)
-    return _Sampled(run, sample, rows, ended, contraction(model, sample), seconds)
+    rows = summary_rows(sample, kinds=_kinds(model, sample))
+    return _Sampled(run, sample, rows, end_state_warnings(model, sample), contraction(model, sample), seconds)
+
+
+def _kinds(model, sample) -> dict:
+    """summary.csv's ``kind`` of each row: sampled (its prior is in fit.json), derived
+    (a function of sampled ones) or the fit accuracy."""
+    kinds = {n: "sampled" for n in sample.names}
+    kinds.update({n: "derived" for n in sample.derived})
+    kinds["phi"] = "fit accuracy (derived)"
+    return kinds
+
+
+def _finish(out: Path, model, got: _Sampled, steps, convergence, b_identified: bool = True) -> _Sampled:
+    """Every warning of the run (its end state, the coordinates' edge, convergence, in
+    the order ``fit`` prints them), flagged in its rows, and summary.csv written."""
+    run, sample = got.run, got.sample
+    ended = list(got.ended)
+    edge = run.coordinates.domain_edge(sample.theta) if run.coordinates is not None else None
+    if edge is not None and edge > EDGE_WARNING:
+        ended.append(EndWarning(model.names[0], "near the coordinates' edge",
+                                f"the posterior reaches |dZ/dZ_theta - 1| = {edge:.2f}, near the edge of the impedance "
+                                f"coordinates' domain ({MAX_SENSITIVITY_CHANGE:g}), which may cut it; compare with "
+                                "--coordinates unconstrained"))
+    late = convergence_warning(converged=run.converged, reason=run.reason, iteration=run.iteration,
+                               tau=dict(zip(model.names, map(float, run.tau))), rows=got.rows,
+                               conv=convergence or Convergence(), steps=steps, b_identified=b_identified)
+    if late is not None:
+        ended.append(late)
+    _flag(got.rows, ended)
+    write_summary(out / "summary.csv", got.rows)
+    return dataclasses.replace(got, ended=ended)
 
 
 def _run_info(name: str, model, got: _Sampled, seed: int, extra: dict) -> dict:
@@ -295,7 +335,10 @@ def _run_info(name: str, model, got: _Sampled, seed: int, extra: dict) -> dict:
         "transient": int(run.transient), "warmup": int(run.warmup), **extra,
         "warnings": [dataclasses.asdict(w) for w in got.ended],
         "likelihood": dataclasses.asdict(model.likelihood),
-        "priors": {n: p.describe() for n, p in model.all_priors.items()},
+        # the priors of what was sampled; the derived quantities (raw frictions from sums
+        # and shares, b_app) have none of their own
+        "priors": {n: model.all_priors[n].describe() for n in model.names},
+        "derived": list(model.derived_names),
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "moves": list(run.moves),
         "coordinates": run.coordinates.describe(),
@@ -331,10 +374,11 @@ def joint_records(jm) -> list[str]:
 
 
 def _flag(rows: list, ended: list) -> list:
-    """Write each warning's flag into its summary row (``flag``); return the warnings."""
+    """Write each warning's flag into its summary rows (``flag``); return the warnings."""
     flags: dict = {}
     for w in ended:
-        flags.setdefault(w.name, []).append(w.flag)
+        for name in w.names:
+            flags.setdefault(name, []).append(w.flag)
     for r in rows:
         r["flag"] = "; ".join(flags.get(r["name"], []))
     return ended
@@ -375,14 +419,20 @@ def _residual_sd(sample) -> float:
     return float(np.median(vals["sigma"] / np.sqrt(1.0 - rho**2)))
 
 
-def _write_plots(out: Path, pm: PosteriorModel, sample, sims) -> None:
+def _label(pm: PosteriorModel, name: str | None) -> str:
+    """The figures' name of a record: its file's ``name``, its setting and its drive."""
+    setting = pm.record.metadata.get("setting")
+    words = [w for w in (name, str(setting) if setting else None) if w] or ["record"]
+    return ", ".join(words) + f", {pm.drive.hz:.4g} Hz"
+
+
+def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, b_interval=None,
+                 b_theory: float | None = None) -> None:
     import matplotlib.pyplot as plt
 
     from .plots import plot_bands, plot_corner, plot_phi, plot_trace, reference_values
 
     meta = pm.record.metadata
-    label = f"{meta.get('setting') or 'record'}" + (
-        f", {pm.record.drive_frequency:g} Hz" if pm.record.drive_frequency else "")
     flat = sample.values.reshape(-1, len(sample.names))
     truths, paper = reference_values(pm, meta)
     figs = {

@@ -70,6 +70,12 @@ MODELS = {
 }
 
 
+#: ``b_app`` (the inertance seen through the nut, to first order in k_n / (omega c_n))
+#: is reported only where k_n / (omega c_n) is below this: an assumption of this
+#: package's reporting, not of the model.
+B_APP_VALIDITY = 0.1
+
+
 def record_masses(record: Record, m_s: float | None = None, m_B: float | None = None) -> tuple[float, float]:
     """m_s and m_B (kg) from the options, else the record's metadata (m_s, or setting),
     else (m_B) the paper's; :func:`..masses.resolve_masses` says where each came from."""
@@ -232,10 +238,17 @@ class PosteriorModel:
     def derived(self, values: dict) -> dict:
         """The derived quantities (``derived_names``) from sampled values by name: the raw
         frictions of the split parametrisation and ``b_app``, the inertance seen through
-        the nut (``device.apparent_inertance``). Works on arrays."""
+        the nut (``device.apparent_inertance``), NaN where that first-order quantity is
+        not defined: where the nut's spring is not small beside its damper at the drive,
+        k_n / (omega c_n) >= :data:`B_APP_VALIDITY` (there it reached 5.8e7 kg on a
+        paper-like record). Works on arrays."""
         out = {n: v for n, v in self.physical(values).items() if n in self.derived_names}
         if "b_app" in self.derived_names:
-            out["b_app"] = apparent_inertance(values["b"], values["k_n"], values["c_n"])
+            b, k_n, c_n = (np.asarray(values[n], dtype=float) for n in ("b", "k_n", "c_n"))
+            defined = k_n / (2.0 * math.pi * self.drive.hz * c_n) < B_APP_VALIDITY
+            out["b_app"] = np.where(defined, apparent_inertance(b, k_n, c_n), np.nan)
+            if out["b_app"].ndim == 0:
+                out["b_app"] = float(out["b_app"])
         return out
 
     def values(self, theta) -> dict:

@@ -12,8 +12,9 @@
   measured acceleration on that grid.
 
 Summary columns are written by this package from arviz's numbers, so they do not change
-with the arviz line: name, mean, sd, hdi_3%, hdi_97%, r_hat, ess_bulk, ess_tail, and
-flag (empty, or a warning of :mod:`.end_state` about that row).
+with the arviz line: name, kind (sampled, derived, or phi's fit accuracy), mean, sd,
+hdi_3%, hdi_97%, r_hat, ess_bulk, ess_tail, and flag (empty, or the flags of the
+warnings of :mod:`.end_state` that name that row).
 """
 
 from __future__ import annotations
@@ -28,9 +29,12 @@ import numpy as np
 from .model import PosteriorModel
 
 __all__ = ["PosteriorSample", "ar1_noise", "posterior_sample", "contraction", "to_inference_data", "summary_rows",
-           "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "MAX_DRAWS"]
+           "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "NUMBER_COLUMNS",
+           "MAX_DRAWS"]
 
-SUMMARY_COLUMNS = ("name", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail", "flag")
+SUMMARY_COLUMNS = ("name", "kind", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail", "flag")
+#: The columns that hold numbers.
+NUMBER_COLUMNS = SUMMARY_COLUMNS[2:-1]
 MAX_DRAWS = 600  # draws that get a simulation for log-likelihood and predictive
 #: A fit's PSIS-LOO (:func:`loo_summary`), beside its summary.
 LOO_FILE = "loo.json"
@@ -163,18 +167,34 @@ def contraction(model: PosteriorModel, sample: PosteriorSample) -> dict:
     return out
 
 
-def summary_rows(sample: PosteriorSample) -> list[dict]:
-    """One row per parameter (and phi) with the summary columns, from the kept draws."""
+def summary_rows(sample: PosteriorSample, kinds: dict | None = None) -> list[dict]:
+    """One row per parameter (and phi) with the summary columns, from the kept draws.
+    ``kinds``: each name's ``kind`` ("sampled", "derived", ...; empty where not given).
+    A derived quantity that is not defined in every draw (NaN: ``b_app``) is summarised
+    over the draws where it is, and its kind says in how many."""
     import arviz as az
 
     rows = []
     data = sample.as_dict()
+    kinds = kinds or {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for name, x in data.items():
+            kind = kinds.get(name, "")
+            defined = np.isfinite(x)
+            if not np.all(defined):
+                kind += f" (defined in {np.mean(defined):.0%} of the draws)"
+                if np.sum(defined) < 2:
+                    rows.append({"name": name, "kind": kind, **{c: math.nan for c in NUMBER_COLUMNS}})
+                    continue
+                # R-hat and ESS need whole chains: not computed over a subset of draws
+                rows.append({"name": name, "kind": kind, **_moments(x[defined]), "r_hat": math.nan,
+                             "ess_bulk": math.nan, "ess_tail": math.nan})
+                continue
             hdi = az.hdi(x.ravel(), hdi_prob=0.94)
             rows.append({
                 "name": name,
+                "kind": kind,
                 "mean": float(np.mean(x)),
                 "sd": float(np.std(x, ddof=1)),
                 "hdi_3%": float(hdi[0]),
@@ -186,12 +206,21 @@ def summary_rows(sample: PosteriorSample) -> list[dict]:
     return rows
 
 
+def _moments(x: np.ndarray) -> dict:
+    """mean, sd and the 94 % HDI of draws ``x`` (any shape, all finite)."""
+    import arviz as az
+
+    hdi = az.hdi(np.ravel(x), hdi_prob=0.94)
+    return {"mean": float(np.mean(x)), "sd": float(np.std(x, ddof=1)), "hdi_3%": float(hdi[0]),
+            "hdi_97%": float(hdi[1])}
+
+
 def write_summary(path, rows: list[dict]) -> None:
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(SUMMARY_COLUMNS)
         for r in rows:
-            w.writerow([r["name"]] + [f"{r[c]:.10g}" for c in SUMMARY_COLUMNS[1:-1]] + [r.get("flag", "")])
+            w.writerow([r["name"], r.get("kind", "")] + [f"{r[c]:.10g}" for c in NUMBER_COLUMNS] + [r.get("flag", "")])
 
 
 def loo_summary(idata) -> dict:

@@ -117,7 +117,8 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
     try:
         info = json.loads((folder / "fit.json").read_text())
         with open(folder / "summary.csv", newline="") as f:
-            rows = [{k: (v if k in ("name", "flag") else float(v)) for k, v in r.items()} for r in csv.DictReader(f)]
+            rows = [{k: (v if k in ("name", "kind", "flag") else float(v)) for k, v in r.items()}
+                    for r in csv.DictReader(f)]
         with np.load(folder / DRAWS_FILE) as npz:
             draws = {k: npz[k] for k in npz.files}
     except (OSError, ValueError, KeyError):
