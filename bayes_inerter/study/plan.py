@@ -61,7 +61,8 @@ class StudyPlan:
     name : the study's name (``runs/<name>/`` by default on the command line).
     settings, frequencies : the grid of generated records (ignored with ``records_dir``).
     records_dir : a folder of the user's CSV records to fit instead of generated ones;
-        each needs ``setting`` (or ``m_s``) and ``drive_frequency_hz`` in its metadata.
+        each needs ``setting`` (or ``m_s``) in its metadata, and its ``drive_frequency_hz``
+        or else it is estimated from the record (``records.drive``).
     generator : how generated records are made; ``seed`` seeds their noise.
     steps : steps per chain; None runs each until converged.
     comparison : (settings, frequencies) of the records also fitted with the

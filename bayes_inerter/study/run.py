@@ -16,6 +16,7 @@ from ..lock import folder_lock
 from ..masses import resolve_masses
 from ..records import paper_grid, read_record, write_record
 from ..records.checks import b_range_for, require_physical
+from ..records.drive import resolve_drive
 from .analysis import (
     collect,
     contraction_table,
@@ -66,7 +67,8 @@ def prepare_records(plan: StudyPlan, out: Path) -> dict:
                              skip=plan.skip_checks, where=str(path))
             setting = rec.metadata.get("setting")
             setting = str(setting).upper() if setting else None
-            records[path.stem] = (path, setting if setting in SETTINGS else None, rec.drive_frequency)
+            # the metadata's drive frequency, or the record's own estimate, as its fit will use
+            records[path.stem] = (path, setting if setting in SETTINGS else None, resolve_drive(rec).hz)
         return records
     folder = out / "records"
     grid = paper_grid(settings=plan.generator, seed=plan.seed, frequencies=plan.frequencies, names=plan.settings)
