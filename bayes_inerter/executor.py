@@ -16,17 +16,24 @@ offers two ways to run a function over items:
 Local workers are forked (they share the parent's memory at the fork, numba's compiled
 kernels included) and leave Ctrl-C to the parent, which ends them: a worker that died of
 it mid-task would leave the parent waiting for its result for ever.
+
+Ctrl-C in the process that evaluates: :func:`interrupts_held` keeps it back while a block
+runs (a sampler step) and raises it when the block ends; :func:`interrupt_raised` turns
+numba's report of one that came inside a compiled function back into a KeyboardInterrupt.
 """
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import multiprocessing.connection
 import signal
+import threading
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator
 
-__all__ = ["Executor", "Serial", "LocalProcesses", "Dask", "Outcome", "WorkerDied", "make_executor"]
+__all__ = ["Executor", "Serial", "LocalProcesses", "Dask", "Outcome", "WorkerDied", "make_executor",
+           "interrupts_held", "interrupt_raised", "caused_by_interrupt"]
 
 #: The state a worker process was given when it started (set only in workers, by
 #: :func:`_start_worker`; never in the process that made the executor).
@@ -249,3 +256,65 @@ def make_executor(processes: int = 1, scheduler: str | None = None, *, state: An
     if processes == 1:
         return Serial(state)
     return LocalProcesses(processes, state)
+
+
+@contextlib.contextmanager
+def interrupts_held():
+    """Ctrl-C (SIGINT) held back while the block runs, then given to the handler that was
+    in place (Python's raises KeyboardInterrupt) as the block ends, in the caller's own
+    code. For a sampler step: a KeyboardInterrupt raised inside it would come out of
+    emcee's log-probability wrapper, which prints every walker's parameters before it
+    passes the exception on, or out of a compiled function, which numba reports as a
+    SystemError; held, the step ends and is stored first. A second Ctrl-C while held is
+    given at once (a step waiting for a worker that will never answer must not hold it
+    for ever). Nothing is held off the main thread (signals go to the main thread alone)
+    or where SIGINT is ignored."""
+    previous = signal.getsignal(signal.SIGINT)
+    if (threading.current_thread() is not threading.main_thread() or previous is None
+            or previous is signal.SIG_IGN):
+        yield
+        return
+    came = []
+
+    def hold(signum, frame):
+        came.append(signum)
+        if len(came) > 1:  # asked again: now
+            came.clear()
+            signal.signal(signal.SIGINT, previous)
+            signal.raise_signal(signum)
+
+    signal.signal(signal.SIGINT, hold)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if came:  # the handler runs here, before raise_signal returns
+            signal.raise_signal(signal.SIGINT)
+
+
+def caused_by_interrupt(exc: BaseException) -> bool:
+    """Whether ``exc`` is a KeyboardInterrupt or was caused by one (its chain holds one)."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
+@contextlib.contextmanager
+def interrupt_raised():
+    """A KeyboardInterrupt out of the block, where Ctrl-C came inside a compiled function.
+
+    A KeyboardInterrupt raised while numba's compiled code has called back into Python
+    (as it does to box the arrays it returns) is not passed on as it is: numba goes on and
+    reports ``SystemError: CPUDispatcher(...) returned a result with an exception set``,
+    the KeyboardInterrupt at the end of its causes. Such an error leaves the block as the
+    KeyboardInterrupt it was; every other exception as it is."""
+    try:
+        yield
+    except Exception as exc:
+        if not caused_by_interrupt(exc):
+            raise
+        raise KeyboardInterrupt().with_traceback(exc.__traceback__) from None

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sys
 
+from ..executor import caused_by_interrupt
 from .fit import cmd_fit
 from .identify import cmd_identify
 from .parser import CHECKPOINT_SECONDS, FIT_COORDINATES, RECORD_CHECKS, build_parser  # noqa: F401  (tests' names)
@@ -36,7 +37,10 @@ def _on_sigint(signum, frame):
     """Ctrl-C: remembered, then raised as KeyboardInterrupt. Python drops an exception
     raised while it runs a weakref callback or a ``__del__`` ("Exception ignored in ..."):
     a fit on two processes, interrupted there, once ran on to its last step and exit
-    status 0. The commands' per-step callbacks raise it again (:func:`_check_interrupt`)."""
+    status 0. The commands' per-step callbacks raise it again (:func:`_check_interrupt`).
+    Raised where a compiled function has called back into Python, numba reports it as a
+    SystemError (:func:`..executor.interrupt_raised`): :func:`main` takes that for the
+    interruption it is."""
     global _INTERRUPTED
     _INTERRUPTED = True
     raise KeyboardInterrupt
@@ -90,7 +94,14 @@ def main(argv=None) -> int:
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_PIPE
-    except (CliError, ValueError, OSError, RuntimeError) as exc:
+    except Exception as exc:
+        # an error Ctrl-C caused (numba's SystemError where it came inside compiled code) is
+        # the interruption, not a failure
+        if _INTERRUPTED or caused_by_interrupt(exc):
+            print("interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        if not isinstance(exc, (CliError, ValueError, OSError, RuntimeError)):
+            raise
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_FAIL
     finally:

@@ -34,7 +34,7 @@ from typing import Iterator
 import emcee
 import numpy as np
 
-from ..executor import Executor, make_executor
+from ..executor import Executor, interrupt_raised, interrupts_held, make_executor
 from .adaptation import Adaptation, Schedule
 from .checkpoint import WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint, stored_identity
 from .convergence import WARMUP, Check, Convergence, Monitor, check_chain, is_converged, transient, why_not
@@ -163,7 +163,8 @@ def sample(target: Target, backend, state: emcee.State, *, schedule: Schedule, i
     Each stretch of ``schedule`` runs with its moves on an emcee sampler of its own,
     which goes on with the state's random state; the checkpoint's twin is brought up to
     date at the end of each stretch. ``executor``: where the walkers are evaluated (made
-    with ``target`` as its state; None: here)."""
+    with ``target`` as its state; None: here). Ctrl-C comes out between steps, after the
+    step it came in is stored (:func:`..executor.interrupts_held`)."""
     nwalkers, ndim = np.shape(state.coords)
     log_prob = functools.partial(target.batch, executor=executor)
     until = backend.iteration + iterations
@@ -172,8 +173,15 @@ def sample(target: Target, backend, state: emcee.State, *, schedule: Schedule, i
         end = min(until, schedule.end_of_stretch(step))
         sampler = emcee.EnsembleSampler(nwalkers, ndim, log_prob, vectorize=True, moves=schedule.moves_at(
             step, backend), backend=backend, blobs_dtype=float)
-        yield from sampler.sample(state, iterations=end - step, store=True)
-        backend.flush()
+        steps = sampler.sample(state, iterations=end - step, store=True)
+        while True:
+            with interrupts_held():
+                got = next(steps, None)
+            if got is None:
+                break
+            yield got
+        with interrupts_held():
+            backend.flush()
         state = backend.get_last_sample()
 
 
@@ -218,7 +226,8 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     backend, done, recovered = _open(Path(checkpoint), identity, fresh, checkpoint_seconds)
     if report:
         report(SamplerStatus(done, done, steps))
-    with make_executor(processes, state=target) as executor:
+    # Ctrl-C in the start search's compiled code: a KeyboardInterrupt, not numba's SystemError
+    with make_executor(processes, state=target) as executor, interrupt_raised():
         try:
             state, start_theta = (_first_walkers(target, nwalkers, seed, start, executor) if done == 0 else
                                   (backend.get_last_sample(), None))
@@ -235,7 +244,8 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
                               check.transient, done, check.warmup)
         finally:
             try:  # a run stopped by Ctrl-C or an error: bring the twin up to date if possible
-                backend.flush()
+                with interrupts_held():
+                    backend.flush()
             except OSError:  # chain.h5 holds every step; the twin is only behind
                 pass
 
