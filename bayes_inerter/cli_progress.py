@@ -102,8 +102,9 @@ class StepProgress:
             self._printed = now
             self._say(self._line())
 
-    def close(self) -> None:
+    def close(self, done: bool = True) -> None:
+        """End the progress; ``done`` False for a run that stopped early (Ctrl-C, an error)."""
         if self.bar is not None:
             self.bar.close()
         elif self.iteration:
-            self._say(self._line() + " (done)")
+            self._say(self._line() + (" (done)" if done else " (stopped)"))

@@ -267,3 +267,11 @@ def test_progress_never_promises_steps_past_the_cap():
     bar.step(15000, None)
     assert "more steps needed than the cap of 20000 leaves" in log.getvalue()
     assert "23360" not in log.getvalue()
+
+
+def test_progress_of_a_stopped_run_does_not_say_done():
+    log = io.StringIO()
+    bar = StepProgress("sampling", total=40, stream=log, interval=0.0)
+    bar.step(3, 40)
+    bar.close(done=False)
+    assert log.getvalue().splitlines()[-1] == "sampling: step 3 of 40 (stopped)"

@@ -46,8 +46,10 @@ def cmd_fit(args) -> int:
             checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
             name=Path(args.record).name, convergence=convergence,
         )
-    finally:
-        bar.close()
+    except BaseException:
+        bar.close(done=False)
+        raise
+    bar.close()
     if result.recovered:
         print(f"note: checkpoint damaged, recovered: {result.recovered}")
     b, iv = result.row("b"), result.b_interval
