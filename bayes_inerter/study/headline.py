@@ -46,7 +46,11 @@ def _section(text: str, heading: str) -> str:
 
 
 def _relink(text: str, prefix: str) -> str:
-    """Relative links and images of ``text`` (``](name)``) prefixed with ``prefix``."""
+    """Relative links and images of ``text`` (``](name)``) prefixed with ``prefix``; a
+    link whose text is its own path in code (``[`name`](name)``, as ``study.report``
+    names the records' folder) has its text prefixed too."""
+    text = re.sub(r"\[`(?!https?:|/|#)([^`\]]+)`\]\(\1\)",
+                  lambda m: f"[`{prefix}/{m.group(1)}`]({m.group(1)})", text)
     return re.sub(r"\]\((?!https?:|/|#)([^)]+)\)", lambda m: f"]({prefix}/{m.group(1)})", text)
 
 

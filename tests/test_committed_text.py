@@ -1,0 +1,135 @@
+"""Committed text names no folder of the machine that wrote it, and the numbers the
+docs quote from a committed result are that result's.
+
+The files are git's (``git ls-files``), so a run left untracked in the tree is not
+checked; each checker is also tried on a planted example, so a check that cannot fail
+is caught."""
+
+import csv
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+#: What is checked: text files under these (paths relative to the repository).
+CHECKED = ("results", "docs", "README.md", "CHANGELOG.md")
+SUFFIXES = (".md", ".csv", ".json", ".txt")
+#: An absolute path of a machine: a Unix home, scratch or work folder, a macOS home, a
+#: Windows drive. Not inside a relative path (``runs/tmp/`` is fine) nor a URL's path.
+MACHINE_PATH = re.compile(r"(?<![\w.~-])/(?:work|tmp|home|root|Users)/|(?<![\w/])[A-Za-z]:\\")
+#: docs/reproducibility.md's sentence quoting results/quick's b's.
+QUOTED = re.compile(r"`results/quick/inertance\.csv` now holds ([^;]+);")
+
+
+def machine_paths(text: str) -> list[tuple[int, str]]:
+    """(line number, line) of each line of ``text`` that holds an absolute path of a machine."""
+    return [(i, line.strip()) for i, line in enumerate(text.splitlines(), 1) if MACHINE_PATH.search(line)]
+
+
+def committed_text_files(root: Path = ROOT) -> list[Path]:
+    """The committed (tracked) text files of :data:`CHECKED` under ``root``."""
+    try:
+        out = subprocess.run(["git", "ls-files", "-z", "--", *CHECKED], cwd=root, capture_output=True, text=True,
+                             check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("not a git checkout: no list of committed files")
+    return [root / name for name in out.split("\0") if name.endswith(SUFFIXES)]
+
+
+def quoted_b_mismatches(doc: str, rows: list[dict]) -> list[str]:
+    """Each b ``doc`` quotes as results/quick's (``A0 752.422``) that is not the row's
+    ``b_median`` to the digits quoted; an error if ``doc`` quotes none."""
+    found = QUOTED.search(doc)
+    if not found:
+        return ["no sentence quoting `results/quick/inertance.csv`'s b's"]
+    quoted = re.findall(r"\b([AB]\d) (\d+(?:\.\d+)?)\b", found.group(1))
+    if not quoted:
+        return [f"no b's in {found.group(0)!r}"]
+    by_setting = {r["setting"]: float(r["b_median"]) for r in rows}
+    bad = []
+    for setting, text in quoted:
+        decimals = len(text.partition(".")[2])
+        if setting not in by_setting:
+            bad.append(f"{setting}: not in results/quick/inertance.csv")
+        elif f"{by_setting[setting]:.{decimals}f}" != text:
+            bad.append(f"{setting}: the doc says {text}, results/quick/inertance.csv holds {by_setting[setting]}")
+    return bad
+
+
+@pytest.mark.parametrize("text", [
+    "Fitted: the records in `/work/main/results/full/paper-like/records`.",
+    "--out /tmp/rich/rec.csv",
+    '"records_dir": "/home/someone/records"',
+    "cd /root/project",
+    "see /Users/name/Desktop/run1.csv",
+    r"C:\Users\name\run1.csv",
+    r'"path": "D:\\data\\run1.csv"',
+    "file:///tmp/x.html",
+])
+def test_a_machine_path_is_found(text):
+    assert machine_paths("first line\n" + text) == [(2, text.strip())]
+
+
+@pytest.mark.parametrize("text", [
+    "Fitted: the records in [`records`](records).",
+    "runs/tmp/quick and results/work/x are relative",
+    "https://github.com/home/project and a ratio 1:3",
+    "time=Zeit,force=Kraft",
+])
+def test_relative_paths_and_urls_are_not(text):
+    assert machine_paths(text) == []
+
+
+def test_a_planted_file_is_caught(tmp_path):
+    """The listing and the check together: a committed file with an absolute path is
+    named, an untracked one is not."""
+    def git(*args):
+        subprocess.run(["git", *args], cwd=tmp_path, check=True, capture_output=True)
+
+    try:
+        git("init", "-q")
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("no git")
+    (tmp_path / "results" / "study").mkdir(parents=True)
+    (tmp_path / "results" / "study" / "REPORT.md").write_text("the records in `/work/main/records`\n")
+    (tmp_path / "results" / "study" / "fig.png").write_bytes(b"/tmp/ in a binary file")
+    (tmp_path / "README.md").write_text("relative only\n")
+    git("add", "results", "README.md")
+    (tmp_path / "results" / "untracked.md").write_text("/tmp/x\n")
+    files = committed_text_files(tmp_path)
+    assert sorted(p.relative_to(tmp_path).as_posix() for p in files) == ["README.md", "results/study/REPORT.md"]
+    assert [p.name for p in files if machine_paths(p.read_text())] == ["REPORT.md"]
+
+
+def test_committed_text_names_no_machine_path():
+    files = committed_text_files()
+    assert any(p.name == "REPORT.md" for p in files)  # the listing found the results
+    found = {p.relative_to(ROOT).as_posix(): hits for p in files
+             if (hits := machine_paths(p.read_text(encoding="utf-8", errors="replace")))}
+    assert not found, "absolute paths of a machine in committed text (write them relative):\n" + "\n".join(
+        f"{name}:{i}: {line[:160]}" for name, hits in found.items() for i, line in hits)
+
+
+def _quick_rows() -> list[dict]:
+    with open(ROOT / "results" / "quick" / "inertance.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_the_docs_quote_results_quick_as_committed():
+    doc = (ROOT / "docs" / "reproducibility.md").read_text()
+    assert quoted_b_mismatches(doc, _quick_rows()) == []
+
+
+def test_a_stale_quote_is_caught():
+    rows = [{"setting": "A0", "b_median": "752.422"}, {"setting": "B2", "b_median": "20258.8"}]
+    ok = "and `results/quick/inertance.csv` now holds A0 752.422 and B2 20259, its `b_median`;"
+    assert quoted_b_mismatches(ok, rows) == []
+    stale = "and `results/quick/inertance.csv` now holds A0 752.577 and B2 20258.9, its `b_median`;"
+    assert quoted_b_mismatches(stale, rows) == [
+        "A0: the doc says 752.577, results/quick/inertance.csv holds 752.422",
+        "B2: the doc says 20258.9, results/quick/inertance.csv holds 20258.8"]
+    assert quoted_b_mismatches("no numbers quoted", rows) != []
+    assert quoted_b_mismatches("`results/quick/inertance.csv` now holds A7 1.0;", rows) == [
+        "A7: not in results/quick/inertance.csv"]
