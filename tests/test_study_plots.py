@@ -173,3 +173,66 @@ def test_structure_figure_draws_identified_and_fitted_b_per_setting():
     fitted = [c for c in ax2.containers if c.get_label() == "structural fit, control"][0]
     assert np.allclose(fitted.lines[0].get_ydata(), b / [theoretical_inertance(s) for s in settings])
     plt.close(fig)
+
+
+def _overlaps(a, b) -> bool:
+    """Whether two window extents share some area (touching edges do not count)."""
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+def test_model_comparison_keeps_its_labels_clear_of_the_titles_and_ticks():
+    # results/quick's comparison: the best model's "0 (se ...)" label sat on the title,
+    # the worst's on the tick labels
+    rows = [{"record": "A3_1Hz", "model": m, "phi_mean": p, "elpd_loo": e, "elpd_se": se}
+            for m, p, e, se in (("linear", 0.276, 1334.68, 22.3), ("rigid", 0.932, 1558.53, 31.1),
+                                ("two-port", 0.991, 2754.9, 16.5))]
+    fig = plot_models(rows)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    titles = [ax.title.get_window_extent(renderer) for ax in fig.axes]
+    labels = [t.get_window_extent(renderer) for ax in fig.axes
+              for t in [ax.xaxis.label, ax.yaxis.label, *ax.texts, *ax.get_xticklabels(), *ax.get_yticklabels()]
+              if t.get_text()]
+    assert not [(t, lab) for t in titles for lab in labels if _overlaps(t, lab)]
+    loo = fig.axes[1]
+    bar_labels = [t.get_window_extent(renderer) for t in loo.texts]
+    ticks = [t.get_window_extent(renderer) for t in loo.get_xticklabels() if t.get_text()]
+    assert len(bar_labels) == 3 and not [(a, b) for a in bar_labels for b in ticks if _overlaps(a, b)]
+    inside = loo.get_window_extent(renderer)  # each bar's label inside its panel
+    assert all(inside.y0 <= b.y0 and b.y1 <= inside.y1 for b in bar_labels)
+    plt.close(fig)
+
+
+def test_phi_map_title_fits_a_narrow_figure():
+    rows = [{"setting": "A0", "freq_hz": 0.5, "phi_mean": 0.91}, {"setting": "A1", "freq_hz": 1.0, "phi_mean": 0.93}]
+    fig = plot_phi_map(rows)
+    fig.canvas.draw()
+    title = fig.axes[0].title.get_window_extent(fig.canvas.get_renderer())
+    assert 0 <= title.x0 and title.x1 <= fig.bbox.x1 and title.y1 <= fig.bbox.y1
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("draw", ["inertance", "least_squares", "design", "ranks", "coverage"])
+def test_no_title_overlaps_a_label(draw):
+    """Every other figure, drawn with the data above: no title (nor the figure's) on an
+    axis label or a tick label."""
+    rng = np.random.default_rng(7)
+    rows = [{"parameter": n, "coverage_50": 0.5, "se_50": 0.05, "coverage_90": 0.9, "se_90": 0.03,
+             "replicates": 50.0} for n in ("b", "f_0")]
+    fig = {"inertance": lambda: plot_inertance([_row("A0", 752.0, product=750.0), _row("A1", 1668.0)]),
+           "least_squares": lambda: plot_least_squares([_ls_row("A3_1Hz", "A3", 1.0, 1010.0),
+                                                        _ls_row("A3_0.5Hz", "A3", 0.5, 980.0)]),
+           "design": lambda: plot_design([{"setting": s, "design": d, "b": 0.9, "k_n": 0.1}
+                                          for s in ("A0", "B2") for d in ("paper", "wide")], ["b", "k_n"]),
+           "ranks": lambda: plot_ranks({n: rng.integers(0, 100, 40) for n in ("b", "f_0", "c_n")}, 99,
+                                       title="given"),
+           "coverage": lambda: plot_coverage({"model-ar1": rows})}[draw]()
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    titles = [ax.title for ax in fig.axes] + ([fig._suptitle] if fig._suptitle is not None else [])
+    titles = [t.get_window_extent(renderer) for t in titles if t.get_text()]
+    labels = [t.get_window_extent(renderer) for ax in fig.axes
+              for t in [ax.xaxis.label, ax.yaxis.label, *ax.get_xticklabels(), *ax.get_yticklabels()]
+              if t.get_text()]
+    assert titles and not [(t, lab) for t in titles for lab in labels if _overlaps(t, lab)]
+    plt.close(fig)

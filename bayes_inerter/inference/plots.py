@@ -77,36 +77,130 @@ def reference_values(model, metadata: dict):
     return t_out, p_out
 
 
-def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: str = "", fig=None):
+#: The corner plot's marks: colour and line style of each (``plot_corner``'s legend).
+TRUTH_COLOR, PAPER_COLOR, INTERVAL_COLOR, THEORY_COLOR = "tab:blue", "tab:red", "tab:orange", "tab:purple"
+
+
+def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: str = "", fig=None,
+                interval=None, theory: float | None = None, b: str = "b"):
     """Corner plot of (n, ndim) draws in SI units: b in kg, shares and rho as they are,
     the other parameters in log10. ``truths`` and ``paper`` (in the plotted scale, None
     where unknown) are marked only where given. ``fig``: draw into this figure (empty,
-    or with ndim x ndim axes, as ``corner.corner`` takes it)."""
-    import corner
+    or with ndim x ndim axes, as ``corner.corner`` takes it). ``title``: the figure's
+    title, as the caller words it.
 
+    On the parameter named ``b`` (kg): ``interval`` (lo, hi), the reported interval, is
+    shaded on its histogram and drawn as dashed lines in its 2-D panels, whose range is
+    widened to hold it; ``theory``, the theoretical b (the device file's), is a line of
+    its own colour where it falls inside the panels (the legend gives its value and says
+    when it is off them). A legend names every mark drawn."""
     import logging
 
+    import corner
+    from matplotlib.lines import Line2D
+
+    if (interval is not None or theory is not None) and b not in list(names):
+        raise ValueError(f"interval and theory mark the parameter {b!r}, which is not among {list(names)}")
     x = np.column_stack([_to_plot(n, values[:, i]) for i, n in enumerate(names)])
     # corner logs "Too few points to create valid contours" to the root logger for
     # panels of a parameter pinned to a point; the panel shows that plainly already
     root = logging.getLogger()
     level = root.level
     root.setLevel(logging.ERROR)
+    made = fig is None
     try:
         fig = corner.corner(
-            x, fig=fig, labels=[_label(n) for n in names], truths=truths, truth_color="tab:blue",
+            x, fig=fig, labels=[_label(n) for n in names], truths=truths, truth_color=TRUTH_COLOR,
             quantiles=[0.03, 0.5, 0.97], show_titles=True, title_fmt=".4g",
             title_kwargs={"fontsize": 8}, label_kwargs={"fontsize": 8}, plot_datapoints=False,
         )
     finally:
         root.setLevel(level)
     if paper is not None and any(p is not None for p in paper):
-        corner.overplot_lines(fig, [np.nan if p is None else p for p in paper], color="tab:red", ls="--")
-    marks = [m for m, given in (("blue: truth of a generated record", truths is not None and any(
-        t is not None for t in truths)), ("red dashed: the paper's values", paper is not None and any(
-        p is not None for p in paper))) if given]
-    fig.suptitle(title + ("\n" + "; ".join(marks) if marks else ""), fontsize=10)
+        corner.overplot_lines(fig, [np.nan if p is None else p for p in paper], color=PAPER_COLOR, ls="--")
+    handles = []
+    if truths is not None and any(t is not None for t in truths):
+        handles.append(Line2D([], [], color=TRUTH_COLOR, label="truth"))
+    if paper is not None and any(p is not None for p in paper):
+        handles.append(Line2D([], [], color=PAPER_COLOR, ls="--", label="paper"))
+    if interval is not None or theory is not None:
+        handles += _mark_b(fig, len(names), list(names).index(b), interval, theory)
+    _title_and_legend(fig, title, handles, grow=made)
     return fig
+
+
+def _title_and_legend(fig, title: str, handles: list, *, grow: bool) -> None:
+    """``title`` at the top of a corner figure, the legend of ``handles`` under it on the
+    right (in the empty upper triangle where it fits); the panels moved down until
+    neither overlaps a panel, its title or its labels: ``grow``, the figure is made
+    taller for it (one made here), else the panels' grid is lowered (the caller's)."""
+    legend = fig.legend(handles=handles, loc="upper right", fontsize=8, frameon=False) if handles else None
+    inch = fig.dpi
+    for _ in range(6):
+        renderer = fig._get_renderer()  # any canvas's, Agg's or a bare Figure's
+        height = fig.get_figheight() * inch
+        texts = []
+        below = height - 0.1 * inch  # the texts' top: 0.1 in under the figure's edge
+        if title:
+            sup = fig.suptitle(title, fontsize=10, y=below / height, va="top")
+            texts.append(sup.get_window_extent(renderer))
+            below = texts[-1].y0
+        if legend is not None:
+            legend.set_bbox_to_anchor((0.98, (below - 0.05 * inch) / height), transform=fig.transFigure)
+            texts.append(legend.get_window_extent(renderer))
+        panels = [ax.get_tightbbox(renderer) for ax in fig.axes if ax.get_frame_on()]
+        need = max([p.y1 - t.y0 for t in texts for p in panels if t.overlaps(p)], default=0.0)
+        if need <= 0:
+            return
+        step = (need + 0.05 * inch) / inch  # inches
+        pars, h = fig.subplotpars, fig.get_figheight()
+        if grow:
+            fig.set_size_inches(fig.get_figwidth(), h + step)
+            fig.subplots_adjust(top=pars.top * h / (h + step), bottom=pars.bottom * h / (h + step))
+        else:
+            fig.subplots_adjust(top=pars.top - step / h)
+
+
+def _mark_b(fig, ndim: int, k: int, interval, theory) -> list:
+    """Mark the reported ``interval`` and the ``theory`` on the ``k``-th parameter's
+    panels of a corner figure (``ndim`` x ``ndim`` axes); return their legend handles."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    axes = np.asarray(fig.axes).reshape(ndim, ndim)
+    column = [axes[i, k] for i in range(k + 1, ndim)]  # b on the x axis below the histogram
+    row = [axes[k, j] for j in range(k)]  # b on the y axis left of it
+    hist = axes[k, k]
+    lo, hi = hist.get_xlim()
+    handles = []
+    if interval is not None:
+        a, z = sorted(float(v) for v in interval)
+        pad = 0.05 * (max(hi, z) - min(lo, a))
+        lo, hi = min(lo, a - pad), max(hi, z + pad)  # the interval inside the panels
+        for ax in [hist, *column]:
+            ax.set_xlim(lo, hi)
+        for ax in row:
+            ax.set_ylim(lo, hi)
+        hist.axvspan(a, z, color=INTERVAL_COLOR, alpha=0.2, lw=0)
+        for v in (a, z):
+            for ax in [hist, *column]:
+                ax.axvline(v, color=INTERVAL_COLOR, ls="--", lw=1.2)
+            for ax in row:
+                ax.axhline(v, color=INTERVAL_COLOR, ls="--", lw=1.2)
+        handles.append(Patch(facecolor=INTERVAL_COLOR, alpha=0.4, edgecolor=INTERVAL_COLOR, ls="--",
+                             label=f"reported 94 % interval: {a:.5g} to {z:.5g} kg"))
+    if theory is not None:
+        t = float(theory)
+        where = "" if lo <= t <= hi else f" (off the panels, to the {'left' if t < lo else 'right'})"
+        for ax in [hist, *column, *row]:  # a line off the panels must not widen them
+            ax.set_autoscale_on(False)
+        for ax in [hist, *column]:
+            ax.axvline(t, color=THEORY_COLOR, lw=1.5)
+        for ax in row:
+            ax.axhline(t, color=THEORY_COLOR, lw=1.5)
+        handles.append(Line2D([], [], color=THEORY_COLOR, lw=1.5,
+                              label=f"theoretical b (device file): {t:.5g} kg{where}"))
+    return handles
 
 
 def _reversal_time(time, accel_lp, freq):
@@ -124,6 +218,33 @@ def _reversal_time(time, accel_lp, freq):
     return time[crossings[0]] if len(crossings) else time[-1] - period
 
 
+def _steady(time, freq) -> np.ndarray:
+    """Where the response is steady: the record without its first and last drive period
+    (without its first and last tenth where the drive frequency is not known, or where
+    that would leave less than half of it)."""
+    duration = time[-1] - time[0]
+    cut = 1.0 / freq if freq else 0.1 * duration
+    if duration - 2 * cut < 0.5 * duration:
+        cut = 0.1 * duration
+    return (time >= time[0] + cut) & (time <= time[-1] - cut)
+
+
+def _steady_ylim(ax, time, series, freq) -> None:
+    """The y-limits of ``ax`` from the steady part of ``series`` (``_steady``), so that a
+    start-up spike or the end's ringing does not squash the rest; what lies beyond them
+    is said in the panel."""
+    steady = _steady(time, freq)
+    reach = max(float(np.nanmax(np.abs(y[steady]))) for y in series)
+    whole = max(float(np.nanmax(np.abs(y))) for y in series)
+    if not np.isfinite(reach) or reach <= 0:
+        return
+    ax.set_ylim(-1.1 * reach, 1.1 * reach)
+    if whole > 1.1 * reach:
+        ax.text(0.99, 0.02, f"scaled to the steady part; the record's ends reach ±{whole:.3g} m/s²",
+                transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color="0.3",
+                bbox={"facecolor": "w", "alpha": 0.7, "lw": 0})
+
+
 def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, noise_sd: float | None = None, title: str = "",
                fig=None):
     """Median, 50 % and 94 % credible bands of the simulated low-passed acceleration
@@ -132,7 +253,9 @@ def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, noise_sd: floa
 
     Three panels: the measured and the median over the whole record; the residual about
     the posterior median with the bands about it (bands far thinner than the signal are
-    visible only so); a zoom on a velocity reversal. Legends sit outside the data.
+    visible only so), its y-limits set by the steady part (without the first and last
+    drive period, where a start-up spike would squash the rest); a zoom on a velocity
+    reversal. Legends sit outside the data.
     ``fig``: draw the three panels into this (empty) figure."""
     q = np.percentile(sims, [3, 25, 50, 75, 97], axis=0)
     t_rev = _reversal_time(time, measured_lp, freq)
@@ -154,6 +277,8 @@ def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, noise_sd: floa
     mid.plot(time, measured_lp - q[2], color="k", lw=0.6, label="measured - median")
     mid.axhline(0, color="tab:red", lw=0.8)
     mid.set_ylabel("about the posterior\nmedian (m/s²)")
+    edges = [measured_lp - q[2], d[0], d[4]] + ([-half, half] if noise_sd is not None else [])
+    _steady_ylim(mid, time, edges, freq)
     sel = (time >= t_rev - span) & (time <= t_rev + span)
     if noise_sd is not None:
         zoom.fill_between(time[sel], (q[2] - half)[sel], (q[2] + half)[sel], color="tab:blue", alpha=0.15, lw=0)

@@ -226,7 +226,7 @@ def plot_phi_map(rows: list[dict], *, ax=None):
                     color="w" if np.nan_to_num(grid[i, j], nan=lo) < (lo + hi) / 2 else "k")
     ax.set_xticks(range(len(settings)), settings)
     ax.set_yticks(range(len(freqs)), [f"{f:g} Hz" for f in freqs])
-    ax.set_title("fit accuracy phi (%): posterior mean, (paper's Table 2)")
+    ax.set_title("fit accuracy phi (%): posterior mean\n(in brackets: the paper's Table 2)")  # fits 2 settings
     fig.colorbar(im, ax=ax, label="phi (%)")
     if made:
         fig.tight_layout()
@@ -261,6 +261,9 @@ def plot_models(rows: list[dict], *, fig=None):
     a1.set_ylabel("fit accuracy phi (%)")
     a1.legend(fontsize=8)
     a2.set_ylabel("elpd_loo - best model's (nats; higher is better)")
+    # room above and below the bars for their labels, clear of the title and the ticks
+    low = min([0.0] + [b.get_height() for b in a2.patches if np.isfinite(b.get_height())])
+    a2.set_ylim(low - 0.18 * (-low or 1.0), 0.15 * (-low or 1.0))
     a1.set_title("fit accuracy")
     a2.set_title("LOO: expected log predictive density")
     if made:
