@@ -158,3 +158,22 @@ def test_bands_residual_limits_come_from_the_steady_part():
     fig = plot_bands(t, np.sin(2 * np.pi * t) + 0.01 * rng.normal(size=t.size), sims, freq=1.0, noise_sd=0.01)
     assert not fig.axes[1].texts
     plt.close(fig)
+
+
+def test_trace_names_the_burn_in_as_fit_prints_it():
+    theta = np.random.default_rng(0).normal(size=(4, 20, 2))
+    fig = plot_trace(theta, ["b", "rho"], burn=740, thin=5, warmup=666)
+    label = fig.axes[-1].get_xlabel()
+    assert "the first 740 discarded: a warm-up of 666, then 2 tau" in label and "every 5th" in label
+    plt.close(fig)
+
+
+def test_fit_figures_are_titled_by_the_records_file_name():
+    from bayes_inerter import paper_parameters
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.fit import _label
+    from bayes_inerter.records import GeneratorSettings, generate_record
+
+    rec = generate_record(paper_parameters("A3"), 1.5, settings=GeneratorSettings(duration=2.0, ramp=0.5), rng=0,
+                          setting_name="A3")
+    assert _label(PosteriorModel(rec), "run1.csv") == "run1.csv, A3, 1.5 Hz"

@@ -26,3 +26,14 @@ def test_report_and_headline_name_the_records_relative_to_themselves(tmp_path):
     composed = write_headline(full, study, title="Paper-like", summary="Why.").read_text()
     assert "The records ([`paper-like/records`](paper-like/records)) carry" in composed
     assert str(tmp_path) not in composed
+
+
+def test_study_json_names_the_records_relative_to_the_working_folder(tmp_path, monkeypatch):
+    from bayes_inerter.study.run import _portable
+
+    (tmp_path / "mine" / "records").mkdir(parents=True)
+    monkeypatch.chdir(tmp_path)
+    assert _portable(str(tmp_path / "mine" / "records")) == "mine/records"
+    assert _portable("mine/records") == "mine/records"
+    outside = tmp_path.parent / "elsewhere"
+    assert _portable(str(outside)) == str(outside)  # not inside: as given

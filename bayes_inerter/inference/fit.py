@@ -186,7 +186,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                                         settings=interval_settings, rng=np.random.default_rng(seed + 2))
         got = _finish(out, pm, got, steps, convergence, b_identified=b_interval.identified)
         if plots:
-            _write_plots(out, pm, sample, sims, label=_label(pm, name), b_interval=b_interval, b_theory=b_theory)
+            _write_plots(out, pm, sample, sims, label=_label(pm, name), warmup=int(run.warmup),
+                         b_interval=b_interval, b_theory=b_theory)
         info = _run_info(model, pm, got, seed, {
             "m_s": pm.m_s, "m_B": pm.m_B, "masses": masses.as_dict(), "b_theory_device_file": b_theory,
             "drive_frequency": drive.as_dict(),
@@ -262,7 +263,7 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
         if all_draws:
             np.savez_compressed(out / ALL_DRAWS_FILE, **{n: sample.values[:, :, i] for i, n in enumerate(jm.names)})
         if plots:
-            _write_joint_plots(out, jm, sample)
+            _write_joint_plots(out, jm, sample, warmup=int(run.warmup))
         info = _run_info("joint", jm, got, seed, {"records": joint_records(jm), "record_model": model})
         info["timings_s"] = {"sampling": got.seconds, "total": time.perf_counter() - t0,
                              **_sampling_all_runs(out, got.seconds, run, run.start_theta is not None)}
@@ -348,7 +349,7 @@ def _run_info(name: str, model, got: _Sampled, seed: int, extra: dict) -> dict:
     }
 
 
-def _write_joint_plots(out: Path, jm, sample) -> None:
+def _write_joint_plots(out: Path, jm, sample, warmup: int) -> None:
     """corner.png (the b's, with the records' true b's where all have one) and trace.png."""
     import matplotlib.pyplot as plt
 
@@ -361,7 +362,7 @@ def _write_joint_plots(out: Path, jm, sample) -> None:
     figs = {"corner.png": plot_corner(flat[:, :nb], jm.names[:nb],
                                       truths=truths if all(t is not None for t in truths) else None,
                                       title=f"joint model, {len(jm.records)} records: inertance per setting"),
-            "trace.png": plot_trace(sample.theta, jm.names, burn=sample.burn, thin=sample.thin)}
+            "trace.png": plot_trace(sample.theta, jm.names, burn=sample.burn, thin=sample.thin, warmup=warmup)}
     for name, fig in figs.items():
         fig.savefig(out / name, dpi=100)
         plt.close(fig)
@@ -426,8 +427,11 @@ def _label(pm: PosteriorModel, name: str | None) -> str:
     return ", ".join(words) + f", {pm.drive.hz:.4g} Hz"
 
 
-def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, b_interval=None,
+def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, warmup: int, b_interval=None,
                  b_theory: float | None = None) -> None:
+    """corner.png (with b's reported interval, where it identifies b, and the device
+    file's theoretical b), bands.png, trace.png (naming the burn-in as ``fit`` prints it)
+    and phi.png."""
     import matplotlib.pyplot as plt
 
     from .plots import plot_bands, plot_corner, plot_phi, plot_trace, reference_values
@@ -437,13 +441,15 @@ def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, b_i
     truths, paper = reference_values(pm, meta)
     figs = {
         "corner.png": plot_corner(flat, sample.names, truths=truths, paper=paper,
-                                  title=f"{label}: {pm.model} model"),
+                                  title=f"{label}: {pm.model} model",
+                                  interval=(b_interval.lo, b_interval.hi) if b_interval is not None
+                                  and b_interval.identified else None, theory=b_theory),
         # inside the likelihood's window: the low-pass rings at the record's ends
         "bands.png": plot_bands(pm.record.time[pm.window], pm.measured_lp[pm.window], sims[:, pm.window],
                                 freq=pm.record.drive_frequency, noise_sd=_residual_sd(sample),
                                 title=f"{label}: predicted acceleration ({pm.model}), "
                                       f"{pm.likelihood.edge:g} s cut at each end"),
-        "trace.png": plot_trace(sample.theta, sample.names, burn=sample.burn, thin=sample.thin),
+        "trace.png": plot_trace(sample.theta, sample.names, burn=sample.burn, thin=sample.thin, warmup=warmup),
         "phi.png": plot_phi(sample.phi, title=f"{label}: fit accuracy"),
     }
     for name, fig in figs.items():

@@ -296,7 +296,7 @@ def plot_bands(time, measured_lp, sims: np.ndarray, *, freq=None, noise_sd: floa
     return fig
 
 
-def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1, fig=None):
+def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1, warmup: int | None = None, fig=None):
     """Walker traces of every parameter after burn-in: b in kg, shares and rho as they
     are, the others in log10 (as :func:`plot_corner`).
 
@@ -313,7 +313,9 @@ def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1, fig=No
         ax.plot(steps, y.T, lw=0.4, alpha=0.5)
         ax.set_ylabel(_label(names[i]), fontsize=7)
         ax.tick_params(labelsize=7)
-    axes[-1].set_xlabel(f"step (burn-in of {burn} steps discarded, every {thin}th shown)")
+    # the same two numbers ``fit`` prints: the warm-up, and 2 tau after it
+    how = f": a warm-up of {warmup}, then 2 tau" if warmup is not None and warmup < burn else ""
+    axes[-1].set_xlabel(f"step (the first {burn} discarded{how}; every {thin}th shown)")
     return fig
 
 

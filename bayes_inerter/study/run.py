@@ -268,13 +268,29 @@ def _write_study_json(out: Path, plan: StudyPlan, versions: dict, seconds: dict,
     """study.json: the plan, versions, timings and outcomes, and every run into the folder."""
     this_run = _run_entry(datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), seconds,
                           processes, outcomes)
-    info = {"plan": dataclasses.asdict(plan), "versions": versions, "seconds": seconds,
+    plan_dict = dataclasses.asdict(plan)
+    if plan.records_dir:  # no machine's path in a file that may be committed: relative to the working folder
+        plan_dict["records_dir"] = _portable(plan.records_dir)
+    info = {"plan": plan_dict, "versions": versions, "seconds": seconds,
             "processes": processes, "scheduler": scheduler,
             "outcomes": [{k: v for k, v in o.items() if k != "job"} for o in outcomes],
             # every run into this folder, oldest first: a run that reuses finished fits
             # takes seconds, and must not hide the time the sampling took
             "runs": _earlier_runs(out / "study.json") + [this_run]}
     (out / "study.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
+
+
+def _portable(path) -> str:
+    """``path`` relative to the working folder where it lies inside it (as ``--records``
+    takes it from there), else as given."""
+    import os
+
+    p = Path(path)
+    try:
+        return Path(os.path.relpath(p.resolve(), Path.cwd().resolve())).as_posix() if p.resolve().is_relative_to(
+            Path.cwd().resolve()) else str(path)
+    except (OSError, ValueError):
+        return str(path)
 
 
 def _earlier_runs(path: Path) -> list:
