@@ -44,6 +44,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .drive import resolve_drive, spectral_peak
 from .io import RecordError
 from .record import Record
 from .units import UNITS
@@ -107,22 +108,9 @@ def fundamental(time, x, freq: float) -> complex:
     return complex(coef[0], -coef[1])
 
 
-def _peak(time, x) -> tuple[float, float]:
-    """(frequency of x's largest spectral peak, its share of x's power) ."""
-    x = np.asarray(x, dtype=float) - np.mean(x)
-    spec = np.abs(np.fft.rfft(x)) ** 2
-    spec[0] = 0.0
-    total = spec.sum()
-    k = int(np.argmax(spec))
-    fs = (len(time) - 1) / (time[-1] - time[0])
-    return k * fs / len(x), (spec[max(k - 1, 0): k + 2].sum() / total if total > 0 else 0.0)
-
-
 def drive_frequency(record: Record) -> float:
     """The drive frequency, Hz: the metadata's, or else the record's own estimate
     (:func:`.drive.resolve_drive`, the one every step of a fit uses)."""
-    from .drive import resolve_drive
-
     return resolve_drive(record).hz
 
 
@@ -147,7 +135,7 @@ def _time_unit(record: Record, freq: float):
         return (f"the record is sampled at {fs:.3g} Hz, below {MIN_RATE_HZ:g} Hz: a time column in ms "
                 "reads 1000 times too slow; give --units time=ms (or check the time column)")
     if meta_f is not None:
-        seen = _peak(record.time, record.accel)[0]
+        seen = spectral_peak(record.time, record.accel)[0]
         if seen > 0 and abs(seen * 1000 / meta_f - 1) < 0.1:
             return (f"the acceleration peaks at {seen:.3g} Hz but the metadata's drive frequency is "
                     f"{meta_f:g} Hz: a time column in ms? give --units time=ms")

@@ -32,7 +32,7 @@ import numpy as np
 
 from .record import Record
 
-__all__ = ["DriveFrequency", "estimate_drive_frequency", "resolve_drive", "with_drive", "HARMONICS",
+__all__ = ["DriveFrequency", "estimate_drive_frequency", "resolve_drive", "with_drive", "spectral_peak", "HARMONICS",
            "STEADY_SHARE", "SOURCE_KEY"]
 
 #: Harmonics of the drive in the refining least squares (each channel of a device with
@@ -61,8 +61,9 @@ class DriveFrequency:
         return dataclasses.asdict(self)
 
 
-def _peak(time, x) -> tuple[float, float]:
-    """(frequency of x's largest spectral peak, its share of x's power)."""
+def spectral_peak(time, x) -> tuple[float, float]:
+    """(frequency of x's largest spectral peak, Hz, its share of x's power, with the bins
+    on either side)."""
     x = np.asarray(x, dtype=float) - np.mean(x)
     spec = np.abs(np.fft.rfft(x)) ** 2
     spec[0] = 0.0
@@ -111,7 +112,7 @@ def _steady(time: np.ndarray, x: np.ndarray, freq: float) -> slice:
 def estimate_drive_frequency(record: Record) -> DriveFrequency:
     """The drive frequency estimated from the record alone (see the module docstring)."""
     channels = [x for x in (record.disp, record.accel, record.force) if x is not None]
-    peaks = [_peak(record.time, x) for x in channels]
+    peaks = [spectral_peak(record.time, x) for x in channels]
     j = int(np.argmax([share for _, share in peaks]))
     f0, x = peaks[j][0], np.asarray(channels[j], dtype=float)
     if not f0 > 0:
