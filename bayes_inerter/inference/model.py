@@ -252,10 +252,11 @@ class PosteriorModel:
         return out
 
     def values(self, theta) -> dict:
-        """Sampled and derived parameter values at theta, by name."""
+        """Sampled and derived parameter values at theta, by name; a derived quantity not
+        defined there (``b_app``, see :meth:`derived`) is left out."""
         vals = dict(zip(self.names, map(float, self.to_values(theta))))
         vals.update(self.physical(vals))
-        vals.update(self.derived(vals))
+        vals.update({n: v for n, v in self.derived(vals).items() if math.isfinite(v)})
         return vals
 
     def parameters(self, theta) -> InerterParameters:
