@@ -26,7 +26,12 @@ def test_identify_prints_b_its_interval_and_phi_and_writes_json(record, tmp_path
     lo, hi = info["b_interval"]
     assert (f"b = {info['b']:.6g} kg (least squares; 94 % interval {lo:.6g} to {hi:.6g}, from the Jacobian over "
             f"{info['cycles']} drive cycles)") in text
-    assert "warning" not in text and info["at_bounds"] == []  # the model's own record: nothing to warn of
+    # the model's own record: no poor fit, and b itself within its prior; a parameter the
+    # record leaves open (c_B, k_B) may end on a bound from one start on some processors,
+    # and is then named, in the JSON as on the console
+    warned = [line for line in text.splitlines() if line.startswith("warning: ")]
+    assert all(line.split()[1] in info["at_bounds"] for line in warned), warned
+    assert len(warned) == len(info["at_bounds"]) and "b" not in info["at_bounds"]
     assert f"phi = {info['phi']:.2%}" in text
     assert lo < info["b"] < hi and info["starts"] == 1 and info["interval"] == "hessian"
     # the model's own record: least squares lands within 2 % of the generating b
