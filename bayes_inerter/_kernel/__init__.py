@@ -43,8 +43,10 @@ Layout: ``_compiled`` (the helpers every kernel shares: levels, tables, the Herm
 range, the Coulomb contacts' switching rules), ``_rich`` (the same for piecewise-linear
 contacts and dead zones), ``templates`` and ``generate`` (the one generator of a
 network's specialised kernel: the templates are the algorithm, ``generate`` writes out
-their arithmetic), ``cache`` (the generated modules on disk). The
-same algorithm written plainly, without speed tricks, is ``tests/reference_kernel.py``.
+their arithmetic), ``cache`` (the generated modules on disk, in a folder of each
+environment, with that folder's own copies of ``_compiled`` and ``_rich``, which its
+kernels call: see ``cache`` for why). The same algorithm written plainly, without speed
+tricks, is ``tests/reference_kernel.py``.
 """
 
 from __future__ import annotations
