@@ -5,7 +5,6 @@ import json
 import pytest
 
 from bayes_inerter.cli import main
-from bayes_inerter.records import read_record
 
 SHORT = ["--duration", "4", "--ramp", "1"]
 
@@ -18,24 +17,37 @@ def record(tmp_path_factory):
 
 
 def test_identify_prints_b_its_interval_and_phi_and_writes_json(record, tmp_path, capsys):
+    """What the command prints is what it writes, whatever the one optimiser start finds.
+
+    Only what holds for any start is asserted: where the start ends depends on the
+    processor's floating-point path (on one machine c_B ended on a bound of its prior,
+    here f_share does for some seeds, and then the command warns). With c_B held at its
+    lower bound the least-squares b of this record is 3 % off, so b's accuracy is not
+    asserted here (``tests/test_inference_identify.py`` does, from several starts)."""
+    import math
+
+    from bayes_inerter.inference.end_state import PHI_WARNING
+
     capsys.readouterr()
     out = tmp_path / "fit.json"
     assert main(["identify", str(record), "--starts", "1", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     info = json.loads(out.read_text())
-    lo, hi = info["b_interval"]
-    assert (f"b = {info['b']:.6g} kg (least squares; 94 % interval {lo:.6g} to {hi:.6g}, from the Jacobian over "
-            f"{info['cycles']} drive cycles)") in text
-    # the model's own record: no poor fit, and b itself within its prior; a parameter the
-    # record leaves open (c_B, k_B) may end on a bound from one start on some processors,
-    # and is then named, in the JSON as on the console
-    warned = [line for line in text.splitlines() if line.startswith("warning: ")]
-    assert all(line.split()[1] in info["at_bounds"] for line in warned), warned
-    assert len(warned) == len(info["at_bounds"]) and "b" not in info["at_bounds"]
+    assert info["starts"] == 1 and info["interval"] == "hessian" and math.isfinite(info["b"]) and info["b"] > 0
+    if info["b_interval"] is None:  # a direction the record leaves flat at this start's end
+        assert info["why_no_interval"] and f"b = {info['b']:.6g} kg (least squares; no interval: " in text
+    else:
+        lo, hi = info["b_interval"]
+        assert math.isfinite(lo) and math.isfinite(hi) and lo < info["b"] < hi
+        assert (f"b = {info['b']:.6g} kg (least squares; 94 % interval {lo:.6g} to {hi:.6g}, from the Jacobian over "
+                f"{info['cycles']} drive cycles)") in text
     assert f"phi = {info['phi']:.2%}" in text
-    assert lo < info["b"] < hi and info["starts"] == 1 and info["interval"] == "hessian"
-    # the model's own record: least squares lands within 2 % of the generating b
-    assert info["b"] == pytest.approx(read_record(record).metadata["true_parameters"]["b"], rel=0.02)
+    # every warning printed is in the JSON, and every reason the JSON gives for one is printed
+    warnings = [line for line in text.splitlines() if line.startswith("warning: ")]
+    on_bounds = [w.split()[1] for w in warnings if "ended on a bound of its prior" in w]
+    poor_fit = [w for w in warnings if w.startswith("warning: the model reproduces ")]
+    assert on_bounds == info["at_bounds"] and len(on_bounds) + len(poor_fit) == len(warnings)
+    assert bool(poor_fit) == (not info["phi_filtered"] >= PHI_WARNING)
 
 
 @pytest.mark.parametrize("argv, message", [(["--bootstrap", "5"], "too few"), (["--out", "fit.txt"], ".json"),

@@ -293,27 +293,39 @@ def test_regularised_solver_converges_to_exact_kernel():
     assert errs[1] < errs[0] / 3
 
 
-@pytest.mark.slow  # 16 s: the stiff solver on extreme draws; the quick subset keeps the kernel's own sweeps
-@settings(max_examples=8, deadline=None)
-@given(
-    st.sampled_from(sorted(NETWORKS)),
-    st.fixed_dictionaries(
-        {
-            "b": st.floats(10.0, 5e4), "m_s": st.floats(1.0, 100.0),
-            "m_B": st.floats(1.0, 200.0), "c_n": st.floats(0.0, 1e8),
-            "k_n": st.floats(1e3, 1e9), "c_B": st.floats(0.0, 1e6),
-            "k_B": st.floats(1e4, 1e10), "f1_0": st.floats(0.0, 5e3),
-            "c_f1": st.floats(0.0, 1e4), "f2_0": st.floats(0.0, 5e3),
-            "c_f2": st.floats(0.0, 1e4),
-        }
-    ),
-    st.floats(0.2, 3.0),
+#: The wide draws of ``test_output_is_finite_over_wide_parameters``.
+WIDE = st.fixed_dictionaries(
+    {
+        "b": st.floats(10.0, 5e4), "m_s": st.floats(1.0, 100.0),
+        "m_B": st.floats(1.0, 200.0), "c_n": st.floats(0.0, 1e8),
+        "k_n": st.floats(1e3, 1e9), "c_B": st.floats(0.0, 1e6),
+        "k_B": st.floats(1e4, 1e10), "f1_0": st.floats(0.0, 5e3),
+        "c_f1": st.floats(0.0, 1e4), "f2_0": st.floats(0.0, 5e3),
+        "c_f2": st.floats(0.0, 1e4),
+    }
 )
-def test_output_is_finite_over_wide_parameters(name, values, freq):
-    p = dataclasses.replace(paper_parameters("A0"), **values)
-    t, f = inverse_dynamics_force(paper_parameters("A3"), freq, duration=0.5, ramp=0.2)
-    try:
-        a = simulate(p, t, f, network=name)
-    except SimulationError:
-        return  # reported chatter is a clear outcome, not a silent one
-    assert np.all(np.isfinite(a))
+
+
+@pytest.mark.slow  # 16 s: the stiff solver on extreme draws; the quick subset keeps the kernel's own sweeps
+def test_output_is_finite_over_wide_parameters():
+    """Every draw either simulates to finite accelerations or is refused (SimulationError:
+    the contacts chatter), and most simulate: a check that every draw skipped would pass
+    having checked nothing."""
+    simulated = {}
+
+    @settings(max_examples=8, deadline=None)
+    @given(st.sampled_from(sorted(NETWORKS)), WIDE, st.floats(0.2, 3.0))
+    def finite_or_refused(name, values, freq):
+        key = (name, tuple(sorted(values.items())), freq)
+        p = dataclasses.replace(paper_parameters("A0"), **values)
+        t, f = inverse_dynamics_force(paper_parameters("A3"), freq, duration=0.5, ramp=0.2)
+        try:
+            a = simulate(p, t, f, network=name)
+        except SimulationError:
+            simulated[key] = False  # reported chatter is a clear outcome, not a silent one
+            return
+        assert np.all(np.isfinite(a))
+        simulated[key] = True
+
+    finite_or_refused()
+    assert sum(simulated.values()) >= len(simulated) / 2, simulated

@@ -2,6 +2,7 @@
 
 import dataclasses
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -84,7 +85,12 @@ def test_identify_one_fits_a_record_and_keeps_what_a_rerun_checks(tmp_path):
     got = ls_mod.identify_one(str(path), str(tmp_path / "A3.json"), starts=1, seed=3)
     assert json.loads((tmp_path / "A3.json").read_text()) == got
     assert (got["record"], got["starts"], got["seed"], got["interval"]) == ("A3_1.5Hz.csv", 1, 3, "hessian")
-    lo, hi = got["b_interval"]
-    assert lo < got["b"] < hi and got["b"] == pytest.approx(SETTINGS["A3"].b_paper, rel=0.02)
+    # one start: only what holds wherever it ends (b's accuracy: tests/test_inference_identify.py)
+    if got["b_interval"] is None:
+        assert got["why_no_interval"]
+    else:
+        lo, hi = got["b_interval"]
+        assert lo < got["b"] < hi
+    assert math.isfinite(got["b"]) and got["b"] > 0
     assert ls_mod._earlier(tmp_path / "A3.json", str(path), 1, 3) == got
     assert ls_mod._earlier(tmp_path / "A3.json", str(path), 4, 3) is None
