@@ -39,6 +39,27 @@ def inverse_dynamics_force(params, freq, *, amplitude=0.01, duration=3.0, fs=100
     return t, f
 
 
+def normal_posterior(duration: float = 1.5, ramp: float = 0.5):
+    """A generated A2 record's posterior with its density swapped for a cheap known one:
+    independent normals in theta about the generating parameters (``test_start`` holds
+    the centre, to start a sampler there)."""
+    from scipy import stats
+
+    from bayes_inerter import paper_parameters
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.records import GeneratorSettings, generate_record
+
+    rec = generate_record(paper_parameters("A2"), 1.0, settings=GeneratorSettings(duration=duration, ramp=ramp),
+                          rng=2, setting_name="A2")
+    pm = PosteriorModel(rec)
+    centre = pm.to_theta(paper_parameters("A2"), 3e-3, 0.2)
+    lo, hi = pm.bounds().T
+    sd = np.minimum(hi - centre, centre - lo) / 6
+    pm.log_prob = lambda theta: (float(np.sum(stats.norm.logpdf(theta, centre, sd))), 0.0)
+    pm.test_start = (centre, 0.0)
+    return pm
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

@@ -137,22 +137,10 @@ def test_a_second_ctrl_c_is_not_held():
 
 @pytest.fixture(scope="module")
 def model():
-    """A posterior whose density is a cheap normal in theta (as tests/test_inference_sampler.py)."""
-    from scipy import stats
+    """A posterior whose density is a cheap normal in theta (``conftest.normal_posterior``)."""
+    from conftest import normal_posterior
 
-    from bayes_inerter import paper_parameters
-    from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.records import GeneratorSettings, generate_record
-
-    rec = generate_record(paper_parameters("A2"), 1.0, settings=GeneratorSettings(duration=1.0, ramp=0.3), rng=2,
-                          setting_name="A2")
-    pm = PosteriorModel(rec)
-    centre = pm.to_theta(paper_parameters("A2"), 3e-3, 0.2)
-    lo, hi = pm.bounds().T
-    sd = np.minimum(hi - centre, centre - lo) / 6
-    pm.log_prob = lambda theta: (float(np.sum(stats.norm.logpdf(theta, centre, sd))), 0.0)
-    pm.test_start = (centre, 0.0)
-    return pm
+    return normal_posterior(duration=1.0, ramp=0.3)
 
 
 def test_ctrl_c_inside_a_sampler_step_stops_after_the_step_is_stored(model, tmp_path, capsys):

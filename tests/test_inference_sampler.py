@@ -5,29 +5,19 @@ share of the steps, and refitted so that a continued chain is the uninterrupted 
 
 import numpy as np
 import pytest
-from scipy import stats
+from conftest import normal_posterior
 
-from bayes_inerter import paper_parameters
-from bayes_inerter.inference import Convergence, PosteriorModel
+from bayes_inerter.inference import Convergence
 from bayes_inerter.inference.moves import BlockMove
 from bayes_inerter.inference.sampler import Adaptation, run_sampler, transient
-from bayes_inerter.records import GeneratorSettings, generate_record
 
 CONV = Convergence(check_every=40, n_tau=20, min_ess=200, max_steps=2000)
 
 
 @pytest.fixture(scope="module")
 def model():
-    rec = generate_record(paper_parameters("A2"), 1.0, settings=GeneratorSettings(duration=1.5, ramp=0.5), rng=2,
-                          setting_name="A2")
-    pm = PosteriorModel(rec)
     # the record's posterior swapped for a cheap known density: independent normals in theta
-    centre = pm.to_theta(paper_parameters("A2"), 3e-3, 0.2)
-    lo, hi = pm.bounds().T
-    sd = np.minimum(hi - centre, centre - lo) / 6
-    pm.log_prob = lambda theta: (float(np.sum(stats.norm.logpdf(theta, centre, sd))), 0.0)
-    pm.test_start = (centre, 0.0)
-    return pm
+    return normal_posterior(duration=1.5, ramp=0.5)
 
 
 def _run(model, path, max_steps):
