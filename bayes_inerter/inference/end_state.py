@@ -77,15 +77,13 @@ def _hdi(x) -> tuple[float, float]:
     return float(lo), float(hi)
 
 
-def _at_bound(x, lo: float, hi: float) -> str | None:
-    """"lower" or "upper" where the draws ``x`` (in the sampled scale) press on that bound
-    of [lo, hi] (see module docstring), else None."""
+def _at_bounds(x, lo: float, hi: float) -> list[tuple[str, float]]:
+    """The bounds of [lo, hi] that the draws ``x`` (in the sampled scale) press on (see
+    module docstring), as ("lower", lo) and ("upper", hi)."""
     h_lo, h_hi = _hdi(x)
-    if np.mean(x <= lo + BOUND_LOG_TOL) >= BOUND_SHARE or h_lo <= lo + BOUND_LOG_TOL:
-        return "lower"
-    if np.mean(x >= hi - BOUND_LOG_TOL) >= BOUND_SHARE or h_hi >= hi - BOUND_LOG_TOL:
-        return "upper"
-    return None
+    return [(side, bound) for side, share, near, bound in (
+        ("lower", np.mean(x <= lo + BOUND_LOG_TOL), h_lo <= lo + BOUND_LOG_TOL, lo),
+        ("upper", np.mean(x >= hi - BOUND_LOG_TOL), h_hi >= hi - BOUND_LOG_TOL, hi)) if share >= BOUND_SHARE or near]
 
 
 def prior_limited_warning(model, sample) -> EndWarning | None:
@@ -97,9 +95,9 @@ def prior_limited_warning(model, sample) -> EndWarning | None:
     for i, name in enumerate(sample.names):
         if i in skip or not model.all_priors[name].log_scale:
             continue
-        side = _at_bound(sample.theta[..., i].ravel(), *bounds[i])
-        if side:
-            found.append(f"{name} ({side})")
+        sides = [side for side, _ in _at_bounds(sample.theta[..., i].ravel(), *bounds[i])]
+        if sides:
+            found.append(f"{name} ({' and '.join(sides)})")
     if not found:
         return None
     names = [f.split(" (")[0] for f in found]
@@ -176,16 +174,11 @@ def end_state_warnings(model, sample) -> list[EndWarning]:
     for i in _inertances(sample.names):
         if not model.all_priors[sample.names[i]].log_scale:
             continue
-        x = sample.theta[..., i].ravel()
-        lo, hi = bounds[i]
-        h_lo, h_hi = _hdi(x)
-        for side, share, near, bound in (("lower", np.mean(x <= lo + BOUND_LOG_TOL), h_lo <= lo + BOUND_LOG_TOL, lo),
-                                         ("upper", np.mean(x >= hi - BOUND_LOG_TOL), h_hi >= hi - BOUND_LOG_TOL, hi)):
-            if share >= BOUND_SHARE or near:
-                out.append(EndWarning(sample.names[i], f"at {side} prior bound",
-                                      f"the 94 % interval of {sample.names[i]} reaches its prior's {side} bound "
-                                      f"{np.exp(bound):g} kg: the data push it out of the prior; check "
-                                      "the record's units and masses, or widen the prior"))
+        for side, bound in _at_bounds(sample.theta[..., i].ravel(), *bounds[i]):
+            out.append(EndWarning(sample.names[i], f"at {side} prior bound",
+                                  f"the 94 % interval of {sample.names[i]} reaches its prior's {side} bound "
+                                  f"{np.exp(bound):g} kg: the data push it out of the prior; check "
+                                  "the record's units and masses, or widen the prior"))
     limited = prior_limited_warning(model, sample)
     if limited is not None:
         out.append(limited)

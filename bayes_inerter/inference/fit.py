@@ -283,6 +283,9 @@ class _Sampled:
     ended: list
     shrink: dict
     seconds: float
+    #: how near the draws come to the coordinates' domain edge (``Coordinates.domain_edge``;
+    #: set by ``_finish``, which warns of it, and kept in fit.json)
+    edge: float | None = None
 
 
 def _sample_into(out: Path, model, **options) -> _Sampled:
@@ -323,7 +326,7 @@ def _finish(out: Path, model, got: _Sampled, steps, convergence, b_identified: b
         ended.append(late)
     _flag(got.rows, ended)
     write_summary(out / "summary.csv", got.rows)
-    return dataclasses.replace(got, ended=ended)
+    return dataclasses.replace(got, ended=ended, edge=edge)
 
 
 def _run_info(name: str, model, got: _Sampled, seed: int, extra: dict) -> dict:
@@ -343,7 +346,7 @@ def _run_info(name: str, model, got: _Sampled, seed: int, extra: dict) -> dict:
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "moves": list(run.moves),
         "coordinates": run.coordinates.describe(),
-        "coordinates_domain_edge": run.coordinates.domain_edge(sample.theta),
+        "coordinates_domain_edge": got.edge,
         "contraction": got.shrink,
         "versions": versions(),
     }
