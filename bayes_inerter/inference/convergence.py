@@ -20,12 +20,13 @@ others, not a proof). Or stops at ``max_steps``. The draws kept for the posterio
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import emcee
 import numpy as np
 
-__all__ = ["Convergence", "Check", "Monitor", "WARMUP", "transient", "check_chain", "tau_settled",
+__all__ = ["Convergence", "Check", "Monitor", "WARMUP", "transient", "check_chain", "steps_for", "tau_settled",
            "is_converged", "why_not"]
 
 #: Share of a chain left out as warm-up before its convergence is judged and its draws
@@ -125,6 +126,12 @@ def check_chain(chain: np.ndarray, log_prob: np.ndarray, conv: Convergence, rhat
     rhat, ess = rhat_ess(chain[min(burn, n - 2):])
     return Check(tau, rhat, ess, warm, skip)
 
+
+
+def steps_for(tau_max: float, conv: Convergence) -> int:
+    """The chain length at which the chain after its warm-up share is ``conv.n_tau``
+    times ``tau_max`` long (the rule's tau part, where the share is the longer warm-up)."""
+    return math.ceil(conv.n_tau * tau_max / (1.0 - conv.warmup))
 
 
 def tau_settled(iteration, tau, previous, conv: Convergence) -> bool:

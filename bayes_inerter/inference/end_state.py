@@ -33,6 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .convergence import steps_for
+
 __all__ = ["EndWarning", "end_state_warnings", "prior_limited_warning", "convergence_warning", "BOUND_LOG_TOL",
            "BOUND_SHARE", "PHI_WARNING", "NOT_CONVERGED", "PRIOR_LIMITED", "CAP_FACTOR"]
 
@@ -106,11 +108,6 @@ def prior_limited_warning(model, sample) -> EndWarning | None:
                       "are the prior's, not a measurement", tuple(names[1:]))
 
 
-def _needed_steps(tau_max: float, conv) -> int:
-    """The chain length at which the rule's tau part would hold for ``tau_max``."""
-    return math.ceil(conv.n_tau * tau_max / (1.0 - conv.warmup))
-
-
 def convergence_warning(*, converged: bool, reason: str, iteration: int, tau: dict, rows: list, conv,
                         steps: int | None, b_identified: bool = True) -> EndWarning | None:
     """The warning of a chain that has not converged (see module docstring), or None.
@@ -156,7 +153,7 @@ def _advice(iteration: int, tau_max: float, conv, steps: int | None, slow: list)
         return f"to go on until converged (at most {cap} steps), run again without --steps"
     if not math.isfinite(tau_max):
         return "its autocorrelation time cannot be estimated yet: run again with a higher --max-steps"
-    needed = _needed_steps(tau_max, conv)
+    needed = steps_for(tau_max, conv)
     if needed <= CAP_FACTOR * cap:
         higher = max(needed, iteration + conv.check_every)
         higher = int(math.ceil(1.2 * higher / 1000.0) * 1000)

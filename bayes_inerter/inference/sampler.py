@@ -37,7 +37,8 @@ import numpy as np
 from ..executor import Executor, interrupt_raised, interrupts_held, make_executor
 from .adaptation import Adaptation, Schedule
 from .checkpoint import WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint, stored_identity
-from .convergence import WARMUP, Check, Convergence, Monitor, check_chain, is_converged, transient, why_not
+from .convergence import (WARMUP, Check, Convergence, Monitor, check_chain, is_converged, steps_for, transient,
+                          why_not)
 from .coordinates import Coordinates, continue_at, default_coordinates, reference_tolerance
 from .identity import run_identity
 from .model import PosteriorModel
@@ -333,6 +334,5 @@ def _status(backend, check: Check, done: int, conv: Convergence) -> SamplerStatu
     tau_max = float(np.max(check.tau)) if np.all(np.isfinite(check.tau)) else math.nan
     needed = None
     if math.isfinite(tau_max):  # the warm-up takes its share of the longer chain too
-        needed = max(0, math.ceil(conv.n_tau * tau_max / (1.0 - conv.warmup)) - n, check.warmup + math.ceil(
-            conv.n_tau * tau_max) - n)
+        needed = max(0, steps_for(tau_max, conv) - n, check.warmup + math.ceil(conv.n_tau * tau_max) - n)
     return SamplerStatus(n, done, None, tau_max, float(np.mean(backend.accepted / n)), needed)
