@@ -44,6 +44,9 @@ PHI_WARNING = 0.5
 #: The flags of the two warnings that name several rows.
 NOT_CONVERGED = "not converged"
 PRIOR_LIMITED = "at prior bound (prior-limited)"
+#: The likelihood's own scales, whose prior bound says nothing about the device: a
+#: discrepancy tau at its lower bound means the model matches to within the noise.
+UNWARNED = ("sigma", "rho", "tau")
 #: A higher step cap is advised only where the chain's own tau says it would converge
 #: within this many times the current cap; beyond, the advice is about the record.
 CAP_FACTOR = 4.0
@@ -92,7 +95,7 @@ def prior_limited_warning(model, sample) -> EndWarning | None:
     """One warning naming the parameters other than the inertances and the noise whose
     draws press on a prior bound (log-scale priors only), or None."""
     bounds = np.asarray(model.bounds(), dtype=float)
-    skip = set(_inertances(sample.names)) | {i for i, n in enumerate(sample.names) if n in ("sigma", "rho")}
+    skip = set(_inertances(sample.names)) | {i for i, n in enumerate(sample.names) if n in UNWARNED}
     found = []
     for i, name in enumerate(sample.names):
         if i in skip or not model.all_priors[name].log_scale:

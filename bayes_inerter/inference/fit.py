@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import os
 import platform
 import time
@@ -126,8 +127,11 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                coordinates: str = "impedance", adaptation: Adaptation | None = Adaptation(),
                checkpoint_seconds: float = WRITE_SECONDS,
                interval: str | IntervalSettings = DEFAULT_INTERVAL, freq: float | None = None,
-               name: str | None = None) -> FitResult:
+               name: str | None = None, modal: bool | None = None) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
+
+    ``modal``: the bearing's damper sampled as the plate mode's damping ratio under its
+    physical prior (``model.PosteriorModel``; None: wherever the model can).
 
     ``interval``: how b's reported interval is made, a name of ``interval.INTERVALS``
     ("honest", the default: the posterior widened by the sensors' calibration and the
@@ -164,7 +168,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     masses = resolve_masses(record, m_s=m_s, m_B=m_B, device=device)
     b_theory = device.theoretical_inertance if device is not None else None
     pm = PosteriorModel(record, model, m_s=masses.m_s, m_B=masses.m_B, priors=priors or {},
-                        likelihood=likelihood or LikelihoodSettings())
+                        likelihood=likelihood or LikelihoodSettings(), modal=modal)
     check_run_options(pm.ndim, walkers, steps)
     coords = default_coordinates(pm, coordinates)
     check_output_folder(out)
@@ -416,8 +420,14 @@ def _sampling_all_runs(out: Path, t_sample: float, run, started_over: bool) -> d
     return {"sampling_all_runs": own["sampling_all_runs"] + seconds, "steps_timed": own["steps_timed"] + steps}
 
 
-def _residual_sd(sample) -> float:
-    """Posterior median of the residual's marginal sd, sigma / sqrt(1 - rho^2)."""
+def _residual_sd(sample, pm: PosteriorModel) -> float:
+    """Posterior median of the residual's marginal sd, sigma / sqrt(1 - rho^2); for the
+    harmonic likelihood, of the periodic error's, sqrt(sum_k V_k / 2) (over up to 200
+    draws)."""
+    if pm.harmonic is not None:
+        theta = sample.theta.reshape(-1, pm.ndim)
+        pick = theta[:: max(1, len(theta) // 200)]
+        return float(np.median([math.sqrt(pm.harmonic_variance(t).sum() / 2.0) for t in pick]))
     vals = sample.as_dict()
     rho = vals.get("rho", np.zeros_like(vals["sigma"]))
     return float(np.median(vals["sigma"] / np.sqrt(1.0 - rho**2)))
@@ -449,7 +459,7 @@ def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, war
                                   and b_interval.identified else None, theory=b_theory),
         # inside the likelihood's window: the low-pass rings at the record's ends
         "bands.png": plot_bands(pm.record.time[pm.window], pm.measured_lp[pm.window], sims[:, pm.window],
-                                freq=pm.record.drive_frequency, noise_sd=_residual_sd(sample),
+                                freq=pm.record.drive_frequency, noise_sd=_residual_sd(sample, pm),
                                 title=f"{label}: predicted acceleration ({pm.model}), "
                                       f"{pm.likelihood.edge:g} s cut at each end"),
         "trace.png": plot_trace(sample.theta, sample.names, burn=sample.burn, thin=sample.thin, warmup=warmup),

@@ -33,23 +33,16 @@ import numpy as np
 
 from ..device import SETTINGS, apparent_inertance
 from ..executor import make_executor
+from .likelihood import ar1_marginal
 from .model import LikelihoodSettings, PosteriorModel
-from .priors import NOISE_PRIORS
 
-__all__ = ["JointModel", "ar1_marginal", "pooled_log_prob"]
+__all__ = ["JointModel", "ar1_marginal", "pooled_log_prob", "PER_FREQUENCY"]
 
-
-def ar1_marginal(residual: np.ndarray, rho: float) -> float:
-    """log p(residual | rho) of an AR(1) process with its scale marginalised under the
-    prior 1/sigma (see module docstring)."""
-    r = np.asarray(residual, dtype=float)
-    n = len(r)
-    one = 1.0 - rho * rho
-    innov = r[1:] - rho * r[:-1]
-    s = one * r[0] * r[0] + float(innov @ innov)
-    if not s > 0:
-        return -math.inf
-    return 0.5 * math.log(one) + math.lgamma(0.5 * n) - math.log(2.0) - 0.5 * n * math.log(math.pi * s)
+#: The likelihood's parameters shared by the records of one drive frequency (the
+#: residual's colour and the discrepancy are set by the signal's spectrum, which the
+#: frequency sets: an **assumption**); the others (the channels' ``gain``: one pair of
+#: sensors) by every record.
+PER_FREQUENCY = ("rho", "tau", "alpha")
 
 
 @dataclass
@@ -91,14 +84,17 @@ class JointModel:
         first = parts[0]
         shared = [n for n in first.names[: first.n_phys] if n != "b"]
         self.shared = shared
-        self.rhos = [f"rho_{f:g}Hz" for f in self.frequencies] if self.likelihood.residual == "ar1" else []
-        self.names = [f"b_{s}" for s in self.settings] + shared + self.rhos
+        hyper = [n for n in first.names[first.n_phys:] if n != "sigma"]  # sigma: marginalised
+        self.per_frequency = [f"{n}_{f:g}Hz" for n in hyper if n in PER_FREQUENCY for f in self.frequencies]
+        self.rhos = [n for n in self.per_frequency if n.startswith("rho_")]
+        self.names = ([f"b_{s}" for s in self.settings] + shared + self.per_frequency
+                      + [n for n in hyper if n not in PER_FREQUENCY])
         #: the inertance each setting shows through the nut (``device.apparent_inertance``)
         self.derived_names = [f"b_app_{s}" for s in self.settings]
         base = first.all_priors
-        self.all_priors = {**{n: base[n] for n in shared},
+        self.all_priors = {**{n: base[n] for n in self.names if n in base},
                            **{f"b_{s}": base["b"] for s in self.settings},
-                           **{n: NOISE_PRIORS["rho"] for n in self.rhos}}
+                           **{n: base[n.split("_")[0]] for n in self.per_frequency}}
         self._log = np.array([self.all_priors[n].log_scale for n in self.names])
         # where each part's theta comes from: index into the joint theta (sigma: none)
         pos = {n: i for i, n in enumerate(self.names)}
@@ -110,8 +106,8 @@ class JointModel:
                     idx.append(pos[f"b_{s}"])
                 elif n == "sigma":
                     idx.append(-1)
-                elif n == "rho":
-                    idx.append(pos[f"rho_{f:g}Hz"])
+                elif n in PER_FREQUENCY:
+                    idx.append(pos[f"{n}_{f:g}Hz"])
                 else:
                     idx.append(pos[n])
             self._maps.append(np.array(idx))
@@ -154,16 +150,13 @@ class JointModel:
         independent given theta, so they can be computed anywhere (:func:`pooled_log_prob`)
         and added by :meth:`combine`."""
         theta = np.asarray(theta, dtype=float)
-        rho_ar1 = self.likelihood.residual == "ar1"
         out = []
         for k in ks:
-            part = self.parts[k]
-            t = self.part_theta(theta, k)
-            got = part.misfit(t)  # the part's prior is the joint's: no need to ask it
+            # the part's prior is the joint's: no need to ask it
+            got = self.parts[k].log_likelihood(self.part_theta(theta, k), marginal_scale=True)
             if got is None:
                 return out + [None]
-            rho = float(t[-1]) if rho_ar1 else 0.0
-            out.append((ar1_marginal(got[0], rho), got[1]))
+            out.append(got)
         return out
 
     @staticmethod
@@ -195,8 +188,9 @@ class JointModel:
         for n in self.names:
             if n.startswith("b_"):
                 vals = [m["b"] for m, s in zip(medians, self.setting_of) if s == n[2:]]
-            elif n.startswith("rho_"):
-                vals = [m["rho"] for m, f in zip(medians, self.freq_of) if f"rho_{f:g}Hz" == n]
+            elif n in self.per_frequency:
+                base = n.split("_")[0]
+                vals = [m[base] for m, f in zip(medians, self.freq_of) if f"{base}_{f:g}Hz" == n]
             else:
                 vals = [m[n] for m in medians]
             theta.append(scale(n, vals))

@@ -1,14 +1,24 @@
 """How a record's simulated and measured accelerations are compared: the settings of the
-likelihood (``model.PosteriorModel``)."""
+likelihood (``model.PosteriorModel``) and the time-domain residual's densities, which
+the single-record and the joint model share (the harmonic likelihood: ``harmonic``).
+"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..records.conditioning import LOWPASS_HZ
+from ..records.sensitivity import SensorCalibration
 from ..simulate import SAMPLINGS
 
-__all__ = ["LikelihoodSettings"]
+__all__ = ["LikelihoodSettings", "RESIDUALS", "ar1_pointwise", "ar1_marginal"]
+
+#: The likelihoods: the time-domain residual as a stationary AR(1) process or white, and
+#: the harmonic likelihood with errors in both signals and a sampled discrepancy.
+RESIDUALS = ("ar1", "iid", "harmonic")
 
 
 @dataclass(frozen=True)
@@ -17,7 +27,7 @@ class LikelihoodSettings:
 
     Attributes
     ----------
-    residual : "ar1" (default) or "iid".
+    residual : "ar1" (default), "iid" or "harmonic" (:mod:`.harmonic`).
     cutoff : matched low-pass cut-off, Hz (default 30).
     stride : keep every stride-th sample; None: fs / (2 cutoff), about one sample per
         correlation length of the low-passed signal (16 at 1 kHz and 30 Hz).
@@ -39,6 +49,16 @@ class LikelihoodSettings:
         and makes the likelihood rough (tens of nats for a 0.05 % change of the
         Coulomb force, measured on a generated A1 record at 1 Hz; with "mean" the same
         scan is a smooth parabola peaked at the truth).
+    pool : harmonic likelihood only: the noise's variance at a harmonic is averaged over
+        the harmonics within ``pool`` of it (**assumption**: a smooth noise spectrum),
+        default 2.
+    settle : harmonic likelihood only: whole drive periods left out after the start
+        of the steady part (the start-up's transient), default 1.
+    gain_sd : harmonic likelihood only: log-sd of the prior on ``gain``, the
+        acceleration channel's gain relative to the force channel's (**assumption**:
+        the sensors' calibration uncertainties of ``records.SensorCalibration``, 0.25 %
+        for the load cell and 0.5 % for the accelerometer, default their ratio's 0.56 %);
+        0 fixes the gain at 1 and leaves it out of the sampled parameters.
     """
 
     residual: str = "ar1"
@@ -47,10 +67,26 @@ class LikelihoodSettings:
     edge: float = 0.25
     upsample: int = 1
     sampling: str = "mean"
+    pool: int = 2
+    settle: int = 1
+    gain_sd: float = SensorCalibration().ratio_sd
+
+    @property
+    def hyper_names(self) -> tuple[str, ...]:
+        """The sampled parameters of the likelihood itself, after the physical ones."""
+        if self.residual == "harmonic":
+            return ("tau", "alpha") + (("gain",) if self.gain_sd > 0 else ())
+        return ("sigma", "rho") if self.residual == "ar1" else ("sigma",)
 
     def __post_init__(self) -> None:
-        if self.residual not in ("ar1", "iid"):
-            raise ValueError(f"residual model must be 'ar1' or 'iid', got {self.residual!r}")
+        if self.residual not in RESIDUALS:
+            raise ValueError(f"residual model must be one of {', '.join(RESIDUALS)}, got {self.residual!r}")
+        if not (isinstance(self.pool, int) and self.pool >= 0):
+            raise ValueError(f"pool must be a whole number >= 0, got {self.pool!r}")
+        if not (isinstance(self.settle, int) and self.settle >= 0):
+            raise ValueError(f"settle must be a whole number >= 0, got {self.settle!r}")
+        if not (0 <= self.gain_sd < 1):
+            raise ValueError(f"gain_sd must lie in [0, 1), got {self.gain_sd}")
         if not self.cutoff > 0:
             raise ValueError(f"cut-off must be positive, got {self.cutoff}")
         if self.stride is not None and not (isinstance(self.stride, int) and self.stride >= 1):
@@ -61,3 +97,35 @@ class LikelihoodSettings:
             raise ValueError(f"upsample must be a whole number from 1 to 16, got {self.upsample!r}")
         if self.sampling not in SAMPLINGS:
             raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}, got {self.sampling!r}")
+
+
+def ar1_pointwise(residual: np.ndarray, sigma: float, rho: float = 0.0) -> np.ndarray:
+    """Log-density of each residual of a stationary AR(1) process with innovation sd
+    ``sigma`` and coefficient ``rho`` (the first unconditional, each later one given the
+    one before); rho = 0 is white noise."""
+    var = sigma * sigma
+    if rho == 0.0:
+        return -0.5 * (residual * residual / var + math.log(2 * math.pi * var))
+    out = np.empty_like(residual)
+    var0 = var / (1 - rho * rho)
+    out[0] = -0.5 * (residual[0] ** 2 / var0 + math.log(2 * math.pi * var0))
+    innov = residual[1:] - rho * residual[:-1]
+    out[1:] = -0.5 * (innov * innov / var + math.log(2 * math.pi * var))
+    return out
+
+
+def ar1_marginal(residual: np.ndarray, rho: float) -> float:
+    """log p(residual | rho) of a stationary AR(1) process with its scale sigma
+    marginalised under the prior p(sigma) ~ 1/sigma:
+
+        log p = 0.5 log(1 - rho^2) + lgamma(n/2) - log 2 - (n/2) log(pi S),
+        S = (1 - rho^2) r_0^2 + sum_t (r_t - rho r_{t-1})^2
+    """
+    r = np.asarray(residual, dtype=float)
+    n = len(r)
+    one = 1.0 - rho * rho
+    innov = r[1:] - rho * r[:-1]
+    s = one * r[0] * r[0] + float(innov @ innov)
+    if not s > 0:
+        return -math.inf
+    return 0.5 * math.log(one) + math.lgamma(0.5 * n) - math.log(2.0) - 0.5 * n * math.log(math.pi * s)

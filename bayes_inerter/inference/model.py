@@ -34,13 +34,14 @@ from ..records.drive import resolve_drive, with_drive
 from ..records.record import Record
 from ..simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate, simulate_network
 from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
-from .likelihood import LikelihoodSettings
-from .priors import DEFAULT_PRIORS, NOISE_PRIORS, SPLIT_PRIORS
+from .harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
+from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise
+from .parameters import FRICTION_PAIRS, ParameterMap
+from .priors import DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, NOISE_PRIORS, SPLIT_PRIORS, gain_prior
 
 __all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
 
 PHYSICAL = ("b", "f1_0", "c_f1", "f2_0", "c_f2", "c_n", "k_n", "c_B", "k_B")
-_F1, _C1, _F2, _C2 = (FIELDS.index(n) for n in ("f1_0", "c_f1", "f2_0", "c_f2"))
 
 
 @njit(cache=True)
@@ -69,6 +70,10 @@ MODELS = {
     **{name: ("reduced", PHYSICAL + extra) for name, extra in EFFECTS.items()},
 }
 
+
+#: The harmonic likelihood's parameters where :meth:`PosteriorModel.to_theta` is not
+#: told them: a discrepancy of 0.1 mm/s^2 decaying as 1/k, and equal gains.
+HYPER_START = {"tau": 1e-4, "alpha": 1.0, "gain": 1.0}
 
 #: ``b_app`` (the inertance seen through the nut, to first order in k_n / (omega c_n))
 #: is reported only where k_n / (omega c_n) is below this: an assumption of this
@@ -99,6 +104,12 @@ class PosteriorModel:
     on the sums (log-uniform) and the shares (uniform): a documented choice. The four
     raw values are reported as derived quantities. ``split=False`` samples them directly.
 
+    ``modal``: c_B is sampled as the plate mode's damping ratio ``zeta_B`` under a
+    physical prior (``parameters.ParameterMap``, ``priors.MODAL_PRIORS``) and reported
+    as derived. Default (None): with the harmonic likelihood wherever the bearing's
+    damper and spring are free; the time-domain likelihoods keep c_B log-uniform, as
+    their published results were made.
+
     The drive frequency (``drive``, ``records.drive.DriveFrequency``) is the record's
     metadata's, else its own estimate; ``record`` holds it in its metadata from then on.
     """
@@ -110,6 +121,7 @@ class PosteriorModel:
     priors: dict = field(default_factory=dict)
     likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
     split: bool | None = None
+    modal: bool | None = None
 
     def __post_init__(self) -> None:
         if self.model not in MODELS:
@@ -129,26 +141,31 @@ class PosteriorModel:
     def _set_parameters(self) -> None:
         """The sampled parameters (``names``, split or not), their priors, and the derived
         quantities."""
-        pairs = {"f1_0", "f2_0", "c_f1", "c_f2"}
+        pairs = set(FRICTION_PAIRS)
         can_split = pairs <= set(self.free)
         if self.split is None:
             self.split = can_split
         if self.split and not can_split:
             raise ValueError(f"the {self.model} model has no friction pair to split")
-        known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(NOISE_PRIORS) | set(EFFECT_PRIORS)
+        can_modal = {"c_B", "k_B"} <= set(self.free)
+        if self.modal is None:  # the harmonic configuration's; the time-domain ones' kept as they were
+            self.modal = can_modal and self.likelihood.residual == "harmonic"
+        if self.modal and not can_modal:
+            raise ValueError(f"the {self.model} model has no bearing damper to sample as a damping ratio")
+        self.map = ParameterMap(split=self.split, modal=self.modal, m_B=self.m_B)
+        hyper = {**NOISE_PRIORS, **DISCREPANCY_PRIORS, "gain": gain_prior(self.likelihood.gain_sd or 0.01)}
+        known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(MODAL_PRIORS) | set(hyper) | set(EFFECT_PRIORS)
         unknown = set(self.priors) - known
         if unknown:
             raise ValueError(f"priors given for unknown parameters: {', '.join(sorted(unknown))}")
-        self.all_priors = {**DEFAULT_PRIORS, **SPLIT_PRIORS, **NOISE_PRIORS, **EFFECT_PRIORS, **self.priors}
+        self.all_priors = {**DEFAULT_PRIORS, **SPLIT_PRIORS, **MODAL_PRIORS, **hyper, **EFFECT_PRIORS, **self.priors}
         self.effect_names = [n for n in self.free if n in EFFECT_PRIORS]
-        if self.split:
-            sampled = [n for n in self.free if n not in pairs]
-            sampled[1:1] = ["f_0", "f_share", "c_f", "c_share"]
-        else:
-            sampled = list(self.free)
+        sampled = self.map.sampled_names(self.free)
         self.n_phys = len(sampled)
-        self.names = sampled + ["sigma"] + (["rho"] if self.likelihood.residual == "ar1" else [])
+        self.names = sampled + list(self.likelihood.hyper_names)
         self.derived_names = sorted(pairs, key=PHYSICAL.index) if self.split else []
+        if self.modal:
+            self.derived_names.append("c_B")
         if {"b", "k_n", "c_n"} <= set(self.free):
             self.derived_names.append("b_app")
         self._log = np.array([self.all_priors[n].log_scale for n in self.names])
@@ -171,6 +188,8 @@ class PosteriorModel:
             )
         self.measured_lp = lowpass(rec.accel, self.fs, lk.cutoff)
         self.observed = self.measured_lp[self.grid]
+        self.harmonic = (harmonic_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle)
+                         if lk.residual == "harmonic" else None)
         m = self.measured_lp[window]
         self._phi_norm = float(np.linalg.norm(m - m.mean()))
 
@@ -199,7 +218,10 @@ class PosteriorModel:
         direct = [n for n in self.free if n in pos and n in FIELDS]
         self._direct = (np.array([FIELDS.index(n) for n in direct], dtype=int),
                         np.array([pos[n] for n in direct], dtype=int))
-        self._split_at = [pos[n] for n in ("f_0", "f_share", "c_f", "c_share")] if self.split else None
+        self._mapped = [n for n in self.names[: self.n_phys] if n not in FIELDS]  # what the map turns into fields
+        self._mapped_at = [pos[n] for n in self._mapped]
+        self._mapped_fields = [(FIELDS.index(n), n) for n in self.derived_names if n in FIELDS]
+        self._needs = [n for n in ("k_B",) if self.modal and n in pos]  # fields the map reads too
         self._positive = np.array([f in ("b", "m_s", "m_B") for f in FIELDS])
 
     # -- parameter vectors ---------------------------------------------------------
@@ -217,23 +239,15 @@ class PosteriorModel:
         return np.where(self._log, np.exp(np.where(self._log, theta, 0.0)), theta)
 
     def physical(self, values: dict) -> dict:
-        """Raw network parameters (the free ones) from sampled values by name."""
-        out = {n: values[n] for n in self.free if n in values}
-        if self.split:
-            out["f1_0"] = values["f_0"] * values["f_share"]
-            out["f2_0"] = values["f_0"] * (1.0 - values["f_share"])
-            out["c_f1"] = values["c_f"] * values["c_share"]
-            out["c_f2"] = values["c_f"] * (1.0 - values["c_share"])
-        return out
+        """Raw network parameters (the free ones) from sampled values by name
+        (``parameters.ParameterMap``)."""
+        out = self.map.physical(values)
+        return {n: out[n] for n in self.free if n in out}
 
     def sampled_from_physical(self, phys: dict) -> dict:
         """Sampled quantities (by name) from raw parameters, where they can be formed."""
-        out = {n: phys[n] for n in self.names if n in phys}
-        if self.split and all(k in phys for k in ("f1_0", "f2_0", "c_f1", "c_f2")):
-            f0, c = phys["f1_0"] + phys["f2_0"], phys["c_f1"] + phys["c_f2"]
-            out.update(f_0=f0, c_f=c, f_share=phys["f1_0"] / f0 if f0 > 0 else 0.5,
-                       c_share=phys["c_f1"] / c if c > 0 else 0.5)
-        return out
+        out = self.map.sampled(phys)
+        return {n: out[n] for n in self.names if n in out}
 
     def derived(self, values: dict) -> dict:
         """The derived quantities (``derived_names``) from sampled values by name: the raw
@@ -270,12 +284,14 @@ class PosteriorModel:
         vals = dict(zip(self.names, map(float, self.to_values(theta))))
         return {n: vals[n] for n in self.effect_names}
 
-    def to_theta(self, params: InerterParameters, sigma: float, rho: float = 0.0,
-                 effects: dict | None = None) -> np.ndarray:
+    def to_theta(self, params: InerterParameters, sigma: float = 1e-3, rho: float = 0.0,
+                 effects: dict | None = None, hyper: dict | None = None) -> np.ndarray:
         """theta at ``params`` and noise (``effects``: the richer models' effects, by
-        default ``effects.NO_EFFECT``'s)."""
+        default ``effects.NO_EFFECT``'s; ``hyper``: the harmonic likelihood's, by default
+        :data:`HYPER_START`'s)."""
         phys = {n: getattr(params, n) for n in self.free if n in FIELDS}
         phys.update({n: {**NO_EFFECT, **(effects or {})}[n] for n in self.effect_names})
+        phys.update({**HYPER_START, **(hyper or {})})
         vals = self.sampled_from_physical({**phys, "sigma": sigma, "rho": rho})
         theta = [math.log(vals[n]) if lg else vals[n] for n, lg in zip(self.names, self._log)]
         return np.array(theta, dtype=float)
@@ -295,10 +311,12 @@ class PosteriorModel:
         out = self._fixed_vector.copy()
         dst, src = self._direct
         out[dst] = v[src]
-        if self._split_at is not None:
-            f0, f_share, c, c_share = (float(v[i]) for i in self._split_at)
-            out[_F1], out[_F2] = f0 * f_share, f0 * (1.0 - f_share)
-            out[_C1], out[_C2] = c * c_share, c * (1.0 - c_share)
+        if self._mapped:
+            given = {n: float(v[i]) for n, i in zip(self._mapped, self._mapped_at)}
+            given.update({n: float(out[FIELDS.index(n)]) for n in self._needs})
+            phys = self.map.physical(given)
+            for i, n in self._mapped_fields:
+                out[i] = phys[n]
         if not (np.all(np.isfinite(out)) and np.all(out[self._positive] > 0) and np.all(out >= 0)):
             raise ValueError(f"parameters out of range at theta {np.asarray(theta).tolist()}")
         return out
@@ -340,23 +358,44 @@ class PosteriorModel:
 
     def pointwise_loglik(self, residual: np.ndarray, sigma: float, rho: float = 0.0) -> np.ndarray:
         """Log-likelihood of each kept residual (AR(1): conditional on the one before)."""
-        if self.likelihood.residual == "iid" or rho == 0.0:
-            var0 = sigma * sigma
-            innov = residual
-            out = -0.5 * (innov * innov / var0 + math.log(2 * math.pi * var0))
-            return out
-        out = np.empty_like(residual)
-        var = sigma * sigma
-        var0 = var / (1 - rho * rho)
-        out[0] = -0.5 * (residual[0] ** 2 / var0 + math.log(2 * math.pi * var0))
-        innov = residual[1:] - rho * residual[:-1]
-        out[1:] = -0.5 * (innov * innov / var + math.log(2 * math.pi * var))
-        return out
+        return ar1_pointwise(residual, sigma, 0.0 if self.likelihood.residual == "iid" else rho)
 
     def noise(self, theta) -> tuple[float, float]:
+        """(sigma, rho) of the time-domain residual at theta."""
         sigma = math.exp(theta[self.n_phys])
         rho = float(theta[-1]) if self.likelihood.residual == "ar1" else 0.0
         return sigma, rho
+
+    def hyper(self, theta) -> dict:
+        """The likelihood's own parameters at theta (``LikelihoodSettings.hyper_names``),
+        in their units, by name; ``gain`` 1 where it is not sampled."""
+        vals = dict(zip(self.names[self.n_phys:], map(float, self.to_values(theta)[self.n_phys:])))
+        if self.likelihood.residual == "harmonic":
+            vals.setdefault("gain", 1.0)
+        return vals
+
+    def transfer(self, theta) -> np.ndarray:
+        """The model's force-to-acceleration transfer at the harmonic likelihood's
+        harmonics, the network linearised with its Coulomb forces out
+        (``harmonic.linear_transfer``; for the richer models, their two-port part's)."""
+        masses, link_c, link_k, viscous, _ = linear_chain(self.network).arrays(self.field_vector(theta))
+        A, B = chain_state_space(masses, link_c, link_k, viscous)
+        return linear_transfer(A, B, self.harmonic.omega)
+
+    def harmonic_terms(self, theta, sim_raw: np.ndarray) -> float:
+        """The harmonic log-likelihood at theta of the unfiltered simulation ``sim_raw``."""
+        return float(self.harmonic_pointwise(theta, sim_raw).sum())
+
+    def harmonic_pointwise(self, theta, sim_raw: np.ndarray) -> np.ndarray:
+        """Each harmonic's term of the harmonic log-likelihood (``harmonic.harmonic_loglik``)."""
+        h = self.hyper(theta)
+        return harmonic_loglik(self.harmonic, sim_raw, self.transfer(theta), h["tau"], h["alpha"], h["gain"],
+                               pointwise=True)
+
+    def harmonic_variance(self, theta) -> np.ndarray:
+        """V_k at theta: the variance of each harmonic's residual (noise and discrepancy)."""
+        h = self.hyper(theta)
+        return harmonic_variance(self.harmonic, self.transfer(theta), h["tau"], h["alpha"], h["gain"])
 
     def _simulation(self, theta):
         """:meth:`simulate_lp` at theta, or None where the simulation fails or the
@@ -371,6 +410,14 @@ class PosteriorModel:
         lp = self.log_prior(theta)
         if not math.isfinite(lp):
             return lp, None, None
+        if self.harmonic is not None:
+            try:
+                raw = self.simulate_unfiltered(theta)
+            except (SimulationError, ValueError):
+                return -math.inf, None, None
+            if not np.all(np.isfinite(raw)):
+                return -math.inf, None, None
+            return lp, self.harmonic_pointwise(theta, raw), lowpass(raw, self.fs, self.likelihood.cutoff)
         sim = self._simulation(theta)
         if sim is None or not np.all(np.isfinite(sim)):
             return -math.inf, None, None
@@ -391,21 +438,42 @@ class PosteriorModel:
             return None
         return r, 1.0 - math.sqrt(sq) / self._phi_norm
 
+    def log_likelihood(self, theta, *, marginal_scale: bool = False):
+        """(log-likelihood, phi) at theta, or None where the simulation fails or is not
+        finite: the one interface the single-record and the joint model share.
+        ``marginal_scale``: the time-domain residual's scale sigma marginalised under
+        p(sigma) ~ 1/sigma (``likelihood.ar1_marginal``; what the joint model uses, its
+        sigma entry then ignored); the harmonic likelihood has no such scale."""
+        if self.harmonic is not None:
+            try:
+                raw = self.simulate_unfiltered(theta)
+            except (SimulationError, ValueError):
+                return None
+            if not np.all(np.isfinite(raw)):
+                return None
+            return self.harmonic_terms(theta, raw), self.phi(lowpass(raw, self.fs, self.likelihood.cutoff))
+        got = self.misfit(theta)
+        if got is None:
+            return None
+        r, phi = got
+        sigma, rho = self.noise(theta)
+        if marginal_scale:
+            return ar1_marginal(r, rho), phi
+        return float(self.pointwise_loglik(r, sigma, rho).sum()), phi
+
     def log_prob(self, theta):
         """(log posterior, phi) at theta."""
         theta = np.asarray(theta, dtype=float)
         lp = self.log_prior(theta)
         if not math.isfinite(lp):
             return -math.inf, math.nan
-        got = self.misfit(theta)
+        got = self.log_likelihood(theta)
         if got is None:
             return -math.inf, math.nan
-        r, phi = got
-        sigma, rho = self.noise(theta)
-        total = lp + float(self.pointwise_loglik(r, sigma, rho).sum())
+        total = lp + got[0]
         if not math.isfinite(total):
             return -math.inf, math.nan
-        return total, phi
+        return total, got[1]
 
     def replace(self, **changes) -> PosteriorModel:
         return dataclasses.replace(self, **changes)

@@ -44,6 +44,7 @@ import numpy as np
 from scipy.optimize import differential_evolution, minimize
 
 from ..records.conditioning import lowpass
+from ..simulate import SimulationError
 from .model import PosteriorModel
 from .priors import RHO_BOUNDS
 
@@ -237,7 +238,10 @@ def _evolve(model: PosteriorModel, name: str, rng: np.random.Generator, popsize,
 
 
 def _with_noise_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
-    """theta at ``phys`` with sigma the residual's sd and rho its lag-one correlation."""
+    """theta at ``phys`` with sigma the residual's sd and rho its lag-one correlation;
+    for the harmonic likelihood, tau the harmonic residual's rms, alpha 1 and gain 1."""
+    if model.harmonic is not None:
+        return _with_discrepancy_estimate(model, phys)
     _, _, sim = model.evaluate(_with_noise(model, phys))
     r = sim[model.grid] - model.observed
     sigma = max(float(np.std(r)), 1e-5)
@@ -246,6 +250,24 @@ def _with_noise_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
         rho = float(np.corrcoef(r[1:], r[:-1])[0, 1]) if np.std(r) > 0 else 0.0
         theta.append(float(np.clip(rho, RHO_BOUNDS[0] + 0.01, RHO_BOUNDS[1] - 0.01)))
     return np.array(theta)
+
+
+def _with_discrepancy_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
+    theta = _with_noise(model, phys)
+    start = {"tau": 1e-4, "alpha": 1.0, "gain": 1.0}
+    try:
+        r = model.harmonic.accel - model.harmonic.mean_amplitudes(model.simulate_unfiltered(theta))
+        if np.all(np.isfinite(r)):
+            start["tau"] = float(np.sqrt(np.mean(np.abs(r) ** 2)))
+    except (SimulationError, ValueError):
+        pass
+    for name, value in start.items():
+        if name in model.names:
+            prior = model.all_priors[name]
+            lo, hi = prior.bounds
+            t = math.log(value) if prior.log_scale else value
+            theta[model.names.index(name)] = float(np.clip(t, lo + 0.01, hi - 0.01))
+    return theta
 
 
 def local_optimum(model: PosteriorModel, theta: np.ndarray, *, maxiter: int = NM_MAXITER, restarts: int = 0,

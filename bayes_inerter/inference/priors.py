@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LogUniform", "LogNormal", "Uniform", "DEFAULT_PRIORS", "SPLIT_PRIORS", "NOISE_PRIORS"]
+__all__ = ["LogUniform", "LogNormal", "Uniform", "DEFAULT_PRIORS", "SPLIT_PRIORS", "NOISE_PRIORS", "DISCREPANCY_PRIORS", "MODAL_PRIORS",
+           "gain_prior"]
 
 
 @dataclass(frozen=True)
@@ -131,6 +132,14 @@ SPLIT_PRIORS = {
     "c_share": Uniform(0.0, 1.0),  # c_f1 / (c_f1 + c_f2)
 }
 
+#: Prior of the plate mode's damping ratio, zeta_B = c_B / (2 sqrt(k_B m_B)) (the
+#: default ``modal`` parametrisation, ``parameters``): log-uniform over 0.5 to 10 %, the
+#: range of real structures' modal damping. **Assumption**: Table I's c_B of about
+#: 1 N s/m (a ratio of 8e-6) is a tuning artefact the records do not identify.
+MODAL_PRIORS = {
+    "zeta_B": LogUniform(0.005, 0.10),
+}
+
 RHO_BOUNDS = (-0.99, 0.99)
 
 #: Priors of the residual model: scale (m/s^2, log-uniform) and AR(1) coefficient.
@@ -138,3 +147,19 @@ NOISE_PRIORS = {
     "sigma": LogUniform(1e-5, 10.0),
     "rho": Uniform(*RHO_BOUNDS),
 }
+
+#: Priors of the harmonic likelihood's discrepancy (``harmonic``): its scale tau, m/s^2,
+#: log-uniform from far below any record's noise to far above any acceleration's, and
+#: its spectral decay alpha (variance tau^2 k^(-2 alpha) at harmonic k), uniform from
+#: white (0) to a discrepancy that lives at the first harmonics (2). **Assumptions**.
+DISCREPANCY_PRIORS = {
+    "tau": LogUniform(1e-7, 10.0),
+    "alpha": Uniform(0.0, 2.0),
+}
+
+
+def gain_prior(sd: float) -> LogNormal:
+    """Prior of ``gain``, the acceleration channel's gain relative to the force
+    channel's: log-normal about 1 with log-sd ``sd`` (``LikelihoodSettings.gain_sd``),
+    truncated at 4 sd."""
+    return LogNormal(1.0, sd, width=4.0)

@@ -104,7 +104,8 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
     theta = sample.theta[:, idx]
     walkers, draws, _ = theta.shape
     n_grid = len(model.grid)
-    loglik = np.empty((walkers, draws, n_grid))
+    n_obs = model.harmonic.harmonics if model.harmonic is not None else n_grid
+    loglik = np.empty((walkers, draws, n_obs))
     pred = np.empty((walkers, draws, n_grid))
     sims = []
     sim_every = max(1, math.ceil(walkers * draws / keep_sims))
@@ -117,19 +118,21 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
                 pred[w, d] = np.nan
                 continue
             loglik[w, d] = ll
-            sigma, rho = model.noise(theta[w, d])
-            pred[w, d] = sim[model.grid] + ar1_noise(rng, n_grid, sigma, rho)
+            pred[w, d] = sim[model.grid] + _predictive_error(model, theta[w, d], rng)
             if k % sim_every == 0:
                 sims.append(sim)
             k += 1
     posterior = {n: v[:, idx] for n, v in sample.as_dict().items()}
     coords = {"time": model.record.time[model.grid]}
     dims = {"accel": ["time"]}
+    if model.harmonic is not None:
+        coords["harmonic"] = np.arange(1, model.harmonic.harmonics + 1)
+        dims["accel_harmonics"] = ["harmonic"]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         idata = az.from_dict(
             posterior=posterior,
-            log_likelihood={"accel": loglik},
+            log_likelihood={"accel" if model.harmonic is None else "accel_harmonics": loglik},
             posterior_predictive={"accel": pred},
             observed_data={"accel": model.observed},
             sample_stats={"lp": sample.lp[:, idx]},
@@ -137,6 +140,19 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
             dims=dims,
         )
     return idata, np.array(sims)
+
+
+def _predictive_error(model: PosteriorModel, theta, rng: np.random.Generator) -> np.ndarray:
+    """A draw of what the likelihood adds to the simulation on its grid: the AR(1)
+    residual, or for the harmonic likelihood a periodic error whose harmonic k is
+    complex normal with the variance V_k (noise and discrepancy) at theta."""
+    if model.harmonic is None:
+        sigma, rho = model.noise(theta)
+        return ar1_noise(rng, len(model.grid), sigma, rho)
+    V = model.harmonic_variance(theta)
+    z = (rng.standard_normal(len(V)) + 1j * rng.standard_normal(len(V))) * np.sqrt(V / 2.0)
+    t = model.record.time[model.grid]
+    return np.real(np.exp(1j * np.outer(t, model.harmonic.omega)) @ z)
 
 
 def ar1_noise(rng, n, sigma, rho):

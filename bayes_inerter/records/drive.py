@@ -33,7 +33,7 @@ import numpy as np
 from .record import Record
 
 __all__ = ["DriveFrequency", "estimate_drive_frequency", "resolve_drive", "with_drive", "spectral_peak", "HARMONICS",
-           "STEADY_SHARE", "SOURCE_KEY"]
+           "STEADY_SHARE", "SOURCE_KEY", "steady_periods"]
 
 #: Harmonics of the drive in the refining least squares (each channel of a device with
 #: friction carries odd harmonics; the fit must not take them for a shifted fundamental).
@@ -107,6 +107,17 @@ def _steady(time: np.ndarray, x: np.ndarray, freq: float) -> slice:
                 best, best_span = (run_start, i), i - run_start
             run_start = None
     return slice(best[0] * n, best[1] * n)
+
+
+def steady_periods(record: Record, freq: float) -> tuple[int, int]:
+    """(first sample, number) of the record's steady drive periods at ``freq`` Hz: the
+    longest run of whole periods whose amplitude is within :data:`STEADY_SHARE` of the
+    typical one (a ramp-in or ramp-out left out), read from the displacement channel
+    where there is one, else the acceleration."""
+    x = np.asarray(record.disp if record.disp is not None else record.accel, dtype=float)
+    part = _steady(record.time, x, freq)
+    n = int(round(record.fs / freq))
+    return int(part.start), int((part.stop - part.start) // n) if n > 0 else 0
 
 
 def estimate_drive_frequency(record: Record) -> DriveFrequency:

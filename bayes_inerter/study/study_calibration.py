@@ -33,11 +33,19 @@ ones the study reports and the equal-tailed ones.
   longest autocorrelation time a trial replicate showed); the study runs until
   converged, so each replicate also records whether its chain met the convergence rule;
 - the generator's sensor noise is not the likelihood's AR(1) process, so sigma and rho
-  have no true value and only the physical parameters are ranked.
+  have no true value and only the physical parameters are ranked; nor is it the
+  harmonic likelihood's discrepancy, so tau and alpha are not ranked either. Its
+  ``gain`` is: each replicate's acceleration channel is scaled by a gain drawn from its
+  prior, so the calibration covers the sensors' too;
+- ``single``: each replicate is one record, at ``frequencies[k % len(frequencies)]``,
+  fitted by :func:`inference.fit.fit_record` as ``bayes-inerter fit`` runs it, instead of
+  the joint fit; ``steps`` None runs each chain to the convergence rule (``Convergence``,
+  capped at ``max_steps``).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tempfile
 from dataclasses import dataclass, field
@@ -47,7 +55,8 @@ import numpy as np
 
 from ..device import TABLE_I, paper_parameters
 from ..inference.convergence import Convergence
-from ..inference.fit import ALL_DRAWS_FILE, fit_joint
+from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
+from ..inference.likelihood import LikelihoodSettings
 from ..inference.model import PosteriorModel
 from ..inference.priors import LogUniform, Uniform
 from ..records.generator import GeneratorSettings, generate_record
@@ -90,24 +99,30 @@ class StudyCalibration:
     setting : flywheel setting whose masses the devices have (b is drawn).
     frequencies : drive frequencies of each replicate's records, Hz.
     generator : how records are made (default: the study's, 10 s with a 2 s ramp).
-    steps : steps of each joint chain.
+    steps : steps of each chain; None: to the convergence rule, at most ``max_steps``.
     draws : L, the posterior draws each truth is ranked among.
     seed : replicate k uses the seed sequence (seed, k).
+    single : one record per replicate, fitted alone (see module docstring).
+    likelihood : the fits' likelihood settings.
+    max_steps : the cap of a chain run to the convergence rule.
     """
 
     setting: str = "A3"
     frequencies: tuple = (0.5, 1.5)
     generator: GeneratorSettings = field(default_factory=GeneratorSettings)
-    steps: int = 600
+    steps: int | None = 600
     draws: int = 99
     seed: int = 0
+    single: bool = False
+    likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
+    max_steps: int = 6000
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
-        if len(self.frequencies) < 2:
+        if len(self.frequencies) < 2 and not self.single:
             raise ValueError("the joint model needs at least two drive frequencies")
-        if not (isinstance(self.steps, int) and self.steps >= 20):
-            raise ValueError(f"steps must be a whole number of at least 20, got {self.steps!r}")
+        if not (self.steps is None or (isinstance(self.steps, int) and self.steps >= 20)):
+            raise ValueError(f"steps must be None or a whole number of at least 20, got {self.steps!r}")
         if not (isinstance(self.draws, int) and self.draws >= 9):
             raise ValueError(f"draws must be a whole number of at least 9, got {self.draws!r}")
 
@@ -115,27 +130,35 @@ class StudyCalibration:
         return study_replicate(self, k)
 
     def describe(self) -> str:
-        return (f"joint fits of {len(self.frequencies)} records ({', '.join(f'{f:g}' for f in self.frequencies)} Hz, "
-                f"{self.generator.duration:g} s, masses of {self.setting}), {self.steps} steps per chain, "
-                f"ranks among {self.draws} draws, seed {self.seed}")
+        steps = (f"{self.steps} steps per chain" if self.steps else
+                 f"each chain to the convergence rule (at most {self.max_steps} steps)")
+        what = ("single-record fits, one record each at" if self.single else
+                f"joint fits of {len(self.frequencies)} records,")
+        return (f"{what} {', '.join(f'{f:g}' for f in self.frequencies)} Hz ({self.generator.duration:g} s, masses "
+                f"of {self.setting}, the {self.likelihood.residual} likelihood), {steps}, ranks among {self.draws} "
+                f"draws, seed {self.seed}")
 
 
-def _draw_device(cs: StudyCalibration, rng: np.random.Generator):
+def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0):
     """A device from the prior and its records (a draw the simulator refuses is drawn
     again: the posterior gives it zero density too)."""
     template = generate_record(paper_parameters(cs.setting), cs.frequencies[0], settings=cs.generator,
                                rng=np.random.default_rng([cs.seed, 10**6]), setting_name=cs.setting)
-    base = PosteriorModel(template, priors=STUDY_SBC_PRIORS)
+    base = PosteriorModel(template, priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+    ranked = base.names[: base.n_phys] + [n for n in base.names[base.n_phys:] if n == "gain"]
+    freqs = cs.frequencies if not cs.single else (cs.frequencies[k % len(cs.frequencies)],)
     for redraws in range(100):
         theta = np.array([base.all_priors[n].sample(rng) for n in base.names])
         try:
             params = base.parameters(theta)
             records = [generate_record(params, f, settings=cs.generator, rng=rng, setting_name=cs.setting)
-                       for f in cs.frequencies]
+                       for f in freqs]
         except (SimulationError, ValueError):
             continue
         truth = base.values(theta)
-        return {n: float(truth[n]) for n in base.names[: base.n_phys]}, records, redraws
+        gain = truth.get("gain", 1.0)
+        records = [dataclasses.replace(r, accel=r.accel * gain) for r in records]
+        return {n: float(truth[n]) for n in ranked}, records, redraws
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
 
@@ -144,11 +167,19 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     device's true values, its records, the redraws, the fit, every kept draw by name).
     The same ``k`` gives the same device, records, start and chain."""
     rng = np.random.default_rng([cs.seed, k])
-    truth, records, redraws = _draw_device(cs, rng)
-    res = fit_joint(records, out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=STUDY_SBC_PRIORS,
-                    plots=False, all_draws=True)
-    with np.load(out / ALL_DRAWS_FILE) as f:
-        kept = {n: f[n].ravel() for n in f.files}
+    truth, records, redraws = _draw_device(cs, rng, k)
+    convergence = dataclasses.replace(Convergence(), max_steps=cs.max_steps)
+    if cs.single:
+        res = fit_record(records[0], out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=STUDY_SBC_PRIORS,
+                         plots=False, likelihood=cs.likelihood, convergence=convergence, interval="posterior")
+        post = res.idata.posterior
+        kept = {n: np.asarray(post[n]).ravel() for n in post.data_vars}
+        kept[f"b_{cs.setting}"] = kept.pop("b")
+    else:
+        res = fit_joint(records, out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=STUDY_SBC_PRIORS,
+                        plots=False, all_draws=True, likelihood=cs.likelihood, convergence=convergence)
+        with np.load(out / ALL_DRAWS_FILE) as f:
+            kept = {n: f[n].ravel() for n in f.files}
     return rng, truth, records, redraws, res, kept
 
 
