@@ -11,17 +11,23 @@ state (converged, longest tau, steps) and the seconds. Candidates:
   off), its interval the posterior's own;
 - ``ar1-honest``: the same chain, its b interval the package's post-hoc "honest" one
   (no second chain: the row is read from the same fit);
-- ``harmonic``: the harmonic likelihood (``inference.harmonic``: errors in both
-  signals, the discrepancy and the channels' gain sampled) with the plate mode's
-  damping ratio under its physical prior (``modal``).
+- ``harmonic``: the harmonic likelihood (``inference.harmonic``: force in,
+  acceleration out at the drive's harmonics, errors in both signals, the discrepancy
+  and the channels' gain sampled) with the plate mode's damping ratio under its
+  physical prior (``modal``);
+- ``motion``: the motion-in likelihood (``inference.motion``: the measured motion in,
+  the force out at the drive's harmonics, no simulation; the same noise, discrepancy,
+  gain and ``modal``).
 
 Records: ``control`` (the generator's records of the model's own physics, Table I and
-Table 2), and ``paper-like`` (``records.paper_like_record``, a richer device), each at
+Table 2), ``noise-free`` (the same with the sensors' noise off: ideal sensors, band-limited
+at 1 kHz) and ``paper-like`` (``records.paper_like_record``, a richer device), each at
 the settings and frequencies asked, one laboratory seed. Rows already in the CSV are
 not fitted again, so a run that stops continues where it stopped.
 
     python studies/likelihood_compare.py [--out results/likelihood-compare] [--kinds paper-like control]
-        [--settings A0 A3 B2] [--freqs 0.5 1 1.5] [--seed 11] [--max-steps 6000] [--processes 2]
+        [--settings A0 A3 B2] [--freqs 0.5 1 1.5] [--candidates motion harmonic ar1] [--seed 11]
+        [--max-steps 6000] [--processes 2]
 """
 
 from __future__ import annotations
@@ -42,7 +48,7 @@ from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
 from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.records import generate_record
+from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.paper_like import paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,9 +57,13 @@ FIELDS = ("kind", "setting", "freq_hz", "seed", "candidate", "b_true", "b_median
           "tau_max", "steps", "seconds", "identified")
 
 
+KINDS = ("paper-like", "control", "noise-free")
+
+
 def _record(kind: str, setting: str, freq: float, seed: int):
-    if kind == "control":
-        return generate_record(paper_parameters(setting), freq, rng=seed, setting_name=setting)
+    if kind in ("control", "noise-free"):
+        settings = GeneratorSettings(force_noise=0.0, accel_noise=0.0, disp_noise=0.0) if kind == "noise-free" else None
+        return generate_record(paper_parameters(setting), freq, settings=settings, rng=seed, setting_name=setting)
     return paper_like_record(setting, freq, seed=seed)
 
 
@@ -66,11 +76,11 @@ def _hdi(x: np.ndarray, level: float):
 
 def _fit(record, candidate: str, max_steps: int, processes: int, seed: int) -> list[dict]:
     """The rows of one fit: for ``ar1``, also the ``ar1-honest`` row read from the same chain."""
-    if candidate == "harmonic":
-        kw = {"likelihood": LikelihoodSettings(residual="harmonic"), "interval": "posterior"}
+    if candidate in ("harmonic", "motion"):
+        kw = {"likelihood": LikelihoodSettings(residual=candidate), "interval": "posterior"}
     else:
         kw = {"likelihood": LikelihoodSettings(residual="ar1"), "interval": "honest"}
-    modal = candidate == "harmonic"
+    modal = candidate in ("harmonic", "motion")
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(record, Path(tmp) / "fit", convergence=replace(Convergence(), max_steps=max_steps),
@@ -105,10 +115,10 @@ def _finish(row: dict, b_true: float) -> dict:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default=str(ROOT / "results" / "likelihood-compare"))
-    ap.add_argument("--kinds", nargs="+", default=["paper-like", "control"], choices=("paper-like", "control"))
+    ap.add_argument("--kinds", nargs="+", default=["paper-like", "control"], choices=KINDS)
     ap.add_argument("--settings", nargs="+", default=["A0", "A3", "B2"])
     ap.add_argument("--freqs", nargs="+", type=float, default=[0.5, 1.0, 1.5])
-    ap.add_argument("--candidates", nargs="+", default=["harmonic", "ar1"], choices=("harmonic", "ar1"))
+    ap.add_argument("--candidates", nargs="+", default=["motion", "harmonic", "ar1"], choices=("motion", "harmonic", "ar1"))
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--max-steps", type=int, default=6000)
     ap.add_argument("--processes", type=int, default=min(2, os.cpu_count() or 1))

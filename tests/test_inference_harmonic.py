@@ -136,3 +136,11 @@ def test_settings_refuse_unknown_values():
     with pytest.raises(ValueError, match="gain_sd"):
         LikelihoodSettings(gain_sd=-0.1)
     assert LikelihoodSettings(residual="harmonic", gain_sd=0).hyper_names == ("tau", "alpha")
+
+
+def test_the_command_lines_likelihoods_are_the_librarys():
+    from bayes_inerter.cli import DEFAULT_RESIDUAL, FIT_RESIDUALS
+    from bayes_inerter.inference.likelihood import RESIDUALS, LikelihoodSettings
+
+    assert FIT_RESIDUALS == RESIDUALS
+    assert DEFAULT_RESIDUAL == LikelihoodSettings().residual

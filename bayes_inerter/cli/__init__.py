@@ -16,7 +16,8 @@ import sys
 from ..executor import caused_by_interrupt
 from .fit import cmd_fit
 from .identify import cmd_identify
-from .parser import CHECKPOINT_SECONDS, FIT_COORDINATES, RECORD_CHECKS, build_parser  # noqa: F401  (tests' names)
+from .parser import (CHECKPOINT_SECONDS, DEFAULT_RESIDUAL, FIT_COORDINATES, FIT_RESIDUALS, RECORD_CHECKS,  # noqa: F401
+                     build_parser)  # (tests' names)
 from .records import cmd_demo, cmd_generate, cmd_inspect
 from .study import cmd_report, cmd_study
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["build_parser", "CHECKPOINT_SECONDS", "FIT_COORDINATES", "RECORD_CHECKS"]
+__all__ = ["build_parser", "CHECKPOINT_SECONDS", "FIT_COORDINATES", "FIT_RESIDUALS", "RECORD_CHECKS"]
 
 
 def _number_type(convert, ok, requirement: str, noun: str = "number"):
@@ -37,6 +37,9 @@ CHECKPOINT_SECONDS = 0.5
 #: ``inference.coordinates.COORDINATES``, written out so that the parser does not import
 #: the inference package (emcee, arviz) before it is needed; a test keeps the two equal.
 FIT_COORDINATES = ("impedance", "unconstrained", "physical")
+#: ``inference.likelihood.RESIDUALS`` and its default, written out likewise.
+FIT_RESIDUALS = ("ar1", "iid", "harmonic", "motion")
+DEFAULT_RESIDUAL = "ar1"
 
 
 def _add_generator_options(p: argparse.ArgumentParser) -> None:
@@ -133,7 +136,10 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--max-steps", type=_positive_int,
                    help="until converged, but at most this many steps in all (default 20000; a checkpoint is continued)")
     p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")
-    p.add_argument("--residual", choices=("ar1", "iid"), default="ar1", help="residual model (%(default)s)")
+    p.add_argument("--residual", choices=FIT_RESIDUALS, default=DEFAULT_RESIDUAL,
+                   help="likelihood (%(default)s): ar1 or iid, the low-passed acceleration sample by sample; "
+                        "harmonic, the acceleration at the drive's harmonics; motion, the force at the drive's "
+                        "harmonics given the measured motion (docs/inference.md)")
     p.add_argument("--upsample", type=_positive_int, default=1,
                    help="force reconstruction rate / record rate before simulating (%(default)s: linear interpolation)")
     p.add_argument("--processes", type=_positive_int, help="worker processes (default: up to 2)")

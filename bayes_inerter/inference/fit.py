@@ -427,7 +427,7 @@ def _residual_sd(sample, pm: PosteriorModel) -> float:
     if pm.harmonic is not None:
         theta = sample.theta.reshape(-1, pm.ndim)
         pick = theta[:: max(1, len(theta) // 200)]
-        return float(np.median([math.sqrt(pm.harmonic_variance(t).sum() / 2.0) for t in pick]))
+        return float(np.median([math.sqrt(pm.accel_error_variance(t).sum() / 2.0) for t in pick]))
     vals = sample.as_dict()
     rho = vals.get("rho", np.zeros_like(vals["sigma"]))
     return float(np.median(vals["sigma"] / np.sqrt(1.0 - rho**2)))

@@ -48,7 +48,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from ..records.drive import steady_periods
 from ..records.record import Record
@@ -63,8 +62,10 @@ class HarmonicData:
     Attributes
     ----------
     index : (P, n) sample indices of each steady period (n samples each).
-    projector : (P, K, n) complex; ``projector[p] @ x[index[p]]`` is period p's
-        amplitudes at harmonics 1..K.
+    projector : (K, n) complex; ``projector @ x[index[p]]`` is period p's amplitudes at
+        harmonics 1..K in the period's own time (from its first sample).
+    rotation : (P, K) complex; those times ``rotation[p]`` are the amplitudes in the
+        record's time, exp(-i k omega t_p) with t_p the period's first sample's time.
     omega : (K,) rad/s, the harmonics' angular frequencies.
     accel, force : (K,) complex, the measured means over the periods.
     var_accel, var_force : (K,) the pooled sample variances of one period's amplitude.
@@ -74,6 +75,7 @@ class HarmonicData:
 
     index: np.ndarray
     projector: np.ndarray
+    rotation: np.ndarray
     omega: np.ndarray
     accel: np.ndarray
     force: np.ndarray
@@ -91,24 +93,11 @@ class HarmonicData:
 
     def amplitudes(self, x: np.ndarray) -> np.ndarray:
         """(P, K) complex amplitudes of ``x`` (a whole record's samples) in each period."""
-        return _project(self.projector, self.index, np.ascontiguousarray(x, dtype=float))
+        return (np.asarray(x, dtype=float)[self.index] @ self.projector.T) * self.rotation
 
     def mean_amplitudes(self, x: np.ndarray) -> np.ndarray:
         """(K,) complex amplitudes of ``x`` averaged over the periods."""
         return self.amplitudes(x).mean(axis=0)
-
-
-@njit(cache=True)
-def _project(projector, index, x):
-    P, K, n = projector.shape
-    out = np.zeros((P, K), dtype=np.complex128)
-    for p in range(P):
-        for k in range(K):
-            s = 0.0 + 0.0j
-            for j in range(n):
-                s += projector[p, k, j] * x[index[p, j]]
-            out[p, k] = s
-    return out
 
 
 def _pooled(x: np.ndarray, pool: int) -> np.ndarray:
@@ -149,20 +138,21 @@ def harmonic_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, 
     K_fit = max(K, min(int(math.floor(2 * cutoff / freq)), int(0.45 * n)))
     w = 2 * math.pi * freq
     ks = np.arange(1, K_fit + 1)
-    projector = np.empty((count, K, n), dtype=np.complex128)
-    for p in range(count):
-        t = record.time[index[p]]
-        phase = np.outer(t, ks) * w
-        basis = np.column_stack([np.ones(n), np.cos(phase), np.sin(phase)])
-        pinv = np.linalg.pinv(basis)  # rows: offset, cos 1..K_fit, sin 1..K_fit
-        projector[p] = pinv[1: K + 1] - 1j * pinv[K_fit + 1: K_fit + 1 + K]
-    data = HarmonicData(index, projector, w * np.arange(1, K + 1), np.zeros(K, complex), np.zeros(K, complex),
+    # every period has the same samples in its own time: one least-squares projector,
+    # turned into the record's time by each period's phase
+    phase = np.outer(np.arange(n) / fs, ks) * w
+    basis = np.column_stack([np.ones(n), np.cos(phase), np.sin(phase)])
+    pinv = np.linalg.pinv(basis)  # rows: offset, cos 1..K_fit, sin 1..K_fit
+    projector = pinv[1: K + 1] - 1j * pinv[K_fit + 1: K_fit + 1 + K]
+    omega = w * np.arange(1, K + 1)
+    rotation = np.exp(-1j * np.outer(record.time[index[:, 0]], omega))
+    data = HarmonicData(index, projector, rotation, omega, np.zeros(K, complex), np.zeros(K, complex),
                         np.zeros(K), np.zeros(K), np.zeros(K, complex))
     A = data.amplitudes(record.accel)
     F = data.amplitudes(record.force)
     dA, dF = A - A.mean(axis=0), F - F.mean(axis=0)
     dof = count - 1
-    return HarmonicData(index, projector, data.omega, A.mean(axis=0), F.mean(axis=0),
+    return HarmonicData(index, projector, rotation, omega, A.mean(axis=0), F.mean(axis=0),
                         _pooled((np.abs(dA) ** 2).sum(axis=0) / dof, pool),
                         _pooled((np.abs(dF) ** 2).sum(axis=0) / dof, pool),
                         _pooled((dA * np.conj(dF)).sum(axis=0) / dof, pool))

@@ -18,7 +18,7 @@ __all__ = ["LikelihoodSettings", "RESIDUALS", "ar1_pointwise", "ar1_marginal"]
 
 #: The likelihoods: the time-domain residual as a stationary AR(1) process or white, and
 #: the harmonic likelihood with errors in both signals and a sampled discrepancy.
-RESIDUALS = ("ar1", "iid", "harmonic")
+RESIDUALS = ("ar1", "iid", "harmonic", "motion")
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,9 @@ class LikelihoodSettings:
 
     Attributes
     ----------
-    residual : "ar1" (default), "iid" or "harmonic" (:mod:`.harmonic`).
+    residual : "ar1" (default), "iid", "harmonic" (:mod:`.harmonic`: force in,
+        acceleration out, at the drive's harmonics) or "motion" (:mod:`.motion`: the
+        measured motion in, the force out, at the drive's harmonics).
     cutoff : matched low-pass cut-off, Hz (default 30).
     stride : keep every stride-th sample; None: fs / (2 cutoff), about one sample per
         correlation length of the low-passed signal (16 at 1 kHz and 30 Hz).
@@ -49,12 +51,12 @@ class LikelihoodSettings:
         and makes the likelihood rough (tens of nats for a 0.05 % change of the
         Coulomb force, measured on a generated A1 record at 1 Hz; with "mean" the same
         scan is a smooth parabola peaked at the truth).
-    pool : harmonic likelihood only: the noise's variance at a harmonic is averaged over
+    pool : harmonic likelihoods only: the noise's variance at a harmonic is averaged over
         the harmonics within ``pool`` of it (**assumption**: a smooth noise spectrum),
         default 2.
-    settle : harmonic likelihood only: whole drive periods left out after the start
+    settle : harmonic likelihoods only: whole drive periods left out after the start
         of the steady part (the start-up's transient), default 1.
-    gain_sd : harmonic likelihood only: log-sd of the prior on ``gain``, the
+    gain_sd : harmonic likelihoods only: log-sd of the prior on ``gain``, the
         acceleration channel's gain relative to the force channel's (**assumption**:
         the sensors' calibration uncertainties of ``records.SensorCalibration``, 0.25 %
         for the load cell and 0.5 % for the accelerometer, default their ratio's 0.56 %);
@@ -74,7 +76,7 @@ class LikelihoodSettings:
     @property
     def hyper_names(self) -> tuple[str, ...]:
         """The sampled parameters of the likelihood itself, after the physical ones."""
-        if self.residual == "harmonic":
+        if self.residual in ("harmonic", "motion"):
             return ("tau", "alpha") + (("gain",) if self.gain_sd > 0 else ())
         return ("sigma", "rho") if self.residual == "ar1" else ("sigma",)
 

@@ -36,8 +36,10 @@ from ..simulate import Drive, SimulationError, check_record, contacts, run_exact
 from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
 from .harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
 from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise
+from .motion import motion_data, motion_loglik, predicted_force
 from .parameters import FRICTION_PAIRS, ParameterMap
-from .priors import DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, NOISE_PRIORS, SPLIT_PRIORS, gain_prior
+from .priors import (DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, MOTION_DISCREPANCY_PRIORS, NOISE_PRIORS,
+                     SPLIT_PRIORS, gain_prior)
 
 __all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
 
@@ -149,11 +151,12 @@ class PosteriorModel:
             raise ValueError(f"the {self.model} model has no friction pair to split")
         can_modal = {"c_B", "k_B"} <= set(self.free)
         if self.modal is None:  # the harmonic configuration's; the time-domain ones' kept as they were
-            self.modal = can_modal and self.likelihood.residual == "harmonic"
+            self.modal = can_modal and self.likelihood.residual in ("harmonic", "motion")
         if self.modal and not can_modal:
             raise ValueError(f"the {self.model} model has no bearing damper to sample as a damping ratio")
         self.map = ParameterMap(split=self.split, modal=self.modal, m_B=self.m_B)
-        hyper = {**NOISE_PRIORS, **DISCREPANCY_PRIORS, "gain": gain_prior(self.likelihood.gain_sd or 0.01)}
+        discrepancy = MOTION_DISCREPANCY_PRIORS if self.likelihood.residual == "motion" else DISCREPANCY_PRIORS
+        hyper = {**NOISE_PRIORS, **discrepancy, "gain": gain_prior(self.likelihood.gain_sd or 0.01)}
         known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(MODAL_PRIORS) | set(hyper) | set(EFFECT_PRIORS)
         unknown = set(self.priors) - known
         if unknown:
@@ -188,7 +191,10 @@ class PosteriorModel:
             )
         self.measured_lp = lowpass(rec.accel, self.fs, lk.cutoff)
         self.observed = self.measured_lp[self.grid]
-        self.harmonic = (harmonic_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle)
+        self.motion = (motion_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle)
+                       if lk.residual == "motion" else None)
+        self.harmonic = (self.motion.harmonic if self.motion is not None else
+                         harmonic_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle)
                          if lk.residual == "harmonic" else None)
         m = self.measured_lp[window]
         self._phi_norm = float(np.linalg.norm(m - m.mean()))
@@ -370,9 +376,38 @@ class PosteriorModel:
         """The likelihood's own parameters at theta (``LikelihoodSettings.hyper_names``),
         in their units, by name; ``gain`` 1 where it is not sampled."""
         vals = dict(zip(self.names[self.n_phys:], map(float, self.to_values(theta)[self.n_phys:])))
-        if self.likelihood.residual == "harmonic":
+        if self.harmonic is not None:
             vals.setdefault("gain", 1.0)
         return vals
+
+    def _fields(self, theta) -> dict:
+        """The network's parameters at theta by name (``models.FIELDS``)."""
+        return dict(zip(FIELDS, self.field_vector(theta)))
+
+    def motion_terms(self, theta):
+        """(each harmonic's term, phi of the force) of the motion-in likelihood
+        (``motion.motion_loglik``) at theta; None where the parameters are out of range."""
+        try:
+            p = self._fields(theta)
+        except ValueError:
+            return None
+        h = self.hyper(theta)
+        terms, phi = motion_loglik(self.motion, p, h["tau"], h["alpha"], h["gain"], pointwise=True)
+        return (terms, phi) if np.all(np.isfinite(terms)) else None
+
+    def accel_error_variance(self, theta) -> np.ndarray:
+        """The variance of each harmonic's error as the likelihood sees it (noise and
+        discrepancy), in m/s^2 (the motion-in likelihood's force error through the
+        model's transfer), for predictive bands."""
+        if self.motion is None:
+            return self.harmonic_variance(theta)
+        h = self.hyper(theta)
+        p = self._fields(theta)
+        _, Y = predicted_force(self.motion, p, h["gain"])
+        k = np.arange(1, self.harmonic.harmonics + 1)
+        hd = self.harmonic
+        noise = (hd.var_force + np.abs(Y) ** 2 * hd.var_accel - 2.0 * np.real(Y * hd.cov)) / hd.periods
+        return (np.maximum(noise, 0.0) + h["tau"] ** 2 * k ** (-2.0 * h["alpha"])) / np.abs(Y) ** 2
 
     def transfer(self, theta) -> np.ndarray:
         """The model's force-to-acceleration transfer at the harmonic likelihood's
@@ -410,6 +445,11 @@ class PosteriorModel:
         lp = self.log_prior(theta)
         if not math.isfinite(lp):
             return lp, None, None
+        if self.motion is not None:
+            got, sim = self.motion_terms(theta), self._simulation(theta)
+            if got is None or sim is None or not np.all(np.isfinite(sim)):
+                return -math.inf, None, None
+            return lp, got[0], sim
         if self.harmonic is not None:
             try:
                 raw = self.simulate_unfiltered(theta)
@@ -443,7 +483,11 @@ class PosteriorModel:
         finite: the one interface the single-record and the joint model share.
         ``marginal_scale``: the time-domain residual's scale sigma marginalised under
         p(sigma) ~ 1/sigma (``likelihood.ar1_marginal``; what the joint model uses, its
-        sigma entry then ignored); the harmonic likelihood has no such scale."""
+        sigma entry then ignored); the harmonic likelihoods have no such scale. The
+        motion-in likelihood's phi is the force's at the harmonics (``motion``)."""
+        if self.motion is not None:
+            got = self.motion_terms(theta)
+            return None if got is None else (float(got[0].sum()), got[1])
         if self.harmonic is not None:
             try:
                 raw = self.simulate_unfiltered(theta)

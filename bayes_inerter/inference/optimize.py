@@ -46,6 +46,7 @@ from scipy.optimize import differential_evolution, minimize
 from ..records.conditioning import lowpass
 from ..simulate import SimulationError
 from .model import PosteriorModel
+from .motion import predicted_force
 from .priors import RHO_BOUNDS
 
 __all__ = ["find_start", "local_optimum", "laplace_ensemble", "laplace_covariance", "sse", "profiled_misfit",
@@ -256,7 +257,10 @@ def _with_discrepancy_estimate(model: PosteriorModel, phys: np.ndarray) -> np.nd
     theta = _with_noise(model, phys)
     start = {"tau": 1e-4, "alpha": 1.0, "gain": 1.0}
     try:
-        r = model.harmonic.accel - model.harmonic.mean_amplitudes(model.simulate_unfiltered(theta))
+        if model.motion is not None:
+            r = model.harmonic.force - predicted_force(model.motion, model._fields(theta))[0]
+        else:
+            r = model.harmonic.accel - model.harmonic.mean_amplitudes(model.simulate_unfiltered(theta))
         if np.all(np.isfinite(r)):
             start["tau"] = float(np.sqrt(np.mean(np.abs(r) ** 2)))
     except (SimulationError, ValueError):

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LogUniform", "LogNormal", "Uniform", "DEFAULT_PRIORS", "SPLIT_PRIORS", "NOISE_PRIORS", "DISCREPANCY_PRIORS", "MODAL_PRIORS",
-           "gain_prior"]
+__all__ = ["LogUniform", "LogNormal", "Uniform", "DEFAULT_PRIORS", "SPLIT_PRIORS", "NOISE_PRIORS",
+           "DISCREPANCY_PRIORS", "MOTION_DISCREPANCY_PRIORS", "MODAL_PRIORS", "gain_prior"]
 
 
 @dataclass(frozen=True)
@@ -154,6 +154,13 @@ NOISE_PRIORS = {
 #: white (0) to a discrepancy that lives at the first harmonics (2). **Assumptions**.
 DISCREPANCY_PRIORS = {
     "tau": LogUniform(1e-7, 10.0),
+    "alpha": Uniform(0.0, 2.0),
+}
+
+#: The same for the motion-in likelihood (``motion``), whose discrepancy is a force: tau
+#: in N, from far below a load cell's noise to above any test's force.
+MOTION_DISCREPANCY_PRIORS = {
+    "tau": LogUniform(1e-3, 1e5),
     "alpha": Uniform(0.0, 2.0),
 }
 

@@ -127,12 +127,12 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
     dims = {"accel": ["time"]}
     if model.harmonic is not None:
         coords["harmonic"] = np.arange(1, model.harmonic.harmonics + 1)
-        dims["accel_harmonics"] = ["harmonic"]
+        dims[_loglik_name(model)] = ["harmonic"]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         idata = az.from_dict(
             posterior=posterior,
-            log_likelihood={"accel" if model.harmonic is None else "accel_harmonics": loglik},
+            log_likelihood={_loglik_name(model): loglik},
             posterior_predictive={"accel": pred},
             observed_data={"accel": model.observed},
             sample_stats={"lp": sample.lp[:, idx]},
@@ -142,6 +142,14 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
     return idata, np.array(sims)
 
 
+def _loglik_name(model: PosteriorModel) -> str:
+    """What the likelihood's pointwise terms are of: samples of the acceleration, or
+    harmonics of the acceleration or (motion in) of the force."""
+    if model.harmonic is None:
+        return "accel"
+    return "force_harmonics" if model.motion is not None else "accel_harmonics"
+
+
 def _predictive_error(model: PosteriorModel, theta, rng: np.random.Generator) -> np.ndarray:
     """A draw of what the likelihood adds to the simulation on its grid: the AR(1)
     residual, or for the harmonic likelihood a periodic error whose harmonic k is
@@ -149,7 +157,7 @@ def _predictive_error(model: PosteriorModel, theta, rng: np.random.Generator) ->
     if model.harmonic is None:
         sigma, rho = model.noise(theta)
         return ar1_noise(rng, len(model.grid), sigma, rho)
-    V = model.harmonic_variance(theta)
+    V = model.accel_error_variance(theta)
     z = (rng.standard_normal(len(V)) + 1j * rng.standard_normal(len(V))) * np.sqrt(V / 2.0)
     t = model.record.time[model.grid]
     return np.real(np.exp(1j * np.outer(t, model.harmonic.omega)) @ z)
