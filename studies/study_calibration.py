@@ -7,7 +7,13 @@ coverage.png, ranks.png, one JSON per replicate); running again reuses the repli
 already there. About a minute per replicate and process on a 2-core machine.
 
     python studies/study_calibration.py [--replicates 200] [--steps 600] [--processes 2]
-        [--seed 0] [--out FOLDER]
+        [--seed 0] [--out FOLDER] [--single] [--residual motion] [--converge] [--freqs 0.5 1.5]
+
+``--single`` fits each replicate's one record alone (its frequency ``freqs[k % n]``),
+``--residual`` chooses the likelihood, ``--converge`` runs every chain to the
+convergence rule (at most ``--max-steps``) instead of ``--steps``. A folder keeps one
+configuration (settings.json): its replicates are reused, so a run stopped by a
+session's end continues where it stopped.
     python studies/study_calibration.py --inspect K [--steps N]
 
 ``--inspect K`` runs replicate K again with its fit kept (runs/study-calibration/K_<steps>)
@@ -24,6 +30,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from _table import run_with_bar
+from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.study.study_calibration import StudyCalibration, inspect_replicate, run_study_calibration
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,11 +44,22 @@ if __name__ == "__main__":
     ap.add_argument("--processes", type=int, default=min(2, os.cpu_count() or 1))
     ap.add_argument("--out", default=str(RESULTS))
     ap.add_argument("--inspect", type=int, default=None, metavar="K", help="run replicate K again, its fit kept")
+    ap.add_argument("--single", action="store_true", help="one record per replicate, fitted alone")
+    ap.add_argument("--residual", default=None, help="the likelihood (LikelihoodSettings.residual)")
+    ap.add_argument("--converge", action="store_true", help="each chain to the convergence rule")
+    ap.add_argument("--max-steps", type=int, default=StudyCalibration.max_steps)
+    ap.add_argument("--freqs", nargs="+", type=float, default=None)
     args = ap.parse_args()
     try:
         if args.replicates < 1:
             raise ValueError(f"--replicates must be at least 1, got {args.replicates}")
-        cs = replace(StudyCalibration(), steps=args.steps, seed=args.seed)
+        extra = {}
+        if args.residual:
+            extra["likelihood"] = LikelihoodSettings(residual=args.residual)
+        if args.freqs:
+            extra["frequencies"] = tuple(args.freqs)
+        cs = replace(StudyCalibration(), steps=None if args.converge else args.steps, seed=args.seed,
+                     single=args.single, max_steps=args.max_steps, **extra)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)

@@ -388,11 +388,11 @@ class PosteriorModel:
         """(each harmonic's term, phi of the force) of the motion-in likelihood
         (``motion.motion_loglik``) at theta; None where the parameters are out of range."""
         try:
-            p = self._fields(theta)
+            x = self.field_vector(theta)
         except ValueError:
             return None
         h = self.hyper(theta)
-        terms, phi = motion_loglik(self.motion, p, h["tau"], h["alpha"], h["gain"], pointwise=True)
+        terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True)
         return (terms, phi) if np.all(np.isfinite(terms)) else None
 
     def accel_error_variance(self, theta) -> np.ndarray:

@@ -42,11 +42,13 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
+from ..models import FIELDS
 from ..records.record import Record
 from .harmonic import HarmonicData, harmonic_data
 
-__all__ = ["MotionData", "motion_data", "predicted_force", "motion_loglik", "SIGN_BAND", "SIGN_GRID"]
+__all__ = ["MotionData", "motion_data", "predicted_force", "motion_loglik", "SIGN_BAND", "SIGN_GRID", "ORDER"]
 
 #: **Assumption**: the band of the measured motion whose sign times the Coulomb forces, Hz.
 SIGN_BAND = 100.0
@@ -88,39 +90,73 @@ def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, se
     return MotionData(data, data.accel / (1j * data.omega), sign, data.omega)
 
 
-def predicted_force(data: MotionData, p: dict, gain: float = 1.0):
+#: The physical parameters in the order the compiled kernels unpack them: ``models.FIELDS``'s.
+ORDER = ("b", "m_s", "m_B", "c_n", "k_n", "c_B", "k_B", "f1_0", "c_f1", "f2_0", "c_f2")
+if ORDER != FIELDS:  # the model hands the kernels its field vector as it is
+    raise ImportError("motion.ORDER must be models.FIELDS")
+
+
+@njit(cache=True)
+def _predicted(x, gain, omega, velocity, sign):
+    """(F^_k, Y_k) of the module docstring for the parameters ``x`` in :data:`ORDER`."""
+    b, m_s, m_B, c_n, k_n, c_B, k_B, f1_0, c_f1, f2_0, c_f2 = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], \
+        x[8], x[9], x[10]
+    K = omega.shape[0]
+    F = np.empty(K, dtype=np.complex128)
+    Y = np.empty(K, dtype=np.complex128)
+    for k in range(K):
+        iw = 1j * omega[k]
+        V = velocity[k] / gain
+        z_B = c_B + k_B / iw
+        z_n = c_n + k_n / iw
+        y = iw * b + c_f2
+        Z_f = z_n * y / (z_n + y)
+        g = z_n / (z_n + y)
+        den = z_B + iw * m_s + Z_f
+        V_s = (z_B * V - g * f2_0 * sign[k]) / den
+        F[k] = (iw * m_B + c_f1) * V + f1_0 * sign[k] + z_B * (V - V_s)
+        Y[k] = (iw * m_B + c_f1 + z_B * (1.0 - z_B / den)) / iw / gain
+    return F, Y
+
+
+@njit(cache=True)
+def _terms(x, tau, alpha, gain, omega, velocity, sign, force, var_force, var_accel, cov, periods):
+    """Each harmonic's log-likelihood term and the squared residuals' and the force's sums."""
+    F, Y = _predicted(x, gain, omega, velocity, sign)
+    K = omega.shape[0]
+    terms = np.empty(K)
+    sq_sum = 0.0
+    f_sum = 0.0
+    for k in range(K):
+        noise = (var_force[k] + (Y[k].real ** 2 + Y[k].imag ** 2) * var_accel[k]
+                 - 2.0 * (Y[k] * cov[k]).real) / periods
+        V = max(noise, 0.0) + tau * tau * (k + 1.0) ** (-2.0 * alpha)
+        r = force[k] - F[k]
+        sq = r.real ** 2 + r.imag ** 2
+        terms[k] = -np.log(np.pi * V) - sq / V if V > 0 else -np.inf
+        sq_sum += sq
+        f_sum += force[k].real ** 2 + force[k].imag ** 2
+    return terms, sq_sum, f_sum
+
+
+def _vector(p) -> np.ndarray:
+    return p if isinstance(p, np.ndarray) else np.array([float(p[n]) for n in ORDER])
+
+
+def predicted_force(data: MotionData, p, gain: float = 1.0):
     """(F^_k, Y_k): the model's force at the harmonics for the physical parameters ``p``
-    (b, m_s, m_B, c_n, k_n, c_B, k_B, f1_0, c_f1, f2_0, c_f2, by name), and its
-    transfer from the measured acceleration, dF^_k / dA_k."""
-    iw = 1j * data.omega
-    V = data.velocity / gain
-    z_B = p["c_B"] + p["k_B"] / iw
-    z_n = p["c_n"] + p["k_n"] / iw
-    y = iw * p["b"] + p["c_f2"]
-    Z_f = z_n * y / (z_n + y)
-    g = z_n / (z_n + y)
-    den = z_B + iw * p["m_s"] + Z_f
-    F2 = p["f2_0"] * data.sign
-    V_s = (z_B * V - g * F2) / den
-    F = (iw * p["m_B"] + p["c_f1"]) * V + p["f1_0"] * data.sign + z_B * (V - V_s)
-    # the linear part per unit velocity, then per unit of measured acceleration
-    Z = iw * p["m_B"] + p["c_f1"] + z_B * (1.0 - z_B / den)
-    return F, Z / iw / gain
+    (by name, or a vector in :data:`ORDER`), and its transfer from the measured
+    acceleration, dF^_k / dA_k."""
+    return _predicted(_vector(p), float(gain), data.omega, data.velocity, data.sign)
 
 
-def motion_loglik(data: MotionData, p: dict, tau: float, alpha: float, gain: float = 1.0, *,
+def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0, *,
                   pointwise: bool = False):
     """(log L, phi of the force at the harmonics) of the module docstring; with
-    ``pointwise``, each harmonic's term (an array) instead of log L."""
+    ``pointwise``, each harmonic's term (an array) instead of log L. ``p`` as for
+    :func:`predicted_force`."""
     h = data.harmonic
-    F, Y = predicted_force(data, p, gain)
-    noise = (h.var_force + np.abs(Y) ** 2 * h.var_accel - 2.0 * np.real(Y * h.cov)) / h.periods
-    k = np.arange(1, h.harmonics + 1)
-    V = np.maximum(noise, 0.0) + tau * tau * k ** (-2.0 * alpha)
-    r = h.force - F
-    sq = r.real ** 2 + r.imag ** 2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        terms = -np.log(math.pi * V) - sq / V
-    terms = np.where(V > 0, terms, -math.inf)
-    phi = 1.0 - math.sqrt(float(sq.sum()) / float(np.sum(np.abs(h.force) ** 2)))
+    terms, sq, norm = _terms(_vector(p), float(tau), float(alpha), float(gain), data.omega, data.velocity, data.sign,
+                             h.force, h.var_force, h.var_accel, h.cov, float(h.periods))
+    phi = 1.0 - math.sqrt(sq / norm)
     return (terms if pointwise else float(terms.sum())), phi

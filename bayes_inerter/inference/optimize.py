@@ -117,8 +117,24 @@ def profiled_misfit(model: PosteriorModel, phys: np.ndarray) -> float:
     return n * math.log(s2) - math.log(1.0 - rho * rho)
 
 
+def harmonic_misfit(model: PosteriorModel, phys: np.ndarray) -> float:
+    """Minus the harmonic likelihoods' log-likelihood at the physical part of theta, the
+    discrepancy's scale set to the harmonic residual's rms there (a stage-1 objective of
+    the harmonic and motion-in likelihoods)."""
+    theta = _with_discrepancy_estimate(model, phys)
+    if not math.isfinite(model.log_prior(theta)):
+        return _BAD
+    got = model.log_likelihood(theta)
+    return _BAD if got is None or not math.isfinite(got[0]) else -got[0]
+
+
 #: The stage-1 objectives of :func:`find_start`, each evolved once (see module docstring).
-OBJECTIVES = {"sse": sse, "profiled": profiled_misfit}
+OBJECTIVES = {"sse": sse, "profiled": profiled_misfit, "harmonic": harmonic_misfit}
+
+
+def default_objectives(model: PosteriorModel) -> tuple[str, ...]:
+    """The stage-1 objectives a model's start searches with: its own likelihood's."""
+    return ("harmonic",) if model.harmonic is not None else ("sse", "profiled")
 
 
 def velocity_estimate(model: PosteriorModel) -> np.ndarray:
@@ -197,17 +213,18 @@ def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
 
 
 def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_POPSIZE, maxiter=None,
-               objectives=tuple(OBJECTIVES), many=None):
+               objectives=None, many=None):
     """Return (theta, log posterior) of a quick optimum (see module docstring).
 
     ``objectives``: names of :data:`OBJECTIVES` evolved in stage 1, each in turn with the
-    same ``rng``. ``maxiter``: generations of each evolution (None: :data:`DE_MAXITER`
+    same ``rng`` (None: :func:`default_objectives`). ``maxiter``: generations of each evolution (None: :data:`DE_MAXITER`
     as it is when called). ``many``: optional callable(name, list of physical parameter
     vectors) giving the objective ``name`` at each (for example on a process pool):
     differential evolution then evaluates each generation through it. The result does
     not depend on it.
     """
     maxiter = DE_MAXITER if maxiter is None else maxiter
+    objectives = default_objectives(model) if objectives is None else tuple(objectives)
     unknown = [name for name in objectives if name not in OBJECTIVES]
     if unknown or not objectives:
         raise ValueError(f"start objectives must be some of {', '.join(OBJECTIVES)}, got {list(objectives)}")
@@ -240,7 +257,7 @@ def _evolve(model: PosteriorModel, name: str, rng: np.random.Generator, popsize,
 
 def _with_noise_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
     """theta at ``phys`` with sigma the residual's sd and rho its lag-one correlation;
-    for the harmonic likelihood, tau the harmonic residual's rms, alpha 1 and gain 1."""
+    for the harmonic likelihoods, tau the harmonic residual's rms, alpha 0 and gain 1."""
     if model.harmonic is not None:
         return _with_discrepancy_estimate(model, phys)
     _, _, sim = model.evaluate(_with_noise(model, phys))
@@ -255,7 +272,7 @@ def _with_noise_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
 
 def _with_discrepancy_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
     theta = _with_noise(model, phys)
-    start = {"tau": 1e-4, "alpha": 1.0, "gain": 1.0}
+    start = {"tau": 1e-4, "alpha": 0.0, "gain": 1.0}  # a white discrepancy of the residual's size
     try:
         if model.motion is not None:
             r = model.harmonic.force - predicted_force(model.motion, model._fields(theta))[0]
