@@ -11,7 +11,7 @@ __all__ = ["cmd_identify"]
 
 def cmd_identify(args) -> int:
     from ..inference.end_state import PHI_WARNING
-    from ..inference.identify import identify
+    from ..inference.identify import LEAST_SQUARES, identify
     from ..inference.model import PosteriorModel
     from ..inference.plots import UNITS
     from . import EXIT_OK, CliError
@@ -26,7 +26,7 @@ def cmd_identify(args) -> int:
         _check_writable(Path(args.out))
     print(f"masses: {masses.describe()}", flush=True)
     print(f"drive frequency: {drive.describe()}", flush=True)
-    model = PosteriorModel(rec, args.model, m_s=masses.m_s, m_B=masses.m_B)
+    model = PosteriorModel(rec, args.model, m_s=masses.m_s, m_B=masses.m_B, likelihood=LEAST_SQUARES)
     how = (f"a bootstrap over drive cycles, {args.bootstrap} refits" if args.bootstrap
            else "the least-squares Jacobian, clustered over drive cycles")
     print(f"least squares from {args.starts} starts; b's interval from {how} ...", flush=True)

@@ -39,7 +39,7 @@ CHECKPOINT_SECONDS = 0.5
 FIT_COORDINATES = ("impedance", "unconstrained", "physical")
 #: ``inference.likelihood.RESIDUALS`` and its default, written out likewise.
 FIT_RESIDUALS = ("ar1", "iid", "harmonic", "motion")
-DEFAULT_RESIDUAL = "ar1"
+DEFAULT_RESIDUAL = "motion"
 
 
 def _add_generator_options(p: argparse.ArgumentParser) -> None:
@@ -127,10 +127,11 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--model", choices=FIT_MODELS, default="two-port",
                    help="model (%(default)s); two-port-stribeck, -backlash and -rich add Stribeck friction, nut "
                         "backlash or both (docs/inference.md)")
-    p.add_argument("--interval", choices=FIT_INTERVALS, default="honest",
-                   help="b's reported interval (%(default)s): honest widens the posterior's by the sensors' "
-                        "calibration and the model discrepancy the record shows; posterior is the posterior's alone "
-                        "(docs/inference.md)")
+    p.add_argument("--interval", choices=FIT_INTERVALS, default=None,
+                   help="b's reported interval: honest widens the posterior's by the sensors' calibration and the "
+                        "model discrepancy the record shows; posterior is the posterior's alone (default: posterior "
+                        "for the harmonic and motion likelihoods, whose posterior holds both, honest for ar1 and "
+                        "iid; docs/inference.md)")
     p.add_argument("--walkers", type=_positive_int, help="walkers (default 2 x parameters + 2)")
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
     p.add_argument("--max-steps", type=_positive_int,

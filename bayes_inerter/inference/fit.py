@@ -126,7 +126,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                convergence: Convergence | None = None, progress=None, report=None, plots: bool = True,
                coordinates: str = "impedance", adaptation: Adaptation | None = Adaptation(),
                checkpoint_seconds: float = WRITE_SECONDS,
-               interval: str | IntervalSettings = DEFAULT_INTERVAL, freq: float | None = None,
+               interval: str | IntervalSettings | None = None, freq: float | None = None,
                name: str | None = None, modal: bool | None = None) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
@@ -134,8 +134,10 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     physical prior (``model.PosteriorModel``; None: wherever the model can).
 
     ``interval``: how b's reported interval is made, a name of ``interval.INTERVALS``
-    ("honest", the default: the posterior widened by the sensors' calibration and the
-    model discrepancy; "posterior": the posterior alone) or ``IntervalSettings``. It is
+    ("honest": the posterior widened by the sensors' calibration and the model
+    discrepancy; "posterior": the posterior alone) or ``IntervalSettings``; None (the
+    default): "posterior" for the harmonic likelihoods, whose posterior holds the
+    discrepancy and the gain itself, "honest" for the time-domain ones. It is
     in fit.json (``b_interval``) and ``FitResult.b_interval``; summary.csv keeps the
     posterior's own.
 
@@ -162,6 +164,9 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     record's physical sense (``records.checks``) is the caller's to check first.
     """
     out = Path(out)
+    likelihood = likelihood or LikelihoodSettings()
+    if interval is None:
+        interval = "posterior" if likelihood.residual in ("harmonic", "motion") else DEFAULT_INTERVAL
     interval_settings = _interval_settings(interval)
     drive = resolve_drive(record, freq)
     record = with_drive(record, drive)

@@ -38,10 +38,15 @@ import numpy as np
 from scipy import optimize
 from scipy.stats import qmc
 
+from .likelihood import LikelihoodSettings
 from .model import PosteriorModel
 from .optimize import find_start
 
-__all__ = ["Identification", "identify", "STARTS", "LEVEL", "BOOTSTRAP_LEVEL", "INTERVALS"]
+__all__ = ["Identification", "identify", "STARTS", "LEVEL", "BOOTSTRAP_LEVEL", "INTERVALS", "LEAST_SQUARES"]
+
+#: The model :func:`identify` fits: the paper's comparison, the low-passed acceleration
+#: sample by sample (its residual's model only sets the noise entries it leaves alone).
+LEAST_SQUARES = LikelihoodSettings(residual="ar1")
 
 #: Least-squares starts (the optimiser's and Sobol points in the prior's box).
 STARTS = 4

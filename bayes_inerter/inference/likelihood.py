@@ -27,9 +27,10 @@ class LikelihoodSettings:
 
     Attributes
     ----------
-    residual : "ar1" (default), "iid", "harmonic" (:mod:`.harmonic`: force in,
-        acceleration out, at the drive's harmonics) or "motion" (:mod:`.motion`: the
-        measured motion in, the force out, at the drive's harmonics).
+    residual : "motion" (default; :mod:`.motion`: the measured motion in, the force
+        out, at the drive's harmonics), "harmonic" (:mod:`.harmonic`: force in,
+        acceleration out, at the drive's harmonics), "ar1" or "iid" (the low-passed
+        acceleration sample by sample, its residual an AR(1) process or white).
     cutoff : matched low-pass cut-off, Hz (default 30).
     stride : keep every stride-th sample; None: fs / (2 cutoff), about one sample per
         correlation length of the low-passed signal (16 at 1 kHz and 30 Hz).
@@ -63,7 +64,7 @@ class LikelihoodSettings:
         0 fixes the gain at 1 and leaves it out of the sampled parameters.
     """
 
-    residual: str = "ar1"
+    residual: str = "motion"
     cutoff: float = LOWPASS_HZ
     stride: int | None = None
     edge: float = 0.25

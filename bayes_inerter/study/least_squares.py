@@ -17,7 +17,7 @@ import json
 from pathlib import Path
 
 from ..device import SETTINGS
-from ..inference.identify import STARTS  # least-squares starts per record
+from ..inference.identify import LEAST_SQUARES, STARTS  # STARTS: least-squares starts per record
 from .fits import RecordFit
 from .honest import record_interval
 
@@ -37,7 +37,8 @@ def identify_one(record: str, out: str, starts: int = STARTS, seed: int = 0) -> 
 
     rec = read_record(record)
     masses = resolve_masses(rec)
-    got = identify(PosteriorModel(rec, m_s=masses.m_s, m_B=masses.m_B), starts=starts, seed=seed)
+    got = identify(PosteriorModel(rec, m_s=masses.m_s, m_B=masses.m_B, likelihood=LEAST_SQUARES), starts=starts,
+                   seed=seed)
     info = {"record": Path(record).name, "seed": seed, **got.as_dict()}
     Path(out).write_text(json.dumps(info, indent=2) + "\n")
     return info
