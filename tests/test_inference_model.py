@@ -9,6 +9,11 @@ from bayes_inerter import paper_parameters
 from bayes_inerter.inference import LikelihoodSettings, LogNormal, LogUniform, PosteriorModel
 from bayes_inerter.records import GeneratorSettings, Record, generate_record
 
+#: The time-domain AR(1) likelihood these tests are of (its sigma and rho, c_B sampled,
+#: Table I's truth inside the prior), named because it is no longer the default; the
+#: 3 s record also holds too few drive periods for the harmonic ones.
+AR1 = LikelihoodSettings(residual="ar1")
+
 
 @pytest.fixture(scope="module")
 def record():
@@ -17,7 +22,7 @@ def record():
 
 
 def test_log_prob_at_truth(record):
-    m = PosteriorModel(record)
+    m = PosteriorModel(record, likelihood=AR1)
     p = paper_parameters("A2")
     lp, phi = m.log_prob(m.to_theta(p, 0.003, 0.0))
     assert math.isfinite(lp) and phi > 0.95
@@ -32,7 +37,7 @@ def test_log_prob_at_truth(record):
 
 
 def test_outside_prior(record):
-    m = PosteriorModel(record)
+    m = PosteriorModel(record, likelihood=AR1)
     theta = m.to_theta(paper_parameters("A2"), 0.003, 0.0)
     theta[0] = math.log(1e7)  # b beyond the prior's bound
     assert m.log_prob(theta)[0] == -math.inf
@@ -44,7 +49,7 @@ def test_outside_prior(record):
 
 
 def test_ar1_loglik_is_the_multivariate_normal(record):
-    m = PosteriorModel(record)
+    m = PosteriorModel(record, likelihood=AR1)
     rng = np.random.default_rng(0)
     r = rng.standard_normal(30)
     sigma, rho = 0.7, 0.6
@@ -58,23 +63,23 @@ def test_ar1_loglik_is_the_multivariate_normal(record):
 
 
 def test_raw_parametrisation(record):
-    raw = PosteriorModel(record, split=False)
+    raw = PosteriorModel(record, split=False, likelihood=AR1)
     assert raw.names[:5] == ["b", "f1_0", "c_f1", "f2_0", "c_f2"]
-    split = PosteriorModel(record)
+    split = PosteriorModel(record, likelihood=AR1)
     p = paper_parameters("A2")
     # same likelihood, different prior: the log-likelihood parts agree
     _, ll_raw, _ = raw.evaluate(raw.to_theta(p, 0.003, 0.1))
     _, ll_split, _ = split.evaluate(split.to_theta(p, 0.003, 0.1))
     np.testing.assert_allclose(ll_raw, ll_split)
     with pytest.raises(ValueError, match="no friction pair"):
-        PosteriorModel(record, "rigid", split=True)
+        PosteriorModel(record, "rigid", split=True, likelihood=AR1)
 
 
 def test_nested_models(record):
-    rigid = PosteriorModel(record, "rigid")
+    rigid = PosteriorModel(record, "rigid", likelihood=AR1)
     assert rigid.names == ["b", "f1_0", "c_f1", "sigma", "rho"]
     assert rigid.fixed["f2_0"] == 0.0
-    linear = PosteriorModel(record, "linear")
+    linear = PosteriorModel(record, "linear", likelihood=AR1)
     assert linear.names == ["b", "c_n", "k_n", "c_B", "k_B", "sigma", "rho"]
     p = paper_parameters("A2")
     lp, phi = rigid.log_prob(rigid.to_theta(dataclasses.replace(p, f1_0=p.f1_0 + p.f2_0, c_f1=p.c_f1 + p.c_f2), 0.01, 0.0))
@@ -82,13 +87,13 @@ def test_nested_models(record):
 
 
 def test_masses_from_metadata_or_options(record):
-    assert PosteriorModel(record).m_s == 19.594
+    assert PosteriorModel(record, likelihood=AR1).m_s == 19.594
     bare = Record(record.time, record.force, record.accel)
     with pytest.raises(ValueError, match="m_s is unknown: give --m-s"):
-        PosteriorModel(bare)
-    assert PosteriorModel(bare, m_s=20.0).m_s == 20.0
+        PosteriorModel(bare, likelihood=AR1)
+    assert PosteriorModel(bare, m_s=20.0, likelihood=AR1).m_s == 20.0
     with pytest.raises(ValueError, match="m_s must be a positive number"):
-        PosteriorModel(bare, m_s=-1.0)
+        PosteriorModel(bare, m_s=-1.0, likelihood=AR1)
 
 
 def test_bad_model_options(record):
@@ -119,7 +124,7 @@ def test_priors():
 def test_contraction_of_prior_draws_is_zero_and_of_a_point_is_one(record):
     from bayes_inerter.inference.results import PosteriorSample, contraction
 
-    m = PosteriorModel(record)
+    m = PosteriorModel(record, likelihood=AR1)
     rng = np.random.default_rng(2)
     draws = np.stack([m.all_priors[n].sample(rng, (8, 4000)) for n in m.names], axis=-1)
     sample = PosteriorSample(m.names, m.to_values(draws), draws, {}, np.zeros((8, 4000)), np.zeros((8, 4000)), 0, 1)
@@ -145,8 +150,8 @@ def test_convergence_settings_checked():
 def test_start_guess_finds_the_basin(record):
     from bayes_inerter.inference.optimize import rigid_guess, velocity_estimate
 
-    m = PosteriorModel(record)
-    bare = PosteriorModel(Record(record.time, record.force, record.accel, None, record.metadata))
+    m = PosteriorModel(record, likelihood=AR1)
+    bare = PosteriorModel(Record(record.time, record.force, record.accel, None, record.metadata), likelihood=AR1)
     v_disp, v_acc = velocity_estimate(m), velocity_estimate(bare)
     w = m.window
     assert np.corrcoef(v_disp[w], v_acc[w])[0, 1] > 0.99
@@ -164,7 +169,7 @@ def test_edges_of_the_prior_give_a_number_or_minus_infinity(record):
     kernel's MAX_EVENTS_PER_STEP, so no corner can make it run away."""
     from bayes_inerter.simulate import SimulationError, simulate
 
-    m = PosteriorModel(record)
+    m = PosteriorModel(record, likelihood=AR1)
     lo, hi = m.bounds().T
     rng = np.random.default_rng(11)
     corners = [lo, hi] + [np.where(rng.random(m.ndim) < 0.5, lo, hi) for _ in range(30)]
@@ -186,14 +191,14 @@ def test_derived_quantities(record):
     from bayes_inerter.device import apparent_inertance
 
     p = paper_parameters("A2")
-    split = PosteriorModel(record)
+    split = PosteriorModel(record, likelihood=AR1)
     assert split.derived_names == ["f1_0", "c_f1", "f2_0", "c_f2", "b_app"]
     vals = split.values(split.to_theta(p, 0.003, 0.1))
     assert vals["b_app"] == pytest.approx(apparent_inertance(p.b, p.k_n, p.c_n), rel=1e-12)
     assert vals["f2_0"] == pytest.approx(p.f2_0, rel=1e-9)
-    assert PosteriorModel(record, split=False).derived_names == ["b_app"]
-    assert PosteriorModel(record, "linear").derived_names == ["b_app"]
-    assert PosteriorModel(record, "rigid").derived_names == []  # no nut
+    assert PosteriorModel(record, split=False, likelihood=AR1).derived_names == ["b_app"]
+    assert PosteriorModel(record, "linear", likelihood=AR1).derived_names == ["b_app"]
+    assert PosteriorModel(record, "rigid", likelihood=AR1).derived_names == []  # no nut
 
 
 @pytest.mark.parametrize("model", ["two-port", "rigid", "linear"])
@@ -202,7 +207,7 @@ def test_short_way_simulates_as_simulate_does(record, model):
     bit, and refuses what InerterParameters refuses."""
     from bayes_inerter.simulate import simulate
 
-    m = PosteriorModel(record, model)
+    m = PosteriorModel(record, model, likelihood=AR1)
     assert m._chain is not None
     rng = np.random.default_rng(7)
     p0 = paper_parameters("A2")
@@ -223,6 +228,6 @@ def test_short_way_simulates_as_simulate_does(record, model):
 
 
 def test_upsampled_likelihood_takes_the_long_way(record):
-    m = PosteriorModel(record, likelihood=LikelihoodSettings(upsample=2))
+    m = PosteriorModel(record, likelihood=LikelihoodSettings(residual="ar1", upsample=2))
     assert m._chain is None
     assert np.isfinite(m.log_prob(m.to_theta(paper_parameters("A2"), 0.01, 0.2))[0])
