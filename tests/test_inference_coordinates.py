@@ -12,12 +12,17 @@ from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
 from bayes_inerter.inference.coordinates import COORDINATES, default_coordinates, drive_omega, driving_point
 from bayes_inerter.inference.joint import JointModel
+from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.inference.sampler import run_sampler
 from bayes_inerter.models import build_network
 from bayes_inerter.network import accel_response
 from bayes_inerter.records import GeneratorSettings, generate_record
 
 SHORT = GeneratorSettings(duration=2.0, ramp=0.6)
+#: The time-domain likelihood's parametrisation (c_B sampled, sigma and rho; Table I's
+#: truth inside the prior), named because it is no longer the default; the 2 s records
+#: also hold too few drive periods for the harmonic ones.
+AR1 = LikelihoodSettings(residual="ar1")
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +33,7 @@ def records():
 
 @pytest.fixture(scope="module")
 def two_port(records):
-    return PosteriorModel(records[0])
+    return PosteriorModel(records[0], likelihood=AR1)
 
 
 def test_impedance_is_the_two_port_cascades(two_port):
@@ -59,7 +64,7 @@ def _random_thetas(model, n, rng):
 
 @pytest.mark.parametrize("name", ["two-port", "linear", "rigid", "joint"])
 def test_round_trip_across_the_prior_box(records, name):
-    model = JointModel(records) if name == "joint" else PosteriorModel(records[0], name)
+    model = JointModel(records, likelihood=AR1) if name == "joint" else PosteriorModel(records[0], name, likelihood=AR1)
     coords = default_coordinates(model)
     assert coords.kind == ("unconstrained" if name == "rigid" else "impedance")
     theta = _random_thetas(model, 400, np.random.default_rng(1))
@@ -73,7 +78,7 @@ def test_round_trip_across_the_prior_box(records, name):
 
 
 def test_the_papers_devices_lie_deep_inside_the_domain(records):
-    model = JointModel(records)
+    model = JointModel(records, likelihood=AR1)
     imp = default_coordinates(model).impedance
     for name in ("A0", "A3", "B2"):
         p = paper_parameters(name)
@@ -92,7 +97,7 @@ def test_the_papers_devices_lie_deep_inside_the_domain(records):
 
 @pytest.mark.parametrize("name", ["two-port", "linear", "joint"])
 def test_log_jacobian_is_the_finite_difference_determinant(records, name):
-    model = JointModel(records) if name == "joint" else PosteriorModel(records[0], name)
+    model = JointModel(records, likelihood=AR1) if name == "joint" else PosteriorModel(records[0], name, likelihood=AR1)
     coords = default_coordinates(model)
     rng = np.random.default_rng(2)
     checked = 0
@@ -189,7 +194,7 @@ def test_run_sampler_in_impedance_coordinates_samples_theta(two_port, tmp_path):
     # the sampler's own plumbing (start mapped to u, Jacobian added, chain read back in
     # theta): the model's posterior swapped for a known density
     centre, sd = _target(two_port)
-    model = PosteriorModel(two_port.record)
+    model = PosteriorModel(two_port.record, likelihood=AR1)
     model.log_prob = lambda theta: (float(np.sum(stats.norm.logpdf(theta, centre, sd))), 0.0)
     run = run_sampler(model, tmp_path / "chain.h5", nwalkers=24, steps=1500, seed=1,
                       start=(centre, 0.0))
