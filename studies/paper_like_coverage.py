@@ -1,0 +1,153 @@
+"""Does the default fit's own posterior hold b on records of a richer device?
+
+Issue 39's item 5 measured with real chains: replicate k is one paper-like record
+(``records.paper_like``: the full network, Stribeck friction, nut backlash, miscalibrated
+sensors, coloured noise; one laboratory drawn per replicate from seed ``seed0 + k``),
+of flywheel setting ``SETTINGS[k % 9]`` at ``FREQUENCIES[(k // 9) % 3]``, fitted by
+``fit_record`` as ``bayes-inerter fit`` runs it (the default likelihood, each chain to the
+convergence rule, at most ``--max-steps``). Each replicate writes one JSON into
+``--out``/replicates (a run that stops continues where it stopped: rerun the command);
+``--summarise`` writes coverage.csv and replicates.csv from them.
+
+Per replicate: b's posterior median, its 94 % and 50 % highest-density intervals and
+whether they hold the true b (Table 2's, which the generator uses), whether the fit
+calls b identified (``FitResult.b_interval.identified``), the chain's state and seconds.
+
+    python studies/paper_like_coverage.py --replicates 27 [--seed0 1000] [--out results/paper-like-coverage]
+        [--max-steps 20000] [--processes 2] [--summarise]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from bayes_inerter import SETTINGS, paper_parameters
+from bayes_inerter.inference import fit_record
+from bayes_inerter.inference.convergence import Convergence
+from bayes_inerter.records.paper_like import paper_like_record
+
+ROOT = Path(__file__).resolve().parents[1]
+FREQUENCIES = (0.5, 1.0, 1.5)
+LEVELS = (0.94, 0.5)
+
+
+def case(k: int) -> tuple[str, float]:
+    names = list(SETTINGS)
+    return names[k % len(names)], FREQUENCIES[(k // len(names)) % len(FREQUENCIES)]
+
+
+def replicate(k: int, seed0: int, max_steps: int) -> dict:
+    import arviz as az
+
+    setting, freq = case(k)
+    seed = seed0 + k
+    rec = paper_like_record(setting, freq, seed=seed)
+    b_true = paper_parameters(setting).b
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        res = fit_record(rec, Path(tmp) / "fit", seed=seed, plots=False,
+                         convergence=replace(Convergence(), max_steps=max_steps))
+    b = np.asarray(res.idata.posterior["b"]).ravel()
+    tau = np.asarray(list(res.tau.values()) if isinstance(res.tau, dict) else res.tau, dtype=float)
+    out = {"replicate": k, "setting": setting, "freq_hz": freq, "seed": seed, "b_true": b_true,
+           "b_median": float(np.median(b)), "converged": bool(res.converged), "steps": int(res.iterations),
+           "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
+           "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
+           "phi": res.b_interval.phi}
+    for level in LEVELS:
+        lo, hi = az.hdi(b, hdi_prob=level)
+        key = round(100 * level)
+        out[f"hdi{key}"] = [float(lo), float(hi)]
+        out[f"covered{key}"] = bool(lo <= b_true <= hi)
+        out[f"width{key}_pct"] = 100.0 * (hi - lo) / b_true
+    return out
+
+
+def _file(out: Path, k: int) -> Path:
+    return out / "replicates" / f"{k:04d}.json"
+
+
+def _run(args) -> dict:
+    k, seed0, max_steps, out = args
+    got = replicate(k, seed0, max_steps)
+    _file(out, k).write_text(json.dumps(got, indent=1) + "\n")
+    return got
+
+
+def summarise(out: Path) -> list[dict]:
+    reps = [json.loads(p.read_text()) for p in sorted((out / "replicates").glob("*.json"))]
+    with (out / "replicates.csv").open("w", newline="") as f:
+        fields = ["replicate", "setting", "freq_hz", "seed", "b_true", "b_median", "hdi94", "hdi50", "covered94",
+                  "covered50", "width94_pct", "identified", "converged", "steps", "tau_max", "seconds", "phi"]
+        w = csv.DictWriter(f, fields)
+        w.writeheader()
+        for r in reps:
+            w.writerow({k: r.get(k) for k in fields})
+    rows = []
+    for freq in (*FREQUENCIES, None):
+        sel = [r for r in reps if freq is None or r["freq_hz"] == freq]
+        if not sel:
+            continue
+        ident = [r for r in sel if r["identified"]]
+        row = {"freq_hz": "all" if freq is None else freq, "replicates": len(sel), "identified": len(ident),
+               "converged": sum(r["converged"] for r in sel)}
+        for key, nominal in (("94", 0.94), ("50", 0.5)):
+            n = len(ident)
+            row[f"coverage{key}"] = round(sum(r[f"covered{key}"] for r in ident) / n, 3) if n else ""
+            row[f"se{key}"] = round(math.sqrt(nominal * (1 - nominal) / n), 3) if n else ""
+            row[f"median_width{key}_pct"] = round(float(np.median([r[f"width{key}_pct"] for r in ident])), 2) if n \
+                else ""
+        row["median_seconds"] = round(float(np.median([r["seconds"] for r in sel])), 1)
+        rows.append(row)
+    with (out / "coverage.csv").open("w", newline="") as f:
+        w = csv.DictWriter(f, list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    return rows
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--replicates", type=int, default=27)
+    ap.add_argument("--seed0", type=int, default=1000)
+    ap.add_argument("--out", default=str(ROOT / "results" / "paper-like-coverage"))
+    ap.add_argument("--max-steps", type=int, default=20000)
+    ap.add_argument("--processes", type=int, default=min(2, os.cpu_count() or 1))
+    ap.add_argument("--summarise", action="store_true", help="only write the tables from the replicates there")
+    args = ap.parse_args(argv)
+    out = Path(args.out)
+    (out / "replicates").mkdir(parents=True, exist_ok=True)
+    if not args.summarise:
+        todo = [k for k in range(args.replicates) if not _file(out, k).exists()]
+        print(f"{args.replicates - len(todo)} of {args.replicates} replicates already there", flush=True)
+        with ProcessPoolExecutor(max_workers=args.processes) as pool:
+            futures = {pool.submit(_run, (k, args.seed0, args.max_steps, out)): k for k in todo}
+            for i, fut in enumerate(as_completed(futures), 1):
+                try:
+                    r = fut.result()
+                except Exception as exc:  # one replicate's failure is reported, the rest go on
+                    print(f"replicate {futures[fut]} failed: {exc}", file=sys.stderr, flush=True)
+                    continue
+                print(f"[{i}/{len(todo)}] {r['setting']} {r['freq_hz']:g} Hz seed {r['seed']}: b {r['b_median']:.0f} "
+                      f"(true {r['b_true']:.0f}), 94 % {'holds' if r['covered94'] else 'MISSES'}, "
+                      f"{'identified' if r['identified'] else 'not identified'}, converged {r['converged']}, "
+                      f"{r['seconds']} s", flush=True)
+    for row in summarise(out):
+        print(row)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
