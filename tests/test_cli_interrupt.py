@@ -287,8 +287,12 @@ def _wait_for_steps(run: _Run, out, steps: int, timeout: float = 120.0) -> None:
 
 
 def _fit(record_file, out, steps: int = 40) -> list:
+    """The command, with the time-domain likelihood: its start search and steps simulate
+    the record, so each lasts long enough to be interrupted in (the default's, motion in,
+    force out, simulate nothing), and the 2.5 s record holds too few drive periods for
+    the default."""
     return [*COMMAND, "fit", str(record_file), "--out", str(out), "--steps", str(steps), "--walkers", "24",
-            "--processes", "1", "--no-plots", "--seed", "3", "--checkpoint-seconds", "0"]
+            "--processes", "1", "--no-plots", "--seed", "3", "--checkpoint-seconds", "0", "--residual", "ar1"]
 
 
 def test_ctrl_c_in_the_start_search_in_sampling_and_in_a_continued_run(tmp_path, record_file):
