@@ -20,10 +20,27 @@ from bayes_inerter.inference.checkpoint import read_chain, steps_written
 from bayes_inerter.records import GeneratorSettings, generate_record, write_record
 
 SHORT = GeneratorSettings(duration=2.5, ramp=0.8)
+#: Long enough for the default likelihood (motion in, force out), which needs three whole
+#: steady drive periods after the first: 2.5 s at 1.5 Hz hold one.
+PERIODIC = GeneratorSettings(duration=4.0, ramp=0.8)
+
+#: The time-domain likelihood, for the tests that check what it does (its honest interval)
+#: or need its pace: it simulates the record at every evaluation, so a kill or a Ctrl-C
+#: can come mid-chain (the default simulates only for the posterior's draws).
+AR1 = ("--residual", "ar1")
 
 
 @pytest.fixture(scope="module")
 def record_file(tmp_path_factory):
+    d = tmp_path_factory.mktemp("rec")
+    rec = generate_record(paper_parameters("A4"), 1.5, settings=PERIODIC, rng=11, setting_name="A4")
+    path, _ = write_record(d / "a4.csv", rec)
+    return path
+
+
+@pytest.fixture(scope="module")
+def ar1_record_file(tmp_path_factory):
+    """A shorter record, for the fits with the time-domain likelihood (:data:`AR1`)."""
     d = tmp_path_factory.mktemp("rec")
     rec = generate_record(paper_parameters("A4"), 1.5, settings=SHORT, rng=11, setting_name="A4")
     path, _ = write_record(d / "a4.csv", rec)
@@ -36,9 +53,10 @@ def _chain(path):
         return g["chain"][: g.attrs["iteration"]].copy()
 
 
-def test_fit_writes_every_output(tmp_path, record_file, capsys):
+def test_fit_writes_every_output(tmp_path, ar1_record_file, capsys):
     out = tmp_path / "fit"
-    code = main(["fit", str(record_file), "--out", str(out), "--steps", "30", "--walkers", "24", "--processes", "1"])
+    code = main(["fit", str(ar1_record_file), "--out", str(out), "--steps", "30", "--walkers", "24", "--processes", "1",
+                 *AR1])
     assert code == 0
     text = capsys.readouterr().out
     assert "b = " in text and "warning: not converged" in text
@@ -149,7 +167,7 @@ def _run_until_killed(cmd, chain_file, at_least: int) -> None:
 
 def _finish_and_compare(cmd, chain_file, before, tmp_path, record_file) -> None:
     """Run ``cmd`` to the end: exactly its ``--steps``, the killed runs' steps kept, and the
-    same chain as a run never interrupted."""
+    same chain as a run never interrupted (the killed runs' likelihood: :data:`AR1`)."""
     steps = int(cmd[cmd.index("--steps") + 1])
     assert subprocess.run(cmd, capture_output=True).returncode == 0
     after = _chain(chain_file)
@@ -157,43 +175,43 @@ def _finish_and_compare(cmd, chain_file, before, tmp_path, record_file) -> None:
     np.testing.assert_array_equal(after[: len(before)], before)
     ref = tmp_path / "uninterrupted"
     assert main(["fit", str(record_file), "--out", str(ref), "--steps", str(steps), "--walkers", "24",
-                 "--processes", "1", "--no-plots", "--seed", "3"]) == 0
+                 "--processes", "1", "--no-plots", "--seed", "3", *AR1]) == 0
     np.testing.assert_array_equal(_chain(ref / "chain.h5"), after)
 
 
-def test_resume_after_sigkill(tmp_path, record_file):
+def test_resume_after_sigkill(tmp_path, ar1_record_file):
     """Killed part-way and run again: exactly the requested steps, earlier steps kept, and
     the same chain as a run that was never interrupted."""
     out = tmp_path / "killed"
-    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out), *EVERY_STEP,
+    cmd = [*COMMAND, "fit", str(ar1_record_file), "--out", str(out), *AR1, *EVERY_STEP,
            "--steps", str(RESUME_STEPS), "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     _run_until_killed(cmd, out / "chain.h5", 8)
     before = read_chain(out / "chain.h5")
     assert 7 <= len(before) < RESUME_STEPS
-    _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
+    _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, ar1_record_file)
 
 
 @pytest.mark.slow
-def test_resume_after_sigkill_with_steps_held_between_writes(tmp_path, record_file):
+def test_resume_after_sigkill_with_steps_held_between_writes(tmp_path, ar1_record_file):
     """Written every 0.02 s rather than every step and killed: the steps held since the
     last write are lost and taken again, and the finished chain is the uninterrupted one
     (whose run writes at the default interval)."""
     out = tmp_path / "killed"
-    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out),
+    cmd = [*COMMAND, "fit", str(ar1_record_file), "--out", str(out), *AR1,
            "--checkpoint-seconds", "0.02", "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     _run_until_killed(cmd, out / "chain.h5", 8)
     before = read_chain(out / "chain.h5")
     assert 1 <= len(before) < 40
-    _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, record_file)
+    _finish_and_compare(cmd, out / "chain.h5", before, tmp_path, ar1_record_file)
 
 
 @pytest.mark.slow
-def test_ctrl_c_on_worker_processes_ends_the_run_with_130_and_keeps_its_steps(tmp_path, record_file):
+def test_ctrl_c_on_worker_processes_ends_the_run_with_130_and_keeps_its_steps(tmp_path, ar1_record_file):
     """Ctrl-C goes to the whole process group, the walkers' worker processes included: the
     run must stop (it used to wait for ever for a worker that died of it), say so with
     exit status 130, and leave a checkpoint that a second run continues."""
     out = tmp_path / "interrupted"
-    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out), *EVERY_STEP,
+    cmd = [*COMMAND, "fit", str(ar1_record_file), "--out", str(out), *AR1, *EVERY_STEP,
            "--steps", "400", "--walkers", "24", "--processes", "2", "--seed", "3", "--no-plots"]
     # a test run in the background of a non-interactive shell (as CI may be) inherits
     # SIGINT ignored, and Python then never turns it into KeyboardInterrupt: give the
@@ -221,11 +239,11 @@ def test_ctrl_c_on_worker_processes_ends_the_run_with_130_and_keeps_its_steps(tm
 
 
 @pytest.mark.slow  # about 2 minutes; CI keeps the single kill and the write-interrupted cases below
-def test_resume_after_sigkill_several_times(tmp_path, record_file):
+def test_resume_after_sigkill_several_times(tmp_path, ar1_record_file):
     """Killed three times in a row at random steps and run again: exactly the requested
     steps, every earlier step kept, and the same chain as a run never interrupted."""
     out = tmp_path / "killed"
-    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out), *EVERY_STEP,
+    cmd = [*COMMAND, "fit", str(ar1_record_file), "--out", str(out), *AR1, *EVERY_STEP,
            "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     chain_file = out / "chain.h5"
     before = None
@@ -236,16 +254,16 @@ def test_resume_after_sigkill_several_times(tmp_path, record_file):
         if before is not None:  # nothing written before this kill was lost or changed
             np.testing.assert_array_equal(now[: len(before)], before)
         before = now
-    _finish_and_compare(cmd, chain_file, before, tmp_path, record_file)
+    _finish_and_compare(cmd, chain_file, before, tmp_path, ar1_record_file)
 
 
 @pytest.mark.slow
-def test_resume_after_many_kills_at_random_moments(tmp_path, record_file):
+def test_resume_after_many_kills_at_random_moments(tmp_path, ar1_record_file):
     """Killed 12 times at random moments (not at step boundaries: at a seeded random delay
     after the run wrote a new step), run again each time: every intact step is kept and
     the finished chain is the uninterrupted one."""
     out = tmp_path / "killed"
-    cmd = [*COMMAND, "fit", str(record_file), "--out", str(out), *EVERY_STEP,
+    cmd = [*COMMAND, "fit", str(ar1_record_file), "--out", str(out), *AR1, *EVERY_STEP,
            "--steps", "40", "--walkers", "24", "--processes", "1", "--no-plots", "--seed", "3"]
     chain_file = out / "chain.h5"
     rng = np.random.default_rng(7)
@@ -265,7 +283,7 @@ def test_resume_after_many_kills_at_random_moments(tmp_path, record_file):
             assert len(now) >= len(before)
             np.testing.assert_array_equal(now[: len(before)], before)
         before = now
-    _finish_and_compare(cmd, chain_file, before, tmp_path, record_file)
+    _finish_and_compare(cmd, chain_file, before, tmp_path, ar1_record_file)
 
 
 def test_bad_record_refused_before_sampling(tmp_path, capsys):
