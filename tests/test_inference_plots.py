@@ -174,6 +174,7 @@ def test_fit_figures_are_titled_by_the_records_file_name():
     from bayes_inerter.inference.fit import _label
     from bayes_inerter.records import GeneratorSettings, generate_record
 
-    rec = generate_record(paper_parameters("A3"), 1.5, settings=GeneratorSettings(duration=2.0, ramp=0.5), rng=0,
+    # 4 s: three steady drive periods after the first, as the default likelihood needs
+    rec = generate_record(paper_parameters("A3"), 1.5, settings=GeneratorSettings(duration=4.0, ramp=0.5), rng=0,
                           setting_name="A3")
     assert _label(PosteriorModel(rec), "run1.csv") == "run1.csv, A3, 1.5 Hz"
