@@ -76,7 +76,8 @@ def test_a_record_with_no_drive_is_refused_with_the_fix():
 def test_the_model_settles_it_once():
     from bayes_inerter.inference.model import PosteriorModel
 
-    rec = generate_record(paper_parameters("A3"), 1.5, settings=GeneratorSettings(duration=3.0, ramp=0.5), rng=3,
+    # 4 s: three steady drive periods after the first, as the default likelihood needs
+    rec = generate_record(paper_parameters("A3"), 1.5, settings=GeneratorSettings(duration=4.0, ramp=0.5), rng=3,
                           setting_name="A3")
     bare = dataclasses.replace(rec, metadata={"setting": "A3"})
     pm = PosteriorModel(bare)
