@@ -7,6 +7,7 @@ import pytest
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
+from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.study.design import Design, design_contraction, noise_at, richer_truth_shift, run_design
 
@@ -18,7 +19,7 @@ def test_noise_at_the_truth_is_the_low_passed_sensor_noise():
     s sqrt(30 / 500) (the residual at the truth is nearly all noise)."""
     gen = GeneratorSettings(duration=3.0, ramp=1.0, force_noise=0.0, accel_noise=0.02)
     rec = generate_record(paper_parameters("A1"), 1.0, settings=gen, rng=5, setting_name="A1")
-    pm = PosteriorModel(rec)
+    pm = PosteriorModel(rec, likelihood=LikelihoodSettings(residual="ar1"))  # the design study's likelihood
     sigma, rho = noise_at(pm, pm.to_theta(paper_parameters("A1"), 1.0, 0.0))
     marginal = sigma / math.sqrt(1 - rho**2)
     assert marginal == pytest.approx(0.02 * math.sqrt(30 / 500), rel=0.2)
