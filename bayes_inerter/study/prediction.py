@@ -48,12 +48,19 @@ class Prediction:
     draws: int
 
 
+#: The likelihood's own parameters (``LikelihoodSettings.hyper_names``), which a
+#: simulation does not use, at values inside their priors: the time-domain residual's
+#: sigma and rho, the harmonic likelihoods' discrepancy and gain.
+UNUSED = {"sigma": 1.0, "rho": 0.0, "tau": 1.0, "alpha": 0.0, "gain": 1.0}
+
+
 def _theta(model: PosteriorModel, values: dict) -> np.ndarray:
-    """``model``'s theta from parameter values by name (b, the shared ones); the noise
-    entries, which a simulation does not use, at sigma 1 and rho 0."""
+    """``model``'s theta from parameter values by name (b, the shared ones); the
+    likelihood's own entries, which a simulation does not use, at :data:`UNUSED`'s."""
     out = []
+    own = set(model.names[model.n_phys:])
     for name in model.names:
-        v = {"sigma": 1.0, "rho": 0.0}.get(name, values.get(name))
+        v = UNUSED[name] if name in own else values.get(name)
         if v is None:
             raise ValueError(f"the draws have no {name!r}")
         out.append(np.log(v) if model.all_priors[name].log_scale else v)
