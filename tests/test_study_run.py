@@ -16,7 +16,9 @@ from bayes_inerter.study import FitJob, quick_plan, run_jobs, run_study
 from bayes_inerter.study import least_squares as least_squares_module
 from bayes_inerter.study import runner as runner_module
 
-TINY = GeneratorSettings(duration=2.0, ramp=0.6)
+#: 5.5 s at 1 Hz: three steady drive periods after the first, what the study's likelihood
+#: (the default, motion in, force out) needs.
+TINY = GeneratorSettings(duration=5.5, ramp=0.6)
 
 
 def tiny_plan(**changes):
