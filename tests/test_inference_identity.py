@@ -16,7 +16,9 @@ from bayes_inerter.inference.priors import LogNormal, Uniform
 from bayes_inerter.inference.sampler import Adaptation, default_moves
 from bayes_inerter.records import GeneratorSettings, generate_record
 
-SHORT = GeneratorSettings(duration=1.5, ramp=0.5)
+#: 5.5 s: three steady drive periods after the first at 1 Hz, as the default likelihood
+#: (motion in, force out) needs.
+SHORT = GeneratorSettings(duration=5.5, ramp=0.5)
 
 
 @pytest.fixture(scope="module")
