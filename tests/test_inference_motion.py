@@ -105,3 +105,27 @@ def test_the_models_force_on_a_noise_free_record_of_its_own_physics():
     measured = (data.harmonic.force[0] / A1).real
     assert (F[0] / A1).real == pytest.approx(measured, rel=1e-3)
     assert measured == pytest.approx(p.b + p.m_s + p.m_B, rel=1e-3)
+
+
+def test_b_is_not_identified_where_the_fit_misses_the_fundamentals_inertial_force():
+    import dataclasses
+
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.interval import INTERVALS, inertance_interval
+    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.motion import FUNDAMENTAL_MAX
+
+    p = paper_parameters("A3")
+    rec = generate_record(p, 1.5, rng=0, setting_name="A3")
+    pm = PosteriorModel(rec, likelihood=LikelihoodSettings(residual="motion"))
+    p = dataclasses.replace(p, c_B=2 * 0.02 * math.sqrt(p.k_B * pm.m_B))  # inside the damping ratio's prior
+    truth = pm.to_theta(p, hyper={"tau": 5.0})
+    half = pm.to_theta(dataclasses.replace(p, b=p.b / 2), hyper={"tau": 5.0})
+    assert pm.fundamental_misfit(truth) < 0.01
+    assert pm.fundamental_misfit(half) > FUNDAMENTAL_MAX
+    draws = np.full(100, p.b) * np.exp(np.linspace(-0.01, 0.01, 100))
+    rng = np.random.default_rng(0)
+    assert inertance_interval(pm, draws, truth, phi=0.9, settings=INTERVALS["posterior"], rng=rng).identified
+    got = inertance_interval(pm, draws / 2, half, phi=0.9, settings=INTERVALS["posterior"], rng=rng)
+    assert not got.identified
+    assert (got.lo, got.hi) == pytest.approx((100.0, 1e5))  # the prior's range

@@ -38,6 +38,7 @@ import numpy as np
 from ..records.sensitivity import SensorCalibration
 from .discrepancy import DECAY, HARMONICS, harmonic_discrepancy
 from .end_state import PHI_WARNING
+from .motion import FUNDAMENTAL_MAX
 
 __all__ = ["IntervalSettings", "InertanceInterval", "INTERVALS", "DEFAULT_INTERVAL", "inertance_interval",
            "widened_interval", "combined_interval"]
@@ -57,6 +58,9 @@ class IntervalSettings:
         where the posterior has flat directions (results/model-error).
     level : the interval's probability (0.94).
     phi_min : below this phi, b is not identified (None: always reported).
+    fundamental_max : motion-in likelihood only: b is not identified where the fit's
+        residual at the fundamental, in phase with the inertial force, exceeds this share
+        of it (``motion.FUNDAMENTAL_MAX``, 0.1; None: always reported).
     """
 
     calibration: SensorCalibration | None = field(default_factory=SensorCalibration)
@@ -66,6 +70,7 @@ class IntervalSettings:
     level: float = LEVEL
     phi_min: float | None = PHI_WARNING
     others: str = "held"
+    fundamental_max: float | None = FUNDAMENTAL_MAX
 
     def __post_init__(self) -> None:
         if self.others not in ("held", "free"):
@@ -160,6 +165,13 @@ def inertance_interval(model, b_draws, theta, *, cov=None, phi: float = math.nan
         lo, hi = np.exp(prior.bounds) if prior.log_scale else prior.bounds
         return InertanceInterval(name, median, float(lo), float(hi), settings.level, float(np.std(np.log(b), ddof=1)),
                                  0.0, 0.0, identified=False, phi=float(phi))
+    if getattr(model, "motion", None) is not None and settings.fundamental_max is not None:
+        misfit = model.fundamental_misfit(theta)
+        if not misfit <= settings.fundamental_max:
+            prior = model.all_priors[b_name]
+            lo, hi = np.exp(prior.bounds) if prior.log_scale else prior.bounds
+            return InertanceInterval(name, median, float(lo), float(hi), settings.level,
+                                     float(np.std(np.log(b), ddof=1)), 0.0, 0.0, identified=False, phi=float(phi))
     sensors = 0.0
     if settings.calibration is not None:
         sensors = settings.calibration.inertance_sd(median, 0.0, model.m_s + model.m_B) / median

@@ -36,7 +36,7 @@ from ..simulate import Drive, SimulationError, check_record, contacts, run_exact
 from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
 from .harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
 from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise
-from .motion import motion_data, motion_loglik, predicted_force
+from .motion import fundamental_misfit, motion_data, motion_loglik, predicted_force
 from .parameters import FRICTION_PAIRS, ParameterMap
 from .priors import (DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, MOTION_DISCREPANCY_PRIORS, NOISE_PRIORS,
                      SPLIT_PRIORS, gain_prior)
@@ -394,6 +394,11 @@ class PosteriorModel:
         h = self.hyper(theta)
         terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True)
         return (terms, phi) if np.all(np.isfinite(terms)) else None
+
+    def fundamental_misfit(self, theta) -> float:
+        """The motion-in fit's in-phase residual at the fundamental, as a share of the
+        model's inertial force there (``motion.fundamental_misfit``)."""
+        return fundamental_misfit(self.motion, self.field_vector(theta), self.hyper(theta)["gain"])
 
     def accel_error_variance(self, theta) -> np.ndarray:
         """The variance of each harmonic's error as the likelihood sees it (noise and

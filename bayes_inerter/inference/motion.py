@@ -48,7 +48,15 @@ from ..models import FIELDS
 from ..records.record import Record
 from .harmonic import HarmonicData, harmonic_data
 
-__all__ = ["MotionData", "motion_data", "predicted_force", "motion_loglik", "SIGN_BAND", "SIGN_GRID", "ORDER"]
+__all__ = ["MotionData", "motion_data", "predicted_force", "motion_loglik", "fundamental_misfit", "SIGN_BAND",
+           "SIGN_GRID", "ORDER", "FUNDAMENTAL_MAX"]
+
+#: **Assumption** of the reporting: b is called identified only where the fit reproduces
+#: the fundamental's force in phase with the acceleration (the inertial force, which b
+#: makes) to within this share. Where it does not, the posterior's b is set by the
+#: harmonics above, whose inertial content a richer device need not share with the
+#: model (its nut's backlash keeps the plate's reversal jerks from the flywheel).
+FUNDAMENTAL_MAX = 0.1
 
 #: **Assumption**: the band of the measured motion whose sign times the Coulomb forces, Hz.
 SIGN_BAND = 100.0
@@ -160,3 +168,12 @@ def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1
                              h.force, h.var_force, h.var_accel, h.cov, float(h.periods))
     phi = 1.0 - math.sqrt(sq / norm)
     return (terms if pointwise else float(terms.sum())), phi
+
+
+def fundamental_misfit(data: MotionData, p, gain: float = 1.0) -> float:
+    """The fit's residual at the drive's fundamental in phase with the model's inertial
+    force there, as a share of that force: |Re(r_1 / (Y_1 A_1 / g))| (see
+    :data:`FUNDAMENTAL_MAX`)."""
+    F, Y = predicted_force(data, p, gain)
+    inertial = Y[0] * data.harmonic.accel[0]  # Y already holds the gain
+    return float(abs(((data.harmonic.force[0] - F[0]) / inertial).real))
