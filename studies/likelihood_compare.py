@@ -95,7 +95,7 @@ def _fit(record, candidate: str, max_steps: int, processes: int, seed: int) -> l
     lo94, hi94 = _hdi(b, 0.94)
     lo50, hi50 = _hdi(b, 0.5)
     rows = [{**base, "candidate": candidate, "hdi94_lo": lo94, "hdi94_hi": hi94, "hdi50_lo": lo50,
-             "hdi50_hi": hi50, "identified": True}]
+             "hdi50_hi": hi50, "identified": bool(res.b_interval.identified) if candidate != "ar1" else True}]
     if candidate == "ar1":
         bi = res.b_interval
         rows.append({**base, "candidate": "ar1-honest", "hdi94_lo": bi.lo, "hdi94_hi": bi.hi, "hdi50_lo": "",
