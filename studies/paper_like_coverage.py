@@ -3,7 +3,8 @@
 Issue 39's item 5 measured with real chains: replicate k is one paper-like record
 (``records.paper_like``: the full network, Stribeck friction, nut backlash, miscalibrated
 sensors, coloured noise; one laboratory drawn per replicate from seed ``seed0 + k``),
-of flywheel setting ``SETTINGS[k % 9]`` at ``FREQUENCIES[(k // 9) % 3]``, fitted by
+of flywheel setting ``SETTINGS[k % 9]`` at ``FREQUENCIES[(k + k // 9) % 3]`` (every 27
+replicates hold each setting at each frequency once, the frequencies interleaved), fitted by
 ``fit_record`` as ``bayes-inerter fit`` runs it (the default likelihood, each chain to the
 convergence rule, at most ``--max-steps``). Each replicate writes one JSON into
 ``--out``/replicates (a run that stops continues where it stopped: rerun the command);
@@ -45,7 +46,7 @@ LEVELS = (0.94, 0.5)
 
 def case(k: int) -> tuple[str, float]:
     names = list(SETTINGS)
-    return names[k % len(names)], FREQUENCIES[(k // len(names)) % len(FREQUENCIES)]
+    return names[k % len(names)], FREQUENCIES[(k + k // len(names)) % len(FREQUENCIES)]
 
 
 def replicate(k: int, seed0: int, max_steps: int) -> dict:
