@@ -96,6 +96,33 @@ def test_fit_writes_every_output(tmp_path, ar1_record_file, capsys):
     assert f"{iv['lo']:.6g} to {iv['hi']:.6g}" in text and "the posterior alone" in text
 
 
+
+def test_the_default_likelihoods_fit_writes_every_output(tmp_path, record_file, capsys):
+    """The default likelihood, motion in, force out: its own parameters and the bearing's
+    damping ratio sampled, its pointwise terms the force's harmonics, and b's interval the
+    posterior's own, which holds the discrepancy and the gain itself."""
+    out = tmp_path / "fit"
+    assert main(["fit", str(record_file), "--out", str(out), "--steps", "10", "--walkers", "26",
+                 "--processes", "1"]) == 0
+    text = capsys.readouterr().out
+    for name in ("summary.csv", "posterior.nc", "loo.json", "chain.h5", "corner.png", "bands.png", "trace.png",
+                 "phi.png", "fit.json"):
+        assert (out / name).exists(), name
+    info = json.loads((out / "fit.json").read_text())
+    assert info["likelihood"]["residual"] == "motion"
+    rows = {r["name"]: r for r in csv.DictReader(open(out / "summary.csv"))}
+    assert all(rows[n]["kind"] == "sampled" for n in ("zeta_B", "tau", "alpha", "gain"))
+    assert rows["c_B"]["kind"] == "derived" and "sigma" not in rows and "rho" not in rows
+    assert set(info["priors"]) == {n for n, r in rows.items() if r["kind"] == "sampled"}
+    iv = info["b_interval"]
+    assert iv["method"] == "posterior" and iv["sd_log_sensors"] == iv["sd_log_discrepancy"] == 0.0
+    assert f"{iv['lo']:.6g} to {iv['hi']:.6g}" in text
+    import arviz as az
+
+    idata = az.from_netcdf(str(out / "posterior.nc"))
+    terms = idata.log_likelihood["force_harmonics"]
+    assert terms.dims[-1] == "harmonic" and json.loads((out / "loo.json").read_text())["n_points"] == terms.shape[-1]
+
 @pytest.mark.slow
 def test_physical_coordinates_keep_the_ridge_move(tmp_path, record_file):
     from bayes_inerter.records import read_record
