@@ -296,23 +296,26 @@ def run_study_calibration(cs: StudyCalibration, out, replicates: int, *, process
 
 def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     """Replicate ``k`` again with its fit kept in ``out``, to tell a wrong basin from a
-    posterior that excludes the truth: the joint log posterior at the truth (each rho at
-    its posterior median, rho having no true value) and at the posterior medians, and
-    every sampled parameter's truth beside its median and 94 % equal-tailed interval.
-    The same seed gives the same device, records and start as :func:`study_replicate`."""
+    posterior that excludes the truth: the joint log posterior at the truth (the
+    likelihood's per-frequency parameters, rho or tau and alpha, at their posterior
+    medians, having no true value) and at the posterior medians, and every sampled
+    parameter's truth beside its median and 94 % equal-tailed interval. The same seed
+    gives the same device, records and start as :func:`study_replicate`."""
     from ..inference.joint import JointModel
 
     _, truth, records, _, res, kept = _fit_replicate(cs, k, Path(out))
-    jm = JointModel(tuple(records), priors=STUDY_SBC_PRIORS)
+    jm = JointModel(tuple(records), priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
     median = {n: float(np.median(x)) for n, x in kept.items()}
+    unknown = set(jm.per_frequency)
     at_truth = {f"b_{cs.setting}": truth["b"], **{n: truth[n] for n in jm.shared},
-                **{n: median[n] for n in jm.rhos}}
+                **{n: truth[n] for n in jm.names if n == "gain"},  # drawn with the device
+                **{n: median[n] for n in jm.per_frequency}}
 
     def log_post(values):
         theta = [math.log(values[n]) if jm.all_priors[n].log_scale else values[n] for n in jm.names]
         return float(jm.log_prob(theta)[0])
 
-    rows = [{"parameter": n, "truth": at_truth[n] if n not in jm.rhos else None, "median": median[n],
+    rows = [{"parameter": n, "truth": at_truth[n] if n not in unknown else None, "median": median[n],
              "q3": float(np.quantile(kept[n], 0.03)), "q97": float(np.quantile(kept[n], 0.97))} for n in jm.names]
     return {"replicate": k, "steps": int(res.iterations), "tau_max": float(np.nanmax(res.tau)),
             "log_posterior_truth": log_post(at_truth), "log_posterior_median": log_post(median), "parameters": rows}
