@@ -129,3 +129,20 @@ def test_b_is_not_identified_where_the_fit_misses_the_fundamentals_inertial_forc
     got = inertance_interval(pm, draws / 2, half, phi=0.9, settings=INTERVALS["posterior"], rng=rng)
     assert not got.identified
     assert (got.lo, got.hi) == pytest.approx((100.0, 1e5))  # the prior's range
+
+
+def test_the_nested_models_are_the_two_ports_limits_and_the_effects_are_refused():
+    from bayes_inerter.inference import PosteriorModel
+
+    rec = generate_record(paper_parameters("A3"), 1.5, rng=0, setting_name="A3")
+    rigid = PosteriorModel(rec, "rigid")
+    theta = rigid.to_theta(paper_parameters("A3"))
+    x = dict(zip(("b", "m_s", "m_B", "c_n", "k_n", "c_B", "k_B", "f1_0", "c_f1", "f2_0", "c_f2"),
+                 rigid.field_vector(theta)))
+    assert x["k_n"] >= 1e14 and x["c_n"] >= 1e12 and x["f2_0"] == 0.0
+    linear = PosteriorModel(rec, "linear")
+    x = linear.field_vector(linear.to_theta(paper_parameters("A3")))
+    assert list(x[7:]) == [0.0, 0.0, 0.0, 0.0]  # no friction
+    assert np.isfinite(rigid.log_prob(theta)[0])
+    with pytest.raises(ValueError, match="harmonic or ar1"):
+        PosteriorModel(rec, "two-port-stribeck")

@@ -73,9 +73,19 @@ MODELS = {
 }
 
 
+#: The motion-in likelihood's algebra (``motion``) is the two-port network's; the nested
+#: networks are its limits: the rigid body's links stiff and damped beyond any drive
+#: (1e12 N s/m, 1e14 N/m; the rotation's friction is already off), the linear network's
+#: friction blocks bypassed.
+MOTION_LIMITS = {
+    "rigid": {"c_n": 1e12, "k_n": 1e14, "c_B": 1e12, "k_B": 1e14},
+    "linear": {"f1_0": 0.0, "c_f1": 0.0, "f2_0": 0.0, "c_f2": 0.0},
+}
+
 #: The harmonic likelihood's parameters where :meth:`PosteriorModel.to_theta` is not
-#: told them: a discrepancy of 0.1 mm/s^2 decaying as 1/k, and equal gains.
-HYPER_START = {"tau": 1e-4, "alpha": 1.0, "gain": 1.0}
+#: told them: a discrepancy of 0.01 (m/s^2 for the force-in likelihood, N for motion in,
+#: inside both priors) decaying as 1/k, and equal gains.
+HYPER_START = {"tau": 1e-2, "alpha": 1.0, "gain": 1.0}
 
 #: ``b_app`` (the inertance seen through the nut, to first order in k_n / (omega c_n))
 #: is reported only where k_n / (omega c_n) is below this: an assumption of this
@@ -128,6 +138,9 @@ class PosteriorModel:
     def __post_init__(self) -> None:
         if self.model not in MODELS:
             raise ValueError(f"unknown model {self.model!r}; choose one of {', '.join(MODELS)}")
+        if self.likelihood.residual == "motion" and self.model not in ("two-port", "rigid", "linear"):
+            raise ValueError(f"the motion-in likelihood knows the two-port network and its limits, not the "
+                             f"{self.model} model's effects; fit it with --residual harmonic or ar1")
         rec = self.record
         check_record(rec.time, rec.force, rec.accel, names=("force", "accel"))
         self.m_s, self.m_B = record_masses(rec, self.m_s, self.m_B)
@@ -219,6 +232,9 @@ class PosteriorModel:
         # The evaluation's short way (see simulate_lp): the network's arrays straight from
         # the parameters, with no network built; where there is none, simulate().
         self._chain = linear_chain(self.network) if q == 1 and not self.effect_names else None
+        if self.motion is not None:
+            # the motion-in algebra is the two-port network's: the nested networks are its limits
+            fixed.update(MOTION_LIMITS.get(self.network, {}))
         self._fixed_vector = np.array([float(fixed[f]) for f in FIELDS])
         pos = {n: i for i, n in enumerate(self.names)}
         direct = [n for n in self.free if n in pos and n in FIELDS]
