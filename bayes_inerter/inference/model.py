@@ -36,7 +36,7 @@ from ..simulate import Drive, SimulationError, check_record, contacts, run_exact
 from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
 from .harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
 from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise
-from .motion import fundamental_misfit, motion_data, motion_loglik, predicted_force
+from .motion import fundamental_misfit, motion_data, motion_loglik, motion_variance
 from .parameters import FRICTION_PAIRS, ParameterMap
 from .priors import (DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, MOTION_DISCREPANCY_PRIORS, NOISE_PRIORS,
                      SPLIT_PRIORS, gain_prior)
@@ -396,10 +396,6 @@ class PosteriorModel:
             vals.setdefault("gain", 1.0)
         return vals
 
-    def _fields(self, theta) -> dict:
-        """The network's parameters at theta by name (``models.FIELDS``)."""
-        return dict(zip(FIELDS, self.field_vector(theta)))
-
     def motion_terms(self, theta):
         """(each harmonic's term, phi of the force) of the motion-in likelihood
         (``motion.motion_loglik``) at theta; None where the parameters are out of range."""
@@ -423,12 +419,8 @@ class PosteriorModel:
         if self.motion is None:
             return self.harmonic_variance(theta)
         h = self.hyper(theta)
-        p = self._fields(theta)
-        _, Y = predicted_force(self.motion, p, h["gain"])
-        k = np.arange(1, self.harmonic.harmonics + 1)
-        hd = self.harmonic
-        noise = (hd.var_force + np.abs(Y) ** 2 * hd.var_accel - 2.0 * np.real(Y * hd.cov)) / hd.periods
-        return (np.maximum(noise, 0.0) + h["tau"] ** 2 * k ** (-2.0 * h["alpha"])) / np.abs(Y) ** 2
+        V, Y = motion_variance(self.motion, self.field_vector(theta), h["tau"], h["alpha"], h["gain"])
+        return V / np.abs(Y) ** 2
 
     def transfer(self, theta) -> np.ndarray:
         """The model's force-to-acceleration transfer at the harmonic likelihood's
@@ -453,6 +445,15 @@ class PosteriorModel:
         h = self.hyper(theta)
         return harmonic_variance(self.harmonic, self.transfer(theta), h["tau"], h["alpha"], h["gain"])
 
+    def _raw_simulation(self, theta):
+        """:meth:`simulate_unfiltered` at theta, or None where the simulation fails, the
+        parameters are out of range or the result is not finite."""
+        try:
+            raw = self.simulate_unfiltered(theta)
+        except (SimulationError, ValueError):
+            return None
+        return raw if np.all(np.isfinite(raw)) else None
+
     def _simulation(self, theta):
         """:meth:`simulate_lp` at theta, or None where the simulation fails or the
         parameters are out of range."""
@@ -472,11 +473,8 @@ class PosteriorModel:
                 return -math.inf, None, None
             return lp, got[0], sim
         if self.harmonic is not None:
-            try:
-                raw = self.simulate_unfiltered(theta)
-            except (SimulationError, ValueError):
-                return -math.inf, None, None
-            if not np.all(np.isfinite(raw)):
+            raw = self._raw_simulation(theta)
+            if raw is None:
                 return -math.inf, None, None
             return lp, self.harmonic_pointwise(theta, raw), lowpass(raw, self.fs, self.likelihood.cutoff)
         sim = self._simulation(theta)
@@ -510,11 +508,8 @@ class PosteriorModel:
             got = self.motion_terms(theta)
             return None if got is None else (float(got[0].sum()), got[1])
         if self.harmonic is not None:
-            try:
-                raw = self.simulate_unfiltered(theta)
-            except (SimulationError, ValueError):
-                return None
-            if not np.all(np.isfinite(raw)):
+            raw = self._raw_simulation(theta)
+            if raw is None:
                 return None
             return self.harmonic_terms(theta, raw), self.phi(lowpass(raw, self.fs, self.likelihood.cutoff))
         got = self.misfit(theta)

@@ -48,7 +48,7 @@ from ..models import FIELDS
 from ..records.record import Record
 from .harmonic import HarmonicData, harmonic_data
 
-__all__ = ["MotionData", "motion_data", "predicted_force", "motion_loglik", "fundamental_misfit", "SIGN_BAND",
+__all__ = ["MotionData", "motion_data", "predicted_force", "motion_variance", "motion_loglik", "fundamental_misfit", "SIGN_BAND",
            "SIGN_GRID", "ORDER", "FUNDAMENTAL_MAX"]
 
 #: **Assumption** of the reporting: b is called identified only where the fit reproduces
@@ -81,12 +81,10 @@ class MotionData:
 
 def _sign_harmonics(record: Record, freq: float, K: int, band: float, pool: int, settle: int) -> np.ndarray:
     fine = harmonic_data(record, freq, cutoff=min(band, 0.45 * record.fs), pool=pool, settle=settle)
-    w = 2 * math.pi * freq
     V = fine.accel / (1j * fine.omega)
     t = np.arange(SIGN_GRID) / (SIGN_GRID * freq)
     v = np.real(np.exp(1j * np.outer(t, fine.omega)) @ V)
     S = np.fft.rfft(np.sign(v)) / SIGN_GRID * 2.0
-    del w
     return S[1: K + 1]
 
 
@@ -128,17 +126,28 @@ def _predicted(x, gain, omega, velocity, sign):
 
 
 @njit(cache=True)
+def _variance(Y, tau, alpha, var_force, var_accel, cov, periods):
+    """V_k of the module docstring, from the transfer Y_k."""
+    K = Y.shape[0]
+    V = np.empty(K)
+    for k in range(K):
+        noise = (var_force[k] + (Y[k].real ** 2 + Y[k].imag ** 2) * var_accel[k]
+                 - 2.0 * (Y[k] * cov[k]).real) / periods
+        V[k] = max(noise, 0.0) + tau * tau * (k + 1.0) ** (-2.0 * alpha)
+    return V
+
+
+@njit(cache=True)
 def _terms(x, tau, alpha, gain, omega, velocity, sign, force, var_force, var_accel, cov, periods):
     """Each harmonic's log-likelihood term and the squared residuals' and the force's sums."""
     F, Y = _predicted(x, gain, omega, velocity, sign)
+    V_all = _variance(Y, tau, alpha, var_force, var_accel, cov, periods)
     K = omega.shape[0]
     terms = np.empty(K)
     sq_sum = 0.0
     f_sum = 0.0
     for k in range(K):
-        noise = (var_force[k] + (Y[k].real ** 2 + Y[k].imag ** 2) * var_accel[k]
-                 - 2.0 * (Y[k] * cov[k]).real) / periods
-        V = max(noise, 0.0) + tau * tau * (k + 1.0) ** (-2.0 * alpha)
+        V = V_all[k]
         r = force[k] - F[k]
         sq = r.real ** 2 + r.imag ** 2
         terms[k] = -np.log(np.pi * V) - sq / V if V > 0 else -np.inf
@@ -156,6 +165,15 @@ def predicted_force(data: MotionData, p, gain: float = 1.0):
     (by name, or a vector in :data:`ORDER`), and its transfer from the measured
     acceleration, dF^_k / dA_k."""
     return _predicted(_vector(p), float(gain), data.omega, data.velocity, data.sign)
+
+
+def motion_variance(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0):
+    """(V_k, Y_k): each harmonic's residual variance (noise of both channels and the
+    discrepancy, N^2) and the model's transfer from the measured acceleration to the force
+    (``p`` as for :func:`predicted_force`)."""
+    h = data.harmonic
+    _, Y = predicted_force(data, p, gain)
+    return _variance(Y, float(tau), float(alpha), h.var_force, h.var_accel, h.cov, float(h.periods)), Y
 
 
 def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0, *,

@@ -217,11 +217,11 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     """Return (theta, log posterior) of a quick optimum (see module docstring).
 
     ``objectives``: names of :data:`OBJECTIVES` evolved in stage 1, each in turn with the
-    same ``rng`` (None: :func:`default_objectives`). ``maxiter``: generations of each evolution (None: :data:`DE_MAXITER`
-    as it is when called). ``many``: optional callable(name, list of physical parameter
-    vectors) giving the objective ``name`` at each (for example on a process pool):
-    differential evolution then evaluates each generation through it. The result does
-    not depend on it.
+    same ``rng`` (None: :func:`default_objectives`). ``maxiter``: generations of each
+    evolution (None: :data:`DE_MAXITER` as it is when called). ``many``: optional
+    callable(name, list of physical parameter vectors) giving the objective ``name`` at
+    each (for example on a process pool): differential evolution then evaluates each
+    generation through it. The result does not depend on it.
     """
     maxiter = DE_MAXITER if maxiter is None else maxiter
     objectives = default_objectives(model) if objectives is None else tuple(objectives)
@@ -275,7 +275,7 @@ def _with_discrepancy_estimate(model: PosteriorModel, phys: np.ndarray) -> np.nd
     start = {"tau": 1e-4, "alpha": 0.0, "gain": 1.0}  # a white discrepancy of the residual's size
     try:
         if model.motion is not None:
-            r = model.harmonic.force - predicted_force(model.motion, model._fields(theta))[0]
+            r = model.harmonic.force - predicted_force(model.motion, model.field_vector(theta))[0]
         else:
             r = model.harmonic.accel - model.harmonic.mean_amplitudes(model.simulate_unfiltered(theta))
         if np.all(np.isfinite(r)):
