@@ -103,7 +103,9 @@ class StudyCalibration:
     draws : L, the posterior draws each truth is ranked among.
     seed : replicate k uses the seed sequence (seed, k).
     single : one record per replicate, fitted alone (see module docstring).
-    likelihood : the fits' likelihood settings.
+    likelihood : the fits' likelihood settings (default: the time-domain AR(1) one that
+        the committed results/study-calibration replicates were made with, so that a
+        folder saved before this option existed is continued under its own likelihood).
     max_steps : the cap of a chain run to the convergence rule.
     """
 
@@ -114,7 +116,7 @@ class StudyCalibration:
     draws: int = 99
     seed: int = 0
     single: bool = False
-    likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
+    likelihood: LikelihoodSettings = field(default_factory=lambda: LikelihoodSettings(residual="ar1"))
     max_steps: int = 6000
 
     def __post_init__(self) -> None:
