@@ -398,13 +398,14 @@ class PosteriorModel:
 
     def motion_terms(self, theta):
         """(each harmonic's term, phi of the force) of the motion-in likelihood
-        (``motion.motion_loglik``) at theta; None where the parameters are out of range."""
+        (``motion.motion_loglik``) at theta; None where the parameters are out of range or
+        the drivetrain's simulation fails."""
         try:
             x = self.field_vector(theta)
-        except ValueError:
+            h = self.hyper(theta)
+            terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True)
+        except (SimulationError, ValueError):
             return None
-        h = self.hyper(theta)
-        terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True)
         return (terms, phi) if np.all(np.isfinite(terms)) else None
 
     def fundamental_misfit(self, theta) -> float:
