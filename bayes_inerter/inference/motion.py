@@ -55,6 +55,7 @@ from ..models import FIELDS
 from ..records.record import Record
 from ..simulate import run_exact
 from .harmonic import HarmonicData, harmonic_data
+from .reversals import SD, ramped_sign, reversal_correction, reversal_windows, window_basis
 
 __all__ = ["MotionData", "motion_data", "predicted_force", "bearing_force", "motion_variance", "motion_loglik",
            "fundamental_misfit", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "ORDER", "FUNDAMENTAL_MAX"]
@@ -87,27 +88,37 @@ class MotionData:
     sign: np.ndarray  # (K,) complex: harmonics of sgn(v_B(t))
     omega: np.ndarray  # (K,) rad/s
     drive: np.ndarray  # (DRIVE_GRID,) m/s: the plate's velocity over one period from t = 0
+    basis: np.ndarray  # (2K, m): the reversals' friction deviations (``reversals.window_basis``)
+    windows: tuple = ()  # the reversals' windows, shares of the period (``reversals.reversal_windows``)
 
     @property
     def harmonics(self) -> int:
         return self.harmonic.harmonics
 
 
-def _plate_velocity(record: Record, freq: float, band: float, pool: int, settle: int):
-    """The measured plate velocity reconstructed up to ``band``: a function of the time
-    in the period."""
+def _plate_motion(record: Record, freq: float, band: float, pool: int, settle: int):
+    """The measured plate velocity and acceleration reconstructed up to ``band`` (each a
+    function of the points per period) and the velocity's noise sd (m/s) there."""
     fine = harmonic_data(record, freq, cutoff=min(band, 0.45 * record.fs), pool=pool, settle=settle)
     V = fine.accel / (1j * fine.omega)
-    return lambda n: np.real(np.exp(1j * np.outer(np.arange(n) / (n * freq), fine.omega)) @ V)
+    sigma_v = math.sqrt(float(np.sum(fine.var_accel / fine.omega ** 2)) / (2.0 * fine.periods))
+
+    def on_grid(X):
+        return lambda n: np.real(np.exp(1j * np.outer(np.arange(n) / (n * freq), fine.omega)) @ X)
+
+    return on_grid(V), on_grid(fine.accel), sigma_v
 
 
 def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, settle: int = 1,
                 sign_band: float = SIGN_BAND) -> MotionData:
     """:class:`MotionData` of ``record`` driven at ``freq`` Hz (see module docstring)."""
     data = harmonic_data(record, freq, cutoff=cutoff, pool=pool, settle=settle)
-    velocity = _plate_velocity(record, freq, max(sign_band, cutoff), pool, settle)
-    sign = (np.fft.rfft(np.sign(velocity(SIGN_GRID))) / SIGN_GRID * 2.0)[1: data.harmonics + 1]
-    return MotionData(data, data.accel / (1j * data.omega), sign, data.omega, velocity(DRIVE_GRID))
+    velocity, accel, sigma_v = _plate_motion(record, freq, max(sign_band, cutoff), pool, settle)
+    v = velocity(SIGN_GRID)
+    windows = tuple(reversal_windows(v, accel(SIGN_GRID), sigma_v, 1.0 / freq))
+    sign = (np.fft.rfft(ramped_sign(v, windows)) / SIGN_GRID * 2.0)[1: data.harmonics + 1]
+    return MotionData(data, data.accel / (1j * data.omega), sign, data.omega, velocity(DRIVE_GRID),
+                      window_basis(windows, data.harmonics), windows)
 
 
 #: The physical parameters in the order the compiled kernels unpack them: ``models.FIELDS``'s.
@@ -156,12 +167,18 @@ def _variance(Y, tau, alpha, var_force, var_accel, cov, periods):
 
 
 @njit(cache=True)
-def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, force, var_force, var_accel, cov,
+def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, basis, force, var_force, var_accel, cov,
            periods):
-    """Each harmonic's log-likelihood term and the squared residuals' and the force's sums."""
+    """Each harmonic's log-likelihood term (the reversals' marginal in equal shares), and
+    the squared residuals' and the force's sums."""
     F, Y = _predicted(x, gain, omega, velocity, sign, bearing, simulated)
     V_all = _variance(Y, tau, alpha, var_force, var_accel, cov, periods)
     K = omega.shape[0]
+    ok = True
+    for k in range(K):
+        if not V_all[k] > 0:
+            ok = False
+    share = reversal_correction(basis, V_all, force - F, SD * x[7]) / K if ok else 0.0
     terms = np.empty(K)
     sq_sum = 0.0
     f_sum = 0.0
@@ -169,7 +186,7 @@ def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, force
         V = V_all[k]
         r = force[k] - F[k]
         sq = r.real ** 2 + r.imag ** 2
-        terms[k] = -np.log(np.pi * V) - sq / V if V > 0 else -np.inf
+        terms[k] = -np.log(np.pi * V) - sq / V + share if V > 0 else -np.inf
         sq_sum += sq
         f_sum += force[k].real ** 2 + force[k].imag ** 2
     return terms, sq_sum, f_sum
@@ -254,7 +271,7 @@ def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1
     h = data.harmonic
     x, bearing, simulated = _inputs(data, p, gain)
     terms, sq, norm = _terms(x, float(tau), float(alpha), float(gain), data.omega, data.velocity, data.sign, bearing,
-                             simulated, h.force, h.var_force, h.var_accel, h.cov, float(h.periods))
+                             simulated, data.basis, h.force, h.var_force, h.var_accel, h.cov, float(h.periods))
     phi = 1.0 - math.sqrt(sq / norm)
     return (terms if pointwise else float(terms.sum())), phi
 

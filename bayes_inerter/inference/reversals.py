@@ -1,0 +1,151 @@
+"""The plate's reversals: where motion in cannot say what the plate's friction does.
+
+At each reversal of a displacement-driven test the plate's Coulomb friction passes from
++f1_0 to -f1_0. Where the plate slides through, it switches in an instant; where it
+sticks (a large friction against a stiff servo), the friction follows the actuator
+through the dwell, whatever the motion; and where the measured velocity is noisy its
+zero crossing, which times the switch, moves by sigma_v / |a| or crosses several times.
+In all three cases the motion alone does not fix the friction inside a short window
+around the reversal, so the likelihood marginalises it there:
+
+- the windows: each cluster of the reconstructed plate velocity's zero crossings (those
+  within ``CLUSTER`` of a period of each other), widened on each side by ``WIDEN`` times
+  the crossing's timing uncertainty sigma_v / |a| (sigma_v: the reconstructed
+  velocity's noise from the periods' scatter, a: the plate's acceleration there) and by
+  at least ``MIN_HALF_WIDTH`` of the period;
+- the friction's mean inside a window: a straight ramp between its values on either side
+  (the sign wave's harmonics, :func:`ramped_sign`);
+- its deviation from that ramp: a_j P_j(x) with P_j the Legendre polynomials of degree
+  j < ``DEGREES`` on the window and a_j ~ N(0, (``SD`` f1_0)^2) (**assumption**: the
+  deviation is of the friction's own size), whose harmonics form the columns of the
+  basis U (2K real rows: the real parts, then the imaginary parts).
+
+With the residual's other variance D (each harmonic's V_k / 2 for its real and its
+imaginary part) the marginal adds to the independent harmonics' log-likelihood
+
+    -1/2 log det(I + s^2 U' D^-1 U) + 1/2 s^2 w' (I + s^2 U' D^-1 U)^-1 w,   w = U' D^-1 r,
+
+s = SD f1_0 (Woodbury's identity: the density of r under D + s^2 U U'). This is the
+"variance that lives at velocity reversals" of the likelihood's design: what the model
+cannot know is left free where it is, not smeared over every harmonic.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["reversal_windows", "ramped_sign", "window_basis", "reversal_correction", "CLUSTER", "WIDEN",
+           "MIN_HALF_WIDTH", "DEGREES", "SD"]
+
+#: Zero crossings closer than this share of a period are one reversal.
+CLUSTER = 0.1
+#: **Assumption**: a window reaches this many timing standard deviations past its crossings.
+WIDEN = 3.0
+#: **Assumption**: the least half-width of a window, as a share of the period.
+MIN_HALF_WIDTH = 0.002
+#: Legendre polynomials per window for the friction's deviation from the ramp.
+DEGREES = 4
+#: **Assumption**: the prior sd of each deviation's amplitude, in units of f1_0.
+SD = 1.0
+
+
+def reversal_windows(v: np.ndarray, a: np.ndarray, sigma_v: float, period: float) -> list[tuple[float, float]]:
+    """The windows (start, end) as shares of the period, in time order (a window may reach
+    below 0 or past 1: it wraps) around the reversals of the velocity ``v`` (m/s) sampled on a
+    uniform grid over one period of ``period`` s; ``a`` the acceleration on that grid
+    (m/s^2), ``sigma_v`` the velocity's noise sd (m/s)."""
+    n = v.shape[0]
+    s = np.sign(v)
+    s[s == 0] = 1.0
+    cross = np.flatnonzero(s != np.roll(s, 1))  # a crossing between sample i-1 and i
+    if cross.size == 0:
+        return []
+    gap = CLUSTER * n
+    # rotate so that no cluster straddles the period's end: start after the largest gap
+    d = np.diff(np.append(cross, cross[0] + n))
+    first = int(np.argmax(d)) + 1
+    order = np.concatenate([cross[first:], cross[:first] + n])
+    clusters, current = [], [order[0]]
+    for c in order[1:]:
+        if c - current[-1] < gap:
+            current.append(c)
+        else:
+            clusters.append(current)
+            current = [c]
+    clusters.append(current)
+    out = []
+    for cl in clusters:
+        lo, hi = cl[0], cl[-1]
+        mid = ((lo + hi) // 2) % n
+        slope = abs(a[mid]) * period  # m/s per period share
+        half = max(MIN_HALF_WIDTH, WIDEN * sigma_v / slope if slope > 0 else CLUSTER)
+        start = (lo - 0.5) / n - half
+        shift = math.floor(start + half)  # the crossings' start in [0, 1)
+        out.append((start - shift, (hi - 0.5) / n + half - shift))
+    return sorted(out)
+
+
+def ramped_sign(v: np.ndarray, windows) -> np.ndarray:
+    """sgn(v) on its grid with a straight ramp across each window (the friction's mean)."""
+    n = v.shape[0]
+    s = np.sign(v)
+    s[s == 0] = 1.0
+    x = np.arange(n) / n
+    for lo, hi in windows:
+        before, after = s[int(math.floor(lo * n)) % n], s[int(math.ceil(hi * n)) % n]
+        for shift in (-1.0, 0.0, 1.0):
+            inside = (x + shift >= lo) & (x + shift <= hi)
+            s[inside] = before + (after - before) * (x[inside] + shift - lo) / (hi - lo)
+    return s
+
+
+def window_basis(windows, K: int, points: int = 64) -> np.ndarray:
+    """U (2K, DEGREES * windows): the harmonics 1..K (real parts, then imaginary parts) of
+    the Legendre polynomials on each window, X_k = 2 int P_j(x(t)) exp(-i k w t) dt / T."""
+    k = np.arange(1, K + 1)
+    cols = []
+    for lo, hi in windows:
+        u = lo + (np.arange(points) + 0.5) / points * (hi - lo)  # midpoints, in period shares
+        x = 2.0 * (u - lo) / (hi - lo) - 1.0
+        e = np.exp(-2j * math.pi * np.outer(k, u)) * (2.0 * (hi - lo) / points)
+        for j in range(DEGREES):
+            X = e @ np.polynomial.legendre.legval(x, np.eye(DEGREES)[j])
+            cols.append(np.concatenate([X.real, X.imag]))
+    return np.array(cols).T if cols else np.zeros((2 * K, 0))
+
+
+@njit(cache=True)
+def reversal_correction(U, V, r, s):
+    """What the reversals' marginal adds to the independent harmonics' log-likelihood
+    (module docstring): U the basis, V each harmonic's complex variance, r the complex
+    residual, s the deviations' prior sd (N)."""
+    m = U.shape[1]
+    K = V.shape[0]
+    if m == 0 or s <= 0.0:
+        return 0.0
+    M = np.zeros((m, m))
+    w = np.zeros(m)
+    for i in range(2 * K):
+        d = 2.0 / V[i % K]  # 1 / (V / 2)
+        ri = r[i].real if i < K else r[i - K].imag
+        for a in range(m):
+            ua = U[i, a] * d
+            w[a] += ua * ri
+            for c in range(a, m):
+                M[a, c] += ua * U[i, c]
+    s2 = s * s
+    for a in range(m):
+        for c in range(a + 1, m):
+            M[c, a] = M[a, c]
+    G = s2 * M
+    for a in range(m):
+        G[a, a] += 1.0
+    L = np.linalg.cholesky(G)
+    logdet = 0.0
+    for a in range(m):
+        logdet += 2.0 * math.log(L[a, a])
+    z = np.linalg.solve(L, w)
+    return -0.5 * logdet + 0.5 * s2 * float(np.dot(z, z))

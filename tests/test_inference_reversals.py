@@ -1,0 +1,86 @@
+"""The plate's reversals (``inference.reversals``): windows, the ramped sign, the marginal."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from bayes_inerter.inference.reversals import (DEGREES, MIN_HALF_WIDTH, WIDEN, ramped_sign, reversal_correction,
+                                               reversal_windows, window_basis)
+
+N, T = 4096, 2.0
+
+
+def _sine():
+    t = np.arange(N) / N
+    w = 2 * math.pi / T
+    return 0.0314 * np.cos(w * t * T), -0.0314 * w * np.sin(w * t * T)  # v, a: reversals at T/4, 3T/4
+
+
+def test_a_clean_sine_has_two_narrow_windows_at_its_reversals():
+    v, a = _sine()
+    windows = reversal_windows(v, a, 0.0, T)
+    assert len(windows) == 2
+    centres = sorted(((lo + hi) / 2) % 1 for lo, hi in windows)
+    np.testing.assert_allclose(centres, [0.25, 0.75], atol=2.0 / N)
+    for lo, hi in windows:
+        assert (hi - lo) / 2 == pytest.approx(MIN_HALF_WIDTH, abs=1.0 / N)
+
+
+def test_noise_widens_a_window_by_its_timing_uncertainty():
+    v, a = _sine()
+    sigma_v = 3e-4  # past the least half-width
+    (lo, hi), _ = reversal_windows(v, a, sigma_v, T)
+    expected = WIDEN * sigma_v / (0.0314 * 2 * math.pi / T) / T  # sigma_v / |a|, as a share of T
+    assert (hi - lo) / 2 == pytest.approx(expected, rel=0.02)
+
+
+def test_crossings_that_chatter_near_a_reversal_are_one_window():
+    v, a = _sine()
+    v = v.copy()
+    i = N // 4
+    v[i - 40: i + 40] = 1e-6 * np.sign(np.sin(np.arange(80)))  # a stuck plate's ripple
+    windows = reversal_windows(v, a, 0.0, T)
+    assert len(windows) == 2
+    first = min(windows, key=lambda w: abs(((w[0] + w[1]) / 2) % 1 - 0.25))
+    assert first[0] <= (i - 40) / N and first[1] >= (i + 39) / N
+
+
+def test_the_sign_ramps_across_a_window_and_is_the_sign_outside():
+    v, a = _sine()
+    windows = [(0.2, 0.3), (0.7, 0.8)]
+    s = ramped_sign(v, windows)
+    x = np.arange(N) / N
+    outside = ~(((x >= 0.2) & (x <= 0.3)) | ((x >= 0.7) & (x <= 0.8)))
+    np.testing.assert_array_equal(s[outside], np.sign(v[outside]))
+    mid = np.argmin(np.abs(x - 0.25))
+    assert s[mid] == pytest.approx(0.0, abs=2.0 / (0.1 * N))
+    assert np.all(np.diff(s[(x >= 0.2) & (x <= 0.3)]) < 0)  # from +1 down to -1
+
+
+def test_the_correction_is_the_marginal_gaussian_density():
+    """log N(r; 0, D + s^2 U U') - log N(r; 0, D), with D each harmonic's V_k / 2 for its
+    real and imaginary part: the Woodbury form against the dense density."""
+    rng = np.random.default_rng(3)
+    K = 12
+    U = window_basis([(0.2, 0.26), (0.7, 0.77)], K)
+    assert U.shape == (2 * K, 2 * DEGREES)
+    V = rng.uniform(0.5, 2.0, K)
+    r = rng.standard_normal(K) + 1j * rng.standard_normal(K)
+    s = 3.0
+    D = np.concatenate([V, V]) / 2
+    x = np.concatenate([r.real, r.imag])
+    dense = (stats.multivariate_normal(np.zeros(2 * K), np.diag(D) + s**2 * U @ U.T).logpdf(x)
+             - stats.multivariate_normal(np.zeros(2 * K), np.diag(D)).logpdf(x))
+    assert reversal_correction(U, V, r, s) == pytest.approx(dense, rel=1e-9, abs=1e-9)
+    assert reversal_correction(U, V, r, 0.0) == 0.0
+
+
+def test_the_basis_holds_the_windows_legendre_harmonics():
+    """The constant on a window [lo, hi] has the harmonics 2 int exp(-i k w t) dt / T."""
+    lo, hi = 0.1, 0.15
+    U = window_basis([(lo, hi)], 5, points=4000)
+    k = np.arange(1, 6)
+    exact = 2 * (np.exp(-2j * np.pi * k * hi) - np.exp(-2j * np.pi * k * lo)) / (-2j * np.pi * k)
+    np.testing.assert_allclose(U[:5, 0] + 1j * U[5:, 0], exact, rtol=1e-6)
