@@ -50,6 +50,7 @@ each evaluation is the force's at the harmonics, 1 - |F - F^| / |F| over k = 1..
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -95,6 +96,12 @@ class MotionData:
     drive: np.ndarray  # (DRIVE_GRID,) m/s: the plate's velocity over one period from t = 0
     basis: np.ndarray  # (2K, m): the reversals' friction deviations (``reversals.window_basis``)
     windows: tuple = ()  # the reversals' windows, shares of the period (``reversals.reversal_windows``)
+
+    @functools.cached_property
+    def drive_input(self) -> np.ndarray:
+        """The drivetrain simulation's input: ``drive`` over DRIVE_SETTLE + 1 periods and
+        the next sample, as a column."""
+        return np.append(np.tile(self.drive, DRIVE_SETTLE + 1), self.drive[0]).reshape(-1, 1)
 
     @property
     def harmonics(self) -> int:
@@ -213,13 +220,13 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
     v = data.drive / gain
     N = v.shape[0]
     freq = data.omega[0] / (2.0 * math.pi)
-    x0 = _periodic_state(x, gain, data)
+    x0 = _periodic_state(x, float(gain), data.omega, data.velocity, data.sign)
     A = np.array([[-(c_B + c_n) / m_s, c_n / m_s, -k_n / m_s, k_B / m_s],
                   [c_n / b, -(c_n + c_f2) / b, k_n / b, 0.0],
                   [1.0, -1.0, 0.0, 0.0],
                   [-1.0, 0.0, 0.0, 0.0]])  # states v_s, v_th, x_s - x_th, x_B - x_s; input v_B
     B = np.array([[c_B / m_s], [0.0], [0.0], [1.0]])
-    u = np.append(np.tile(v, DRIVE_SETTLE + 1), v[0]).reshape(-1, 1)
+    u = data.drive_input / gain
     _, states = run_exact(A, B, _ROTATION, np.array([f2_0]), np.array([b]), u, 1.0 / (N * freq), x0=x0, store=True)
     last = states[-N - 1: -1]
     T_B = c_B * (v - last[:, 0]) + k_B * last[:, 3]
@@ -229,18 +236,24 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
 _ROTATION = np.array([1], dtype=np.int64)  # the drivetrain's contact: the rotation (state 1)
 
 
-def _periodic_state(x, gain, data: MotionData) -> np.ndarray:
+@njit(cache=True)
+def _periodic_state(x, gain, omega, velocity, sign):
     """The drivetrain's state at t = 0 in the linear periodic solution with the rotation's
     friction a square wave with the plate's (the simulation's start)."""
     b, m_s, c_n, k_n, c_B, k_B, f2_0, c_f2 = x[0], x[1], x[3], x[4], x[5], x[6], x[9], x[10]
-    iw = 1j * data.omega
-    V = data.velocity / gain
-    z_B, z_n, y = c_B + k_B / iw, c_n + k_n / iw, iw * b + c_f2
-    F2 = f2_0 * data.sign
-    V_s = (z_B * V - z_n / (z_n + y) * F2) / (z_B + iw * m_s + z_n * y / (z_n + y))
-    V_th = (z_n * V_s - F2) / (z_n + y)
-    return np.array([np.sum(V_s.real), np.sum(V_th.real), np.sum(((V_s - V_th) / iw).real),
-                     np.sum(((V - V_s) / iw).real)])
+    out = np.zeros(4)
+    for k in range(omega.shape[0]):
+        iw = 1j * omega[k]
+        V = velocity[k] / gain
+        z_B, z_n, y = c_B + k_B / iw, c_n + k_n / iw, iw * b + c_f2
+        F2 = f2_0 * sign[k]
+        V_s = (z_B * V - z_n / (z_n + y) * F2) / (z_B + iw * m_s + z_n * y / (z_n + y))
+        V_th = (z_n * V_s - F2) / (z_n + y)
+        out[0] += V_s.real
+        out[1] += V_th.real
+        out[2] += ((V_s - V_th) / iw).real
+        out[3] += ((V - V_s) / iw).real
+    return out
 
 
 def _inputs(data: MotionData, p, gain):
