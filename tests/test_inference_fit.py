@@ -111,7 +111,8 @@ def test_the_default_likelihoods_fit_writes_every_output(tmp_path, record_file, 
     info = json.loads((out / "fit.json").read_text())
     assert info["likelihood"]["residual"] == "motion"
     rows = {r["name"]: r for r in csv.DictReader(open(out / "summary.csv"))}
-    assert all(rows[n]["kind"] == "sampled" for n in ("zeta_B", "tau", "alpha", "gain"))
+    assert all(rows[n]["kind"] == "sampled" for n in ("zeta_B", "tau", "gain"))
+    assert "alpha" not in rows  # the motion-in discrepancy is white by default
     assert rows["c_B"]["kind"] == "derived" and "sigma" not in rows and "rho" not in rows
     assert set(info["priors"]) == {n for n, r in rows.items() if r["kind"] == "sampled"}
     iv = info["b_interval"]

@@ -55,13 +55,13 @@ def test_too_few_draws_are_refused(models):
 
 
 def test_models_of_the_harmonic_likelihoods_predict_from_the_physical_draws_alone():
-    """The default likelihood's models sample their own tau, alpha and gain, which a joint
+    """The default likelihood's models sample their own tau and gain, which a joint
     fit's draws name per frequency (``tau_1Hz``) or not at all: the prediction simulates
     from the physical draws alone, as the time-domain models' do."""
     recs = {f: paper_record("A3", f, settings=GeneratorSettings(duration=d, ramp=0.8), seed=0)
             for f, d in ((1.0, 5.5), (1.5, 4.0))}  # three steady drive periods after the first
     default = {f: PosteriorModel(r) for f, r in recs.items()}
-    assert {"tau", "alpha", "gain", "zeta_B"} <= set(default[1.5].names)
+    assert {"tau", "gain", "zeta_B"} <= set(default[1.5].names)
     draws = {k: v for k, v in _draws(default[1.5]).items() if k not in ("tau", "alpha")}
     got = predict_record(default[1.5], [default[1.0]], draws, "A3", n_draws=20, rng=np.random.default_rng(0))
     time_domain = {f: PosteriorModel(r, likelihood=AR1) for f, r in recs.items()}

@@ -62,6 +62,12 @@ class LikelihoodSettings:
         the sensors' calibration uncertainties of ``records.SensorCalibration``, 0.25 %
         for the load cell and 0.5 % for the accelerometer, default their ratio's 0.56 %);
         0 fixes the gain at 1 and leaves it out of the sampled parameters.
+    decay : motion-in likelihood only: sample the discrepancy's spectral decay alpha
+        (variance tau^2 k^(-2 alpha), alpha uniform on 0 to 2). Default False: the
+        discrepancy is white (**assumption**: what the model lacks does not live at the
+        drive's first harmonics, where b and the viscous friction act; a decaying one
+        let the fits of paper-like records give up the fundamental, see docs/inference.md).
+        The force-in ``harmonic`` likelihood always samples alpha.
     """
 
     residual: str = "motion"
@@ -73,12 +79,15 @@ class LikelihoodSettings:
     pool: int = 2
     settle: int = 1
     gain_sd: float = SensorCalibration().ratio_sd
+    decay: bool = False
 
     @property
     def hyper_names(self) -> tuple[str, ...]:
-        """The sampled parameters of the likelihood itself, after the physical ones."""
+        """The sampled parameters of the likelihood itself, after the physical ones (the
+        motion-in likelihood's discrepancy is white, alpha 0, unless ``decay``)."""
         if self.residual in ("harmonic", "motion"):
-            return ("tau", "alpha") + (("gain",) if self.gain_sd > 0 else ())
+            decay = self.residual == "harmonic" or self.decay
+            return ("tau",) + (("alpha",) if decay else ()) + (("gain",) if self.gain_sd > 0 else ())
         return ("sigma", "rho") if self.residual == "ar1" else ("sigma",)
 
     def __post_init__(self) -> None:

@@ -390,10 +390,11 @@ class PosteriorModel:
 
     def hyper(self, theta) -> dict:
         """The likelihood's own parameters at theta (``LikelihoodSettings.hyper_names``),
-        in their units, by name; ``gain`` 1 where it is not sampled."""
+        in their units, by name; ``gain`` 1 and ``alpha`` 0 where they are not sampled."""
         vals = dict(zip(self.names[self.n_phys:], map(float, self.to_values(theta)[self.n_phys:])))
         if self.harmonic is not None:
             vals.setdefault("gain", 1.0)
+            vals.setdefault("alpha", 0.0)
         return vals
 
     def motion_terms(self, theta):

@@ -158,7 +158,8 @@ DISCREPANCY_PRIORS = {
 }
 
 #: The same for the motion-in likelihood (``motion``), whose discrepancy is a force: tau
-#: in N, from far below a load cell's noise to above any test's force.
+#: in N, from far below a load cell's noise to above any test's force. Its alpha is
+#: sampled only with ``LikelihoodSettings(decay=True)``; by default it is 0 (white).
 MOTION_DISCREPANCY_PRIORS = {
     "tau": LogUniform(1e-3, 1e5),
     "alpha": Uniform(0.0, 2.0),
