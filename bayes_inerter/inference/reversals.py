@@ -11,8 +11,8 @@ around the reversal, so the likelihood marginalises it there:
 - the windows: each cluster of the reconstructed plate velocity's zero crossings (those
   within ``CLUSTER`` of a period of each other), widened on each side by ``WIDEN`` times
   the crossing's timing uncertainty sigma_v / |a| (sigma_v: the reconstructed
-  velocity's noise from the periods' scatter, a: the plate's acceleration there) and by
-  at least ``MIN_HALF_WIDTH`` of the period;
+  velocity's noise from the periods' scatter, |a|: the plate's peak acceleration, the
+  drive's at a reversal) and by at least ``MIN_HALF_WIDTH`` of the period;
 - the friction's mean inside a window: a straight ramp between its values on either side
   (the sign wave's harmonics, :func:`ramped_sign`);
 - its deviation from that ramp: a_j P_j(x) with P_j the Legendre polynomials of degree
@@ -76,12 +76,14 @@ def reversal_windows(v: np.ndarray, a: np.ndarray, sigma_v: float, period: float
             clusters.append(current)
             current = [c]
     clusters.append(current)
+    # the velocity's slope through a reversal: the drive's peak acceleration (a stuck
+    # plate's own acceleration is near zero in its dwell, which would not say how fast
+    # the drive takes the velocity through zero)
+    slope = float(np.max(np.abs(a))) * period  # m/s per period share
+    half = max(MIN_HALF_WIDTH, WIDEN * sigma_v / slope if slope > 0 else CLUSTER)
     out = []
     for cl in clusters:
         lo, hi = cl[0], cl[-1]
-        mid = ((lo + hi) // 2) % n
-        slope = abs(a[mid]) * period  # m/s per period share
-        half = max(MIN_HALF_WIDTH, WIDEN * sigma_v / slope if slope > 0 else CLUSTER)
         start = (lo - 0.5) / n - half
         shift = math.floor(start + half)  # the crossings' start in [0, 1)
         out.append((start - shift, (hi - 0.5) / n + half - shift))
