@@ -31,8 +31,8 @@ missed the measured force by 144 N rms a harmonic at the truth, the simulation b
 0.13 N (``tests/test_inference_motion.py``).
 
 Inside a short window around each of the plate's reversals the motion does not fix the
-plate's friction (a stuck plate, a noisy zero crossing): there S_k is formed from a
-straight ramp, and the friction's deviation from it is marginalised
+plate's friction (a stuck plate, a noisy zero crossing): there S_k is formed with one
+switch at the window's middle, and the friction's deviation from it is marginalised
 (:mod:`.reversals`, its term added to the harmonics' log-likelihood in equal shares).
 
 The plate's mode and its chatter, and every simulation, leave the likelihood; what the
@@ -63,7 +63,7 @@ from ..models import FIELDS
 from ..records.record import Record
 from ..simulate import run_exact
 from .harmonic import HarmonicData, harmonic_data
-from .reversals import SD, ramped_sign, reversal_correction, reversal_windows, window_basis
+from .reversals import SD, switched_sign, reversal_correction, reversal_windows, window_basis
 
 __all__ = ["MotionData", "motion_data", "predicted_force", "bearing_force", "motion_variance", "motion_loglik",
            "fundamental_misfit", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "ORDER", "FUNDAMENTAL_MAX"]
@@ -130,7 +130,7 @@ def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, se
     velocity, accel, sigma_v = _plate_motion(record, freq, max(sign_band, cutoff), pool, settle)
     v = velocity(SIGN_GRID)
     windows = tuple(reversal_windows(v, accel(SIGN_GRID), sigma_v, 1.0 / freq))
-    sign = (np.fft.rfft(ramped_sign(v, windows)) / SIGN_GRID * 2.0)[1: data.harmonics + 1]
+    sign = (np.fft.rfft(switched_sign(v, windows)) / SIGN_GRID * 2.0)[1: data.harmonics + 1]
     return MotionData(data, data.accel / (1j * data.omega), sign, data.omega, velocity(DRIVE_GRID),
                       window_basis(windows, data.harmonics), windows)
 

@@ -9,14 +9,19 @@ In all three cases the motion alone does not fix the friction inside a short win
 around the reversal, so the likelihood marginalises it there:
 
 - the windows: each cluster of the reconstructed plate velocity's zero crossings (those
-  within ``CLUSTER`` of a period of each other), widened on each side by ``WIDEN`` times
+  within ``CLUSTER`` of a period of each other) with the stretch around it where the
+  velocity stays below ``DWELL`` of its peak (a stuck plate's dwell), widened on each side by ``WIDEN`` times
   the crossing's timing uncertainty sigma_v / |a| (sigma_v: the reconstructed
   velocity's noise from the periods' scatter, |a|: the plate's peak acceleration, the
   drive's at a reversal) and by at least ``MIN_HALF_WIDTH`` of the period;
-- the friction's mean inside a window: a straight ramp between its values on either side
-  (the sign wave's harmonics, :func:`ramped_sign`);
-- its deviation from that ramp: a_j P_j(x) with P_j the Legendre polynomials of degree
-  j < ``DEGREES`` on the window and a_j ~ N(0, (``SD`` f1_0)^2) (**assumption**: the
+- the friction's mean inside a window: one switch, midway between its first and last
+  zero crossing (the sign wave's
+  harmonics, :func:`switched_sign`; a straight ramp across the window was tried first
+  and moved the apparent mass of a noise-free A3 record at 1.5 Hz by 0.13 % once the
+  windows took in the slow stretch around a reversal);
+- its deviation from that mean: a_j P_j(x) with P_j the Legendre polynomials of degree
+  j < d on the window (d at least ``DEGREES``, more for a wide window) and
+  a_j ~ N(0, (``SD`` f1_0)^2) (**assumption**: the
   deviation is of the friction's own size), whose harmonics form the columns of the
   basis U (2K real rows: the real parts, then the imaginary parts).
 
@@ -37,8 +42,8 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["reversal_windows", "ramped_sign", "window_basis", "reversal_correction", "CLUSTER", "WIDEN",
-           "MIN_HALF_WIDTH", "DEGREES", "SD"]
+__all__ = ["reversal_windows", "switched_sign", "window_basis", "reversal_correction", "CLUSTER", "WIDEN",
+           "MIN_HALF_WIDTH", "DWELL", "DEGREES", "MAX_DEGREES", "SD"]
 
 #: Zero crossings closer than this share of a period are one reversal.
 CLUSTER = 0.1
@@ -46,8 +51,14 @@ CLUSTER = 0.1
 WIDEN = 3.0
 #: **Assumption**: the least half-width of a window, as a share of the period.
 MIN_HALF_WIDTH = 0.002
-#: Legendre polynomials per window for the friction's deviation from the ramp.
+#: **Assumption**: a window takes in the stretch around its crossings where the velocity
+#: stays below this share of its peak (a stuck plate's dwell).
+DWELL = 0.02
+#: Legendre polynomials per window for the friction's deviation from its mean, at least;
+#: a window also gets one for each degree of freedom of the harmonics 1..K over its
+#: width (2 K times its share of the period), at most ``MAX_DEGREES``.
 DEGREES = 4
+MAX_DEGREES = 24
 #: **Assumption**: the prior sd of each deviation's amplitude, in units of f1_0.
 SD = 1.0
 
@@ -81,40 +92,57 @@ def reversal_windows(v: np.ndarray, a: np.ndarray, sigma_v: float, period: float
     # the drive takes the velocity through zero)
     slope = float(np.max(np.abs(a))) * period  # m/s per period share
     half = max(MIN_HALF_WIDTH, WIDEN * sigma_v / slope if slope > 0 else CLUSTER)
+    # a plate that sticks rests near zero velocity through its dwell: the window takes in
+    # the slow stretch on either side of the crossings
+    slow = np.abs(v) < DWELL * float(np.max(np.abs(v)))
     out = []
     for cl in clusters:
         lo, hi = cl[0], cl[-1]
+        while slow[(lo - 1) % n] and hi - lo < gap:
+            lo -= 1
+        while slow[(hi + 1) % n] and hi - lo < gap:
+            hi += 1
         start = (lo - 0.5) / n - half
         shift = math.floor(start + half)  # the crossings' start in [0, 1)
         out.append((start - shift, (hi - 0.5) / n + half - shift))
     return sorted(out)
 
 
-def ramped_sign(v: np.ndarray, windows) -> np.ndarray:
-    """sgn(v) on its grid with a straight ramp across each window (the friction's mean)."""
+def switched_sign(v: np.ndarray, windows) -> np.ndarray:
+    """sgn(v) on its grid with one switch in each window, midway between its first and
+    last zero crossing (the friction's mean there: a noisy crossing's chatter and a
+    dwell's slow passage are left to the marginalised deviation)."""
     n = v.shape[0]
     s = np.sign(v)
     s[s == 0] = 1.0
-    x = np.arange(n) / n
+    out = s.copy()
     for lo, hi in windows:
-        before, after = s[int(math.floor(lo * n)) % n], s[int(math.ceil(hi * n)) % n]
-        for shift in (-1.0, 0.0, 1.0):
-            inside = (x + shift >= lo) & (x + shift <= hi)
-            s[inside] = before + (after - before) * (x[inside] + shift - lo) / (hi - lo)
-    return s
+        a, b = int(math.floor(lo * n)), int(math.ceil(hi * n))
+        idx = np.arange(a, b + 1)
+        inside = s[idx % n]
+        flips = np.flatnonzero(inside[1:] != inside[:-1]) + 1  # a crossing before idx[j]
+        mid = 0.5 * (idx[flips[0]] + idx[flips[-1]]) if flips.size else 0.5 * (a + b)
+        out[idx % n] = np.where(idx < mid, inside[0], inside[-1])
+    return out
+
+
+def window_degrees(lo: float, hi: float, K: int) -> int:
+    """The Legendre polynomials a window [lo, hi] gets (see :data:`DEGREES`)."""
+    return int(min(MAX_DEGREES, max(DEGREES, math.ceil(2 * K * (hi - lo)))))
 
 
 def window_basis(windows, K: int, points: int = 64) -> np.ndarray:
-    """U (2K, DEGREES * windows): the harmonics 1..K (real parts, then imaginary parts) of
-    the Legendre polynomials on each window, X_k = 2 int P_j(x(t)) exp(-i k w t) dt / T."""
+    """U (2K, sum of the windows' degrees): the harmonics 1..K (real parts, then imaginary
+    parts) of the Legendre polynomials on each window, X_k = 2 int P_j(x(t)) exp(-i k w t) dt / T."""
     k = np.arange(1, K + 1)
     cols = []
     for lo, hi in windows:
+        d = window_degrees(lo, hi, K)
         u = lo + (np.arange(points) + 0.5) / points * (hi - lo)  # midpoints, in period shares
         x = 2.0 * (u - lo) / (hi - lo) - 1.0
         e = np.exp(-2j * math.pi * np.outer(k, u)) * (2.0 * (hi - lo) / points)
-        for j in range(DEGREES):
-            X = e @ np.polynomial.legendre.legval(x, np.eye(DEGREES)[j])
+        for j in range(d):
+            X = e @ np.polynomial.legendre.legval(x, np.eye(d)[j])
             cols.append(np.concatenate([X.real, X.imag]))
     return np.array(cols).T if cols else np.zeros((2 * K, 0))
 
