@@ -42,8 +42,8 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["reversal_windows", "switched_sign", "window_basis", "reversal_correction", "CLUSTER", "WIDEN",
-           "MIN_HALF_WIDTH", "DWELL", "DEGREES", "MAX_DEGREES", "SD"]
+__all__ = ["reversal_windows", "switched_sign", "window_degrees", "window_basis", "reversal_correction", "CLUSTER",
+           "WIDEN", "MIN_HALF_WIDTH", "DWELL", "DEGREES", "MAX_DEGREES", "SD"]
 
 #: Zero crossings closer than this share of a period are one reversal.
 CLUSTER = 0.1
