@@ -142,28 +142,32 @@ if ORDER != FIELDS:  # the model hands the kernels its field vector as it is
 
 
 @njit(cache=True)
+def _screw(iw, V, F2, x):
+    """The module docstring's algebra at one harmonic (iw = i w): the screw's translation
+    V_s for the plate's velocity V and the rotation's Coulomb force F2, with the link
+    impedances z_B, z_n, the rotation's admittance y and the denominator it uses."""
+    b, m_s, c_n, k_n, c_B, k_B, c_f2 = x[0], x[1], x[3], x[4], x[5], x[6], x[10]
+    z_B = c_B + k_B / iw
+    z_n = c_n + k_n / iw
+    y = iw * b + c_f2
+    den = z_B + iw * m_s + z_n * y / (z_n + y)
+    return (z_B * V - z_n / (z_n + y) * F2) / den, z_B, z_n, y, den
+
+
+@njit(cache=True)
 def _predicted(x, gain, omega, velocity, sign, bearing, simulated):
     """(F^_k, Y_k) of the module docstring for the parameters ``x`` in :data:`ORDER`;
     with ``simulated``, the bearing's force is ``bearing`` (the drivetrain's simulation)."""
-    b, m_s, m_B, c_n, k_n, c_B, k_B, f1_0, c_f1, f2_0, c_f2 = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], \
-        x[8], x[9], x[10]
+    m_B, f1_0, c_f1, f2_0 = x[2], x[7], x[8], x[9]
     K = omega.shape[0]
     F = np.empty(K, dtype=np.complex128)
     Y = np.empty(K, dtype=np.complex128)
     for k in range(K):
         iw = 1j * omega[k]
         V = velocity[k] / gain
-        z_B = c_B + k_B / iw
-        z_n = c_n + k_n / iw
-        y = iw * b + c_f2
-        Z_f = z_n * y / (z_n + y)
-        g = z_n / (z_n + y)
-        den = z_B + iw * m_s + Z_f
-        if simulated:
-            F[k] = (iw * m_B + c_f1) * V + f1_0 * sign[k] + bearing[k]
-        else:
-            V_s = (z_B * V - g * f2_0 * sign[k]) / den
-            F[k] = (iw * m_B + c_f1) * V + f1_0 * sign[k] + z_B * (V - V_s)
+        V_s, z_B, _, _, den = _screw(iw, V, f2_0 * sign[k], x)
+        plate = (iw * m_B + c_f1) * V + f1_0 * sign[k]
+        F[k] = plate + (bearing[k] if simulated else z_B * (V - V_s))
         Y[k] = (iw * m_B + c_f1 + z_B * (1.0 - z_B / den)) / iw / gain
     return F, Y
 
@@ -242,14 +246,12 @@ _ROTATION = np.array([1], dtype=np.int64)  # the drivetrain's contact: the rotat
 def _periodic_state(x, gain, omega, velocity, sign):
     """The drivetrain's state at t = 0 in the linear periodic solution with the rotation's
     friction a square wave with the plate's (the simulation's start)."""
-    b, m_s, c_n, k_n, c_B, k_B, f2_0, c_f2 = x[0], x[1], x[3], x[4], x[5], x[6], x[9], x[10]
     out = np.zeros(4)
     for k in range(omega.shape[0]):
         iw = 1j * omega[k]
         V = velocity[k] / gain
-        z_B, z_n, y = c_B + k_B / iw, c_n + k_n / iw, iw * b + c_f2
-        F2 = f2_0 * sign[k]
-        V_s = (z_B * V - z_n / (z_n + y) * F2) / (z_B + iw * m_s + z_n * y / (z_n + y))
+        F2 = x[9] * sign[k]
+        V_s, _, z_n, y, _ = _screw(iw, V, F2, x)
         V_th = (z_n * V_s - F2) / (z_n + y)
         out[0] += V_s.real
         out[1] += V_th.real

@@ -63,14 +63,20 @@ MAX_DEGREES = 24
 SD = 1.0
 
 
+def _sign(v: np.ndarray) -> np.ndarray:
+    """sgn(v) with 0 read as +1 (a crossing is where it changes)."""
+    s = np.sign(v)
+    s[s == 0] = 1.0
+    return s
+
+
 def reversal_windows(v: np.ndarray, a: np.ndarray, sigma_v: float, period: float) -> list[tuple[float, float]]:
     """The windows (start, end) as shares of the period, in time order (a window may reach
     below 0 or past 1: it wraps) around the reversals of the velocity ``v`` (m/s) sampled on a
     uniform grid over one period of ``period`` s; ``a`` the acceleration on that grid
     (m/s^2), ``sigma_v`` the velocity's noise sd (m/s)."""
     n = v.shape[0]
-    s = np.sign(v)
-    s[s == 0] = 1.0
+    s = _sign(v)
     cross = np.flatnonzero(s != np.roll(s, 1))  # a crossing between sample i-1 and i
     if cross.size == 0:
         return []
@@ -113,8 +119,7 @@ def switched_sign(v: np.ndarray, windows) -> np.ndarray:
     last zero crossing (the friction's mean there: a noisy crossing's chatter and a
     dwell's slow passage are left to the marginalised deviation)."""
     n = v.shape[0]
-    s = np.sign(v)
-    s[s == 0] = 1.0
+    s = _sign(v)
     out = s.copy()
     for lo, hi in windows:
         a, b = int(math.floor(lo * n)), int(math.ceil(hi * n))
@@ -141,10 +146,9 @@ def window_basis(windows, K: int, points: int = 64) -> np.ndarray:
         u = lo + (np.arange(points) + 0.5) / points * (hi - lo)  # midpoints, in period shares
         x = 2.0 * (u - lo) / (hi - lo) - 1.0
         e = np.exp(-2j * math.pi * np.outer(k, u)) * (2.0 * (hi - lo) / points)
-        for j in range(d):
-            X = e @ np.polynomial.legendre.legval(x, np.eye(d)[j])
-            cols.append(np.concatenate([X.real, X.imag]))
-    return np.array(cols).T if cols else np.zeros((2 * K, 0))
+        X = e @ np.polynomial.legendre.legvander(x, d - 1)  # (K, d): every degree at once
+        cols.append(np.vstack([X.real, X.imag]))
+    return np.hstack(cols) if cols else np.zeros((2 * K, 0))
 
 
 @njit(cache=True)
