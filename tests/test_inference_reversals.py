@@ -66,21 +66,23 @@ def test_the_sign_switches_once_at_a_windows_middle_and_is_the_sign_outside():
 
 
 def test_the_correction_is_the_marginal_gaussian_density():
-    """log N(r; 0, D + s^2 U U') - log N(r; 0, D), with D each harmonic's V_k / 2 for its
-    real and imaginary part: the Woodbury form against the dense density."""
+    """log N(r; 0, D + U S^2 U') - log N(r; 0, D), with D each harmonic's V_k / 2 for its
+    real and imaginary part and S the columns' prior sds: the Woodbury form against the
+    dense density."""
     rng = np.random.default_rng(3)
     K = 12
     U = window_basis([(0.2, 0.26), (0.7, 0.77)], K)
     assert U.shape == (2 * K, 2 * DEGREES)
     V = rng.uniform(0.5, 2.0, K)
     r = rng.standard_normal(K) + 1j * rng.standard_normal(K)
-    s = 3.0
+    s = np.linspace(0.5, 3.0, U.shape[1])  # unequal: each column its own prior sd
     D = np.concatenate([V, V]) / 2
     x = np.concatenate([r.real, r.imag])
-    dense = (stats.multivariate_normal(np.zeros(2 * K), np.diag(D) + s**2 * U @ U.T).logpdf(x)
+    dense = (stats.multivariate_normal(np.zeros(2 * K), np.diag(D) + (U * s**2) @ U.T).logpdf(x)
              - stats.multivariate_normal(np.zeros(2 * K), np.diag(D)).logpdf(x))
     assert reversal_correction(U, V, r, s) == pytest.approx(dense, rel=1e-9, abs=1e-9)
-    assert reversal_correction(U, V, r, 0.0) == 0.0
+    assert reversal_correction(U, V, r, np.zeros(U.shape[1])) == 0.0
+    assert reversal_correction(U[:, :0], V, r, s[:0]) == 0.0
 
 
 def test_the_basis_holds_the_windows_legendre_harmonics():

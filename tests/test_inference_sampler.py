@@ -111,3 +111,35 @@ def test_a_checkpoint_continues_only_with_the_kernel_it_was_sampled_with(model, 
             run_sampler(model, path, nwalkers=24, seed=5, steps=50, start=model.test_start, adaptation=adaptation)
     assert run_sampler(model, path, nwalkers=24, seed=5, steps=50, start=model.test_start,
                        adaptation=None, fresh=True).iteration == 50
+
+
+def test_a_chain_keeps_its_likelihoods_reference_point_when_continued(tmp_path):
+    """The motion-in likelihood's normaliser takes the noise at the chain's start; the
+    checkpoint remembers that point, so a continued chain samples the same posterior
+    without searching for a start again."""
+    import dataclasses
+
+    from bayes_inerter import paper_parameters
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.checkpoint import stored_identity
+    from bayes_inerter.records import generate_record
+
+    pm = PosteriorModel(generate_record(paper_parameters("A3"), 1.5, rng=0, setting_name="A3"))
+    assert pm.needs_reference and pm.reference_noise is None
+    theta = pm.to_theta(dataclasses.replace(paper_parameters("A3"), c_B=2420.0), hyper={"tau": 1.0})
+    path = tmp_path / "c.h5"
+    first = run_sampler(pm, path, nwalkers=2 * pm.ndim + 2, seed=1, steps=4, start=(theta, pm.log_prob(theta)[0]),
+                        adaptation=None)
+    assert first.model.reference == tuple(theta) and first.model.reference_noise is not None
+    assert stored_identity(path)["reference"] == list(theta)
+    # the normaliser differs from the parameters' own: the chain's density is the referenced model's
+    lp = first.log_prob()[-1]  # in theta, without the coordinates' Jacobian
+    walkers = first.chain()[-1]
+    np.testing.assert_allclose(lp, [first.model.log_prob(w)[0] for w in walkers], rtol=1e-9)
+    assert np.all(np.abs(lp - [pm.log_prob(w)[0] for w in walkers]) > 1e-6)
+
+    def no_search():
+        raise AssertionError("a continued chain searched for a start")
+
+    again = run_sampler(pm, path, nwalkers=2 * pm.ndim + 2, seed=1, steps=8, start=no_search, adaptation=None)
+    assert again.iteration == 8 and again.model.reference == first.model.reference

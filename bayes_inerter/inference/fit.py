@@ -183,7 +183,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         got = _sample_into(out, pm, nwalkers=walkers, steps=steps, seed=seed, fresh=fresh, processes=processes,
                            convergence=convergence, progress=progress, report=report, coordinates=coords,
                            adaptation=adaptation, checkpoint_seconds=checkpoint_seconds)
-        run, sample = got.run, got.sample
+        run, sample, pm = got.run, got.sample, got.model
         idata, sims = to_inference_data(pm, sample, rng=np.random.default_rng(seed + 1))
         t_post = time.perf_counter() - t0 - got.seconds
         idata.to_netcdf(str(out / "posterior.nc"))
@@ -292,6 +292,8 @@ class _Sampled:
     ended: list
     shrink: dict
     seconds: float
+    #: the model the chain sampled (``SamplerRun.model``)
+    model: object = None
     #: how near the draws come to the coordinates' domain edge (``Coordinates.domain_edge``;
     #: set by ``_finish``, which warns of it, and kept in fit.json)
     edge: float | None = None
@@ -302,10 +304,11 @@ def _sample_into(out: Path, model, **options) -> _Sampled:
     draws and read its summary rows and end-state warnings (``_finish`` completes them)."""
     t0 = time.perf_counter()
     run = run_sampler(model, out / "chain.h5", **options)
+    model = run.model if run.model is not None else model  # with its reference point, if it took one
     seconds = time.perf_counter() - t0
     sample = posterior_sample(model, run)
     rows = summary_rows(sample, kinds=_kinds(model, sample))
-    return _Sampled(run, sample, rows, end_state_warnings(model, sample), contraction(model, sample), seconds)
+    return _Sampled(run, sample, rows, end_state_warnings(model, sample), contraction(model, sample), seconds, model)
 
 
 def _kinds(model, sample) -> dict:

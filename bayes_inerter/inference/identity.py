@@ -46,6 +46,7 @@ def run_identity(model, coordinates, adaptation, moves, nwalkers: int) -> dict:
         "moves": [[type(m).__name__, float(w)] for m, w in moves],
         "nwalkers": int(nwalkers),
         "ndim": int(model.ndim),
+        "reference": _plain(getattr(model, "reference", None)),
     }
 
 
@@ -101,6 +102,7 @@ _NAMES = {
     "moves": "with other ensemble moves",
     "nwalkers": "for another number of walkers",
     "ndim": "for another number of parameters",
+    "reference": "with its likelihood's normaliser at another reference point",
 }
 
 

@@ -14,11 +14,13 @@ from ..records.conditioning import LOWPASS_HZ
 from ..records.sensitivity import SensorCalibration
 from ..simulate import SAMPLINGS
 
-__all__ = ["LikelihoodSettings", "RESIDUALS", "ar1_pointwise", "ar1_marginal"]
+__all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "ar1_pointwise", "ar1_marginal"]
 
 #: The likelihoods: the time-domain residual as a stationary AR(1) process or white, and
 #: the harmonic likelihood with errors in both signals and a sampled discrepancy.
 RESIDUALS = ("ar1", "iid", "harmonic", "motion")
+#: The motion-in likelihood's normalisers (``LikelihoodSettings.normaliser``).
+NORMALISERS = ("reference", "full")
 
 
 @dataclass(frozen=True)
@@ -68,6 +70,13 @@ class LikelihoodSettings:
         drive's first harmonics, where b and the viscous friction act; a decaying one
         let the fits of paper-like records give up the fundamental, see docs/inference.md).
         The force-in ``harmonic`` likelihood always samples alpha.
+    normaliser : motion-in likelihood only: the Gaussian normaliser's noise variance.
+        "reference" (default): the noise at a reference point, the start search's
+        optimum (**assumption**; :mod:`.motion` explains why: with the parameters' own,
+        the measured motion's noise pulls b low); "full": the parameters' own.
+    law : motion-in likelihood only: marginalise an odd deviation of the plate's friction
+        from Coulomb's and the viscous law, a function of the measured velocity
+        (:mod:`.friction_law`; default True).
     """
 
     residual: str = "motion"
@@ -80,6 +89,8 @@ class LikelihoodSettings:
     settle: int = 1
     gain_sd: float = SensorCalibration().ratio_sd
     decay: bool = False
+    normaliser: str = "reference"
+    law: bool = True
 
     @property
     def hyper_names(self) -> tuple[str, ...]:
@@ -97,6 +108,8 @@ class LikelihoodSettings:
             raise ValueError(f"pool must be a whole number >= 0, got {self.pool!r}")
         if not (isinstance(self.settle, int) and self.settle >= 0):
             raise ValueError(f"settle must be a whole number >= 0, got {self.settle!r}")
+        if self.normaliser not in NORMALISERS:
+            raise ValueError(f"normaliser must be one of {', '.join(NORMALISERS)}, got {self.normaliser!r}")
         if not (0 <= self.gain_sd < 1):
             raise ValueError(f"gain_sd must lie in [0, 1), got {self.gain_sd}")
         if not self.cutoff > 0:

@@ -134,6 +134,9 @@ class PosteriorModel:
     likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
     split: bool | None = None
     modal: bool | None = None
+    #: theta at which the motion-in likelihood's normaliser takes the noise
+    #: (``LikelihoodSettings.normaliser``; :meth:`with_reference`)
+    reference: tuple | None = None
 
     def __post_init__(self) -> None:
         if self.model not in MODELS:
@@ -152,6 +155,16 @@ class PosteriorModel:
         self.fs = rec.fs
         self._set_data()
         self._set_simulation()
+        self._set_reference()
+
+    def _set_reference(self) -> None:
+        self.reference_noise = None
+        if self.reference is not None and self.motion is not None and self.likelihood.normaliser == "reference":
+            theta = np.asarray(self.reference, dtype=float)
+            if len(theta) != self.ndim:
+                raise ValueError(f"the reference has {len(theta)} parameters; the model samples {self.ndim}")
+            self.reference_noise = motion_variance(self.motion, self.field_vector(theta), 0.0, 0.0,
+                                                   self.hyper(theta)["gain"])[0]
 
     def _set_parameters(self) -> None:
         """The sampled parameters (``names``, split or not), their priors, and the derived
@@ -204,7 +217,7 @@ class PosteriorModel:
             )
         self.measured_lp = lowpass(rec.accel, self.fs, lk.cutoff)
         self.observed = self.measured_lp[self.grid]
-        self.motion = (motion_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle)
+        self.motion = (motion_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle, law=lk.law)
                        if lk.residual == "motion" else None)
         self.harmonic = (self.motion.harmonic if self.motion is not None else
                          harmonic_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle)
@@ -404,7 +417,8 @@ class PosteriorModel:
         try:
             x = self.field_vector(theta)
             h = self.hyper(theta)
-            terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True)
+            terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True,
+                                       reference=self.reference_noise)
         except (SimulationError, ValueError):
             return None
         return (terms, phi) if np.all(np.isfinite(terms)) else None
@@ -539,3 +553,16 @@ class PosteriorModel:
 
     def replace(self, **changes) -> PosteriorModel:
         return dataclasses.replace(self, **changes)
+
+    @property
+    def needs_reference(self) -> bool:
+        """True where the likelihood's normaliser waits for a reference point
+        (:meth:`with_reference`): the motion-in likelihood with ``normaliser="reference"``."""
+        return self.motion is not None and self.likelihood.normaliser == "reference" and self.reference is None
+
+    def with_reference(self, theta) -> PosteriorModel:
+        """This model with the normaliser's noise taken at ``theta`` (``motion``'s module
+        docstring); the model itself where its likelihood has no such normaliser."""
+        if self.motion is None or self.likelihood.normaliser != "reference":
+            return self
+        return self.replace(reference=tuple(float(v) for v in np.asarray(theta, dtype=float)))

@@ -153,12 +153,12 @@ def window_basis(windows, K: int, points: int = 64) -> np.ndarray:
 
 @njit(cache=True)
 def reversal_correction(U, V, r, s):
-    """What the reversals' marginal adds to the independent harmonics' log-likelihood
-    (module docstring): U the basis, V each harmonic's complex variance, r the complex
-    residual, s the deviations' prior sd (N)."""
+    """What the marginal of Gaussian deviations U beta adds to the independent harmonics'
+    log-likelihood (module docstring): U the basis, V each harmonic's complex variance,
+    r the complex residual, s (m,) each column's prior sd (N)."""
     m = U.shape[1]
     K = V.shape[0]
-    if m == 0 or s <= 0.0:
+    if m == 0:
         return 0.0
     M = np.zeros((m, m))
     w = np.zeros(m)
@@ -170,16 +170,16 @@ def reversal_correction(U, V, r, s):
             w[a] += ua * ri
             for c in range(a, m):
                 M[a, c] += ua * U[i, c]
-    s2 = s * s
+    G = np.empty((m, m))
     for a in range(m):
-        for c in range(a + 1, m):
-            M[c, a] = M[a, c]
-    G = s2 * M
-    for a in range(m):
+        w[a] *= s[a]
+        for c in range(a, m):
+            G[a, c] = s[a] * M[a, c] * s[c]
+            G[c, a] = G[a, c]
         G[a, a] += 1.0
     L = np.linalg.cholesky(G)
     logdet = 0.0
     for a in range(m):
         logdet += 2.0 * math.log(L[a, a])
     z = np.linalg.solve(L, w)
-    return -0.5 * logdet + 0.5 * s2 * float(np.dot(z, z))
+    return -0.5 * logdet + 0.5 * float(np.dot(z, z))

@@ -123,6 +123,9 @@ class SamplerRun:
     #: steps left out of tau, R-hat, ESS and the kept draws: the transient or the
     #: convergence rule's warm-up share of the chain, whichever is longer
     warmup: int = 0
+    #: the model the chain sampled: the one given, with its likelihood's reference point
+    #: where it takes one (``PosteriorModel.with_reference``)
+    model: object = None
 
     @property
     def iteration(self) -> int:
@@ -221,6 +224,8 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     if not fresh:  # a checkpoint at a reference frequency within the records' resolution goes on in its own
         coords = continue_at(coords, (stored_identity(checkpoint) or {}).get("coordinates"),
                              reference_tolerance(model))
+    if getattr(model, "needs_reference", False):
+        model, start = _with_reference(model, checkpoint, fresh, start, seed, processes, coords)
     target = Target(model, coords)
     schedule = Schedule(moves or default_moves(model, coordinates=coords), adaptation)
     identity = run_identity(model, coords, adaptation, schedule.base, nwalkers)
@@ -242,7 +247,7 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
             sampler = emcee.EnsembleSampler(nwalkers, model.ndim, target.batch, vectorize=True, backend=backend,
                                             blobs_dtype=float)
             return SamplerRun(sampler, ok, check.tau, reason, start_theta, recovered, schedule.used(), coords,
-                              check.transient, done, check.warmup)
+                              check.transient, done, check.warmup, model)
         finally:
             try:  # a run stopped by Ctrl-C or an error: bring the twin up to date if possible
                 with interrupts_held():
@@ -299,6 +304,25 @@ def _open(checkpoint: Path, identity: dict, fresh: bool, write_seconds: float):
         return opened.backend, opened.steps, opened.recovered
     backend = new_checkpoint(checkpoint, identity=identity, write_seconds=write_seconds)
     return backend, 0, opened.recovered if opened else ""
+
+
+def _with_reference(model, checkpoint, fresh: bool, start, seed: int, processes: int, coords):
+    """``model`` with its likelihood's reference point (``PosteriorModel.with_reference``)
+    and the start to use: the checkpoint's reference where it continues one, else the
+    start (``start`` or the optimiser's, with the parameters' own normaliser) becomes it."""
+    stored = None if fresh else (stored_identity(checkpoint) or {}).get("reference")
+    if stored is not None:
+        return model.with_reference(stored), start
+    if start is None:
+        with make_executor(processes, state=Target(model, coords)) as executor, interrupt_raised():
+            many = ((lambda name, xs: executor.map_state(objective_at, [(name, x) for x in xs]))
+                    if executor.workers > 1 else None)
+            start = find_start(model, np.random.default_rng(seed), many=many)
+    elif callable(start):
+        start = start()
+    theta = np.asarray(start[0], dtype=float)
+    model = model.with_reference(theta)
+    return model, (theta, model.log_prob(theta)[0])
 
 
 def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Executor):
