@@ -306,6 +306,14 @@ def _open(checkpoint: Path, identity: dict, fresh: bool, write_seconds: float):
     return backend, 0, opened.recovered if opened else ""
 
 
+def _many(executor: Executor):
+    """The start search's evaluator of many points on ``executor``'s workers (None: one
+    process)."""
+    if executor.workers <= 1:
+        return None
+    return lambda name, xs: executor.map_state(objective_at, [(name, x) for x in xs])
+
+
 def _with_reference(model, checkpoint, fresh: bool, start, seed: int, processes: int, coords):
     """``model`` with its likelihood's reference point (``PosteriorModel.with_reference``)
     and the start to use: the checkpoint's reference where it continues one, else the
@@ -315,9 +323,7 @@ def _with_reference(model, checkpoint, fresh: bool, start, seed: int, processes:
         return model.with_reference(stored), start
     if start is None:
         with make_executor(processes, state=Target(model, coords)) as executor, interrupt_raised():
-            many = ((lambda name, xs: executor.map_state(objective_at, [(name, x) for x in xs]))
-                    if executor.workers > 1 else None)
-            start = find_start(model, np.random.default_rng(seed), many=many)
+            start = find_start(model, np.random.default_rng(seed), many=_many(executor))
     elif callable(start):
         start = start()
     theta = np.asarray(start[0], dtype=float)
@@ -331,9 +337,7 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
     model, coords = target.model, target.coords
     rng = np.random.default_rng(seed)
     if start is None:
-        many = ((lambda name, xs: executor.map_state(objective_at, [(name, x) for x in xs]))
-                if executor.workers > 1 else None)
-        start = find_start(model, rng, many=many)
+        start = find_start(model, rng, many=_many(executor))
     elif callable(start):
         start = start()
     start_theta = np.asarray(start[0], dtype=float)
