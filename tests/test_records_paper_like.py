@@ -44,7 +44,7 @@ def test_impossible_ranges_are_refused(bad):
 
 @pytest.mark.slow
 def test_a_paper_like_record_keeps_the_papers_b_and_says_what_it_is():
-    dev = PaperLike(base=GeneratorSettings(duration=1.5, ramp=0.5, oversample=8))
+    dev = PaperLike(base=GeneratorSettings(duration=1.5, ramp=0.5, oversample=12))  # above the 5 kHz sensor
     rec = paper_like_record("A1", 1.5, seed=2, device=dev)
     assert rec.metadata["truth"] == "paper-like" and rec.metadata["setting"] == "A1"
     assert rec.metadata["true_parameters"]["b"] == paper_parameters("A1").b
