@@ -211,8 +211,9 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
         drawn around it by ``optimize.laplace_ensemble``.
     coordinates : where the walkers move: a :class:`.coordinates.Coordinates` or the name
         of one (``coordinates.COORDINATES``; default "impedance", which falls back to
-        "unconstrained" for models without an impedance map). A checkpoint continues
-        only in the coordinates it was written in.
+        "unconstrained" for models without an impedance map, and for the motion-in
+        likelihood where its start lies outside the map's domain). A checkpoint
+        continues only in the coordinates it was written in.
     adaptation : the fitted moves (:class:`.adaptation.Adaptation`); None: the ensemble
         moves alone.
     checkpoint_seconds : steps are written to the checkpoint at most this many seconds
@@ -226,6 +227,8 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
                              reference_tolerance(model))
     if getattr(model, "needs_reference", False):
         model, start = _with_reference(model, checkpoint, fresh, start, seed, processes, coords)
+        if coords.kind == "impedance":
+            coords = _reachable(model, coords, start, None if fresh else stored_identity(checkpoint))
     target = Target(model, coords)
     schedule = Schedule(moves or default_moves(model, coordinates=coords), adaptation)
     identity = run_identity(model, coords, adaptation, schedule.base, nwalkers)
@@ -329,6 +332,17 @@ def _with_reference(model, checkpoint, fresh: bool, start, seed: int, processes:
     theta = np.asarray(start[0], dtype=float)
     model = model.with_reference(theta)
     return model, (theta, model.log_prob(theta)[0])
+
+
+def _reachable(model, coords: Coordinates, start, stored: dict | None) -> Coordinates:
+    """The default impedance coordinates, or the unconstrained ones where the start lies
+    outside their domain (measured: a paper-like B2 record at 1.5 Hz whose optimum did)
+    or the checkpoint continued was written in them."""
+    kind = ((stored or {}).get("coordinates") or {}).get("kind")
+    if kind == "unconstrained" or (kind is None and start is not None and not callable(start)
+                                   and not np.all(np.isfinite(coords.to_u(np.asarray(start[0], dtype=float))))):
+        return default_coordinates(model, "unconstrained")
+    return coords
 
 
 def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Executor):
