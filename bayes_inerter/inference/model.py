@@ -159,7 +159,7 @@ class PosteriorModel:
 
     def _set_reference(self) -> None:
         self.reference_noise = None
-        if self.reference is not None and self.motion is not None and self.likelihood.normaliser == "reference":
+        if self.reference is not None and self._takes_reference:
             theta = np.asarray(self.reference, dtype=float)
             if len(theta) != self.ndim:
                 raise ValueError(f"the reference has {len(theta)} parameters; the model samples {self.ndim}")
@@ -558,11 +558,15 @@ class PosteriorModel:
     def needs_reference(self) -> bool:
         """True where the likelihood's normaliser waits for a reference point
         (:meth:`with_reference`): the motion-in likelihood with ``normaliser="reference"``."""
-        return self.motion is not None and self.likelihood.normaliser == "reference" and self.reference is None
+        return self._takes_reference and self.reference is None
+
+    @property
+    def _takes_reference(self) -> bool:
+        return self.motion is not None and self.likelihood.normaliser == "reference"
 
     def with_reference(self, theta) -> PosteriorModel:
         """This model with the normaliser's noise taken at ``theta`` (``motion``'s module
         docstring); the model itself where its likelihood has no such normaliser."""
-        if self.motion is None or self.likelihood.normaliser != "reference":
+        if not self._takes_reference:
             return self
         return self.replace(reference=tuple(float(v) for v in np.asarray(theta, dtype=float)))

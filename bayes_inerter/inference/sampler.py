@@ -222,13 +222,13 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     conv = convergence or Convergence()
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
     coords = coordinates if isinstance(coordinates, Coordinates) else default_coordinates(model, coordinates)
-    if not fresh:  # a checkpoint at a reference frequency within the records' resolution goes on in its own
-        coords = continue_at(coords, (stored_identity(checkpoint) or {}).get("coordinates"),
-                             reference_tolerance(model))
+    stored = None if fresh else (stored_identity(checkpoint) or {})  # read once: the file is opened each time
+    if stored is not None:  # a checkpoint at a reference frequency within the records' resolution goes on in its own
+        coords = continue_at(coords, stored.get("coordinates"), reference_tolerance(model))
     if getattr(model, "needs_reference", False):
-        model, start = _with_reference(model, checkpoint, fresh, start, seed, processes, coords)
+        model, start = _with_reference(model, stored, start, seed, processes, coords)
         if coords.kind == "impedance":
-            coords = _reachable(model, coords, start, None if fresh else stored_identity(checkpoint))
+            coords = _reachable(model, coords, start, stored)
     target = Target(model, coords)
     schedule = Schedule(moves or default_moves(model, coordinates=coords), adaptation)
     identity = run_identity(model, coords, adaptation, schedule.base, nwalkers)
@@ -317,13 +317,14 @@ def _many(executor: Executor):
     return lambda name, xs: executor.map_state(objective_at, [(name, x) for x in xs])
 
 
-def _with_reference(model, checkpoint, fresh: bool, start, seed: int, processes: int, coords):
+def _with_reference(model, stored: dict | None, start, seed: int, processes: int, coords):
     """``model`` with its likelihood's reference point (``PosteriorModel.with_reference``)
-    and the start to use: the checkpoint's reference where it continues one, else the
-    start (``start`` or the optimiser's, with the parameters' own normaliser) becomes it."""
-    stored = None if fresh else (stored_identity(checkpoint) or {}).get("reference")
-    if stored is not None:
-        return model.with_reference(stored), start
+    and the start to use: the reference of the checkpoint's identity ``stored`` where it
+    continues one, else the start (``start`` or the optimiser's, with the parameters' own
+    normaliser) becomes it."""
+    kept = (stored or {}).get("reference")
+    if kept is not None:
+        return model.with_reference(kept), start
     if start is None:
         with make_executor(processes, state=Target(model, coords)) as executor, interrupt_raised():
             start = find_start(model, np.random.default_rng(seed), many=_many(executor))
