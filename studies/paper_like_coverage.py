@@ -25,6 +25,7 @@ import csv
 import json
 import math
 import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -66,7 +67,7 @@ def replicate(k: int, seed0: int, max_steps: int) -> dict:
            "b_median": float(np.median(b)), "converged": bool(res.converged), "steps": int(res.iterations),
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
-           "phi": res.b_interval.phi}
+           "phi": res.b_interval.phi, "commit": _commit()}
     for level in LEVELS:
         lo, hi = az.hdi(b, hdi_prob=level)
         key = round(100 * level)
@@ -74,6 +75,12 @@ def replicate(k: int, seed0: int, max_steps: int) -> dict:
         out[f"covered{key}"] = bool(lo <= b_true <= hi)
         out[f"width{key}_pct"] = 100.0 * (hi - lo) / b_true
     return out
+
+
+def _commit() -> str:
+    """The code's commit (``git rev-parse --short HEAD``; "" outside a clone)."""
+    got = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
+    return got.stdout.strip() if got.returncode == 0 else ""
 
 
 def _file(out: Path, k: int) -> Path:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bayes_inerter.inference.reversals import (DEGREES, DWELL, MIN_HALF_WIDTH, WIDEN, reversal_correction,
+from bayes_inerter.inference.reversals import (DEGREES, DWELL, MIN_HALF_WIDTH, WIDEN, deviations_mean, reversal_correction,
                                                reversal_windows, switched_sign, window_basis)
 
 N, T = 4096, 2.0
@@ -83,6 +83,25 @@ def test_the_correction_is_the_marginal_gaussian_density():
     assert reversal_correction(U, V, r, s) == pytest.approx(dense, rel=1e-9, abs=1e-9)
     assert reversal_correction(U, V, r, np.zeros(U.shape[1])) == 0.0
     assert reversal_correction(U[:, :0], V, r, s[:0]) == 0.0
+
+
+def test_the_deviations_mean_is_the_gaussian_conditional_mean():
+    """E[U beta | r] under r = U beta + e, beta ~ N(0, S^2), e ~ N(0, D): the dense
+    Gaussian's conditional mean U S^2 U' (D + U S^2 U')^-1 r, as K complex harmonics."""
+    rng = np.random.default_rng(4)
+    K = 10
+    U = window_basis([(0.1, 0.18), (0.6, 0.66)], K)
+    V = rng.uniform(0.5, 2.0, K)
+    r = rng.standard_normal(K) + 1j * rng.standard_normal(K)
+    s = np.linspace(0.3, 2.0, U.shape[1])
+    D = np.diag(np.concatenate([V, V]) / 2)
+    C = (U * s**2) @ U.T
+    dense = C @ np.linalg.solve(D + C, np.concatenate([r.real, r.imag]))
+    got = deviations_mean(U, V, r, s)
+    assert got.shape == (K,)
+    assert np.concatenate([got.real, got.imag]) == pytest.approx(dense, rel=1e-9, abs=1e-12)
+    assert np.all(deviations_mean(U, V, r, np.zeros(U.shape[1])) == 0)
+    assert np.all(deviations_mean(U[:, :0], V, r, s[:0]) == 0)
 
 
 def test_the_basis_holds_the_windows_legendre_harmonics():

@@ -425,8 +425,10 @@ class PosteriorModel:
 
     def fundamental_misfit(self, theta) -> float:
         """The motion-in fit's in-phase residual at the fundamental, as a share of the
-        model's inertial force there (``motion.fundamental_misfit``)."""
-        return fundamental_misfit(self.motion, self.field_vector(theta), self.hyper(theta)["gain"])
+        model's inertial force there, after what the marginalised deviations explain
+        (``motion.fundamental_misfit``)."""
+        h = self.hyper(theta)
+        return fundamental_misfit(self.motion, self.field_vector(theta), h["gain"], h["tau"], h["alpha"])
 
     def accel_error_variance(self, theta) -> np.ndarray:
         """The variance of each harmonic's error as the likelihood sees it (noise and

@@ -86,7 +86,7 @@ from ..records.record import Record
 from ..simulate import run_exact
 from .harmonic import HarmonicData, harmonic_data
 from . import friction_law
-from .reversals import SD, switched_sign, reversal_correction, reversal_windows, window_basis
+from .reversals import SD, deviations_mean, switched_sign, reversal_correction, reversal_windows, window_basis
 
 __all__ = ["MotionData", "motion_data", "predicted_force", "bearing_force", "motion_variance", "motion_loglik",
            "fundamental_misfit", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "ORDER", "FUNDAMENTAL_MAX"]
@@ -334,10 +334,19 @@ def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1
     return (terms if pointwise else float(terms.sum())), phi
 
 
-def fundamental_misfit(data: MotionData, p, gain: float = 1.0) -> float:
+def fundamental_misfit(data: MotionData, p, gain: float = 1.0, tau: float | None = None,
+                       alpha: float = 0.0) -> float:
     """The fit's residual at the drive's fundamental in phase with the model's inertial
     force there, as a share of that force: |Re(r_1 / (Y_1 A_1 / g))| (see
-    :data:`FUNDAMENTAL_MAX`)."""
+    :data:`FUNDAMENTAL_MAX`). With ``tau`` (the discrepancy, N) the marginalised
+    deviations' posterior mean (the reversals' and the law's,
+    ``reversals.deviations_mean``) is taken from the residual first: what they explain
+    the posterior has accounted for; None: the residual of the mean prediction alone."""
     F, Y = predicted_force(data, p, gain)
+    r = data.harmonic.force - F
+    if tau is not None and data.basis.shape[1]:
+        x = _vector(p)
+        V, _ = motion_variance(data, x, tau, alpha, gain)
+        r = r - deviations_mean(data.basis, V, r, data.scale[:, 0] * x[7] + data.scale[:, 1] * x[9])
     inertial = Y[0] * data.harmonic.accel[0]  # Y already holds the gain
-    return float(abs(((data.harmonic.force[0] - F[0]) / inertial).real))
+    return float(abs((r[0] / inertial).real))

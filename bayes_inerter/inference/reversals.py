@@ -42,7 +42,8 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["reversal_windows", "switched_sign", "window_degrees", "window_basis", "reversal_correction", "CLUSTER",
+__all__ = ["reversal_windows", "switched_sign", "window_degrees", "window_basis", "reversal_correction",
+           "deviations_mean", "CLUSTER",
            "WIDEN", "MIN_HALF_WIDTH", "DWELL", "DEGREES", "MAX_DEGREES", "SD"]
 
 #: Zero crossings closer than this share of a period are one reversal.
@@ -183,3 +184,22 @@ def reversal_correction(U, V, r, s):
         logdet += 2.0 * math.log(L[a, a])
     z = np.linalg.solve(L, w)
     return -0.5 * logdet + 0.5 * float(np.dot(z, z))
+
+
+def deviations_mean(U, V, r, s) -> np.ndarray:
+    """The deviations' posterior mean given the residual, at the harmonics: U beta^ as
+    K complex values, beta^ = S (I + S U' D^-1 U S)^-1 S U' D^-1 r (the same Gaussian as
+    :func:`reversal_correction`; U, V, r, s as there)."""
+    U = np.asarray(U, dtype=float)
+    V = np.asarray(V, dtype=float)
+    r = np.asarray(r, dtype=complex)
+    s = np.asarray(s, dtype=float)
+    K = V.shape[0]
+    if U.shape[1] == 0:
+        return np.zeros(K, dtype=complex)
+    d = 2.0 / np.concatenate([V, V])
+    rr = np.concatenate([r.real, r.imag])
+    SU = U * s  # the columns scaled by their prior sd
+    G = np.eye(U.shape[1]) + SU.T @ (d[:, None] * SU)
+    fitted = SU @ np.linalg.solve(G, SU.T @ (d * rr))
+    return fitted[:K] + 1j * fitted[K:]
