@@ -104,6 +104,23 @@ def test_pieces_give_the_same_record_bit_for_bit(antialias, piece_s):
         np.testing.assert_array_equal(x, y)
 
 
+def test_a_sensors_delay_shifts_its_channel_alone():
+    """A 2 ms load-cell delay (two record samples) moves the force by exactly two samples,
+    in one pass and piece by piece, and leaves the acceleration as it was."""
+    from bayes_inerter.records.generator import _record_signals
+
+    s = GeneratorSettings(duration=2.5, ramp=0.5, force_noise=0, accel_noise=0, disp_noise=0)
+    p = paper_parameters("A2")
+    plain = _record_signals(p, 1.5, s, chunk_s=1e3)
+    late = dataclasses.replace(s, force_delay=2e-3)
+    one = _record_signals(p, 1.5, late, chunk_s=1e3)
+    many = _record_signals(p, 1.5, late, chunk_s=0.05)
+    np.testing.assert_array_equal(one[0], many[0])
+    np.testing.assert_allclose(one[0][100:], plain[0][98:-2], rtol=0, atol=1e-9 * np.max(np.abs(plain[0])))
+    assert np.max(np.abs(one[0][100:] - plain[0][100:])) > 1.0  # N: the shift is there
+    np.testing.assert_array_equal(one[1], plain[1])
+
+
 def test_naive_sampling_is_worse():
     """MODEL.md section 7: instantaneous sampling gives records the model fits worse
     (after the matched low-pass, at the true parameters)."""
@@ -165,6 +182,7 @@ def test_paper_grid_spawns_independent_records():
         (dict(network="linear"), "truth network"),
         (dict(accel_bandwidth=50_000.0), "below the internal Nyquist"),
         (dict(noise_corner=600.0), "noise_corner must lie between"),
+        (dict(accel_delay=-1e-4), "accel_delay must be non-negative"),
     ],
 )
 def test_bad_generator_settings(kwargs, message):

@@ -59,6 +59,9 @@ class GeneratorSettings:
         approximates.
     force_bandwidth, accel_bandwidth : sensor -3 dB bandwidths, Hz (second-order
         Butterworth; defaults 2 kHz and 5 kHz); None for ideal sensors.
+    force_delay, accel_delay : each sensor's pure time delay, s (default 0: none),
+        rounded to the internal rate's sample (``1 / (fs oversample)``): a conditioning
+        amplifier's or a converter's latency that the record's time stamps do not show.
     force_gain, accel_gain : each sensor's true sensitivity over the nominal one the
         record is converted with: a calibration error (default 1: none). The records
         alone cannot reveal it (``records.sensitivity``).
@@ -91,6 +94,8 @@ class GeneratorSettings:
     noise_corner: float | None = None
     force_bandwidth: float | None = 2000.0
     accel_bandwidth: float | None = 5000.0
+    force_delay: float = 0.0
+    accel_delay: float = 0.0
     force_gain: float = 1.0
     accel_gain: float = 1.0
     antialias: str = "fir"
@@ -107,7 +112,8 @@ class GeneratorSettings:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ValueError(f"generator setting {name} must be positive, got {value!r}")
-        for name in ("ramp", "force_noise", "accel_noise", "disp_noise", "tail", "backlash"):
+        for name in ("ramp", "force_noise", "accel_noise", "disp_noise", "tail", "backlash", "force_delay",
+                     "accel_delay"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ValueError(f"generator setting {name} must be non-negative, got {value!r}")
@@ -234,16 +240,21 @@ class _MeanAcceleration:
 
 
 class _Sensor:
-    """A sensor's second-order Butterworth response, its filter state carried across pieces."""
+    """A sensor's second-order Butterworth response and its pure delay (whole samples of
+    the internal rate, the signal at rest before t = 0), their state carried across pieces."""
 
-    def __init__(self, bandwidth, fine):
+    def __init__(self, bandwidth, fine, delay: float = 0.0):
         self.sos = None if bandwidth is None else signal.butter(2, bandwidth, fs=fine, output="sos")
         self.zi = None if self.sos is None else np.zeros((self.sos.shape[0], 2))
+        self.held = np.zeros(int(round(delay * fine)))
 
     def push(self, x):
-        if self.sos is None:
-            return x
-        y, self.zi = signal.sosfilt(self.sos, x, zi=self.zi)
+        y = x
+        if self.sos is not None:
+            y, self.zi = signal.sosfilt(self.sos, x, zi=self.zi)
+        if self.held.size:
+            both = np.concatenate([self.held, y])
+            y, self.held = both[: len(y)], both[len(y):]
         return y
 
 
@@ -284,7 +295,8 @@ def _record_signals(params, freq, s: GeneratorSettings, chunk_s: float = CHUNK_S
     fine = s.fs * s.oversample
     n_fine = int(round((s.duration + s.tail) * fine)) + 1
     accel_mean = _MeanAcceleration(1.0 / fine)
-    sensors = [_Sensor(s.force_bandwidth, fine), _Sensor(s.accel_bandwidth, fine), _Sensor(None, fine)]
+    sensors = [_Sensor(s.force_bandwidth, fine, s.force_delay), _Sensor(s.accel_bandwidth, fine, s.accel_delay),
+               _Sensor(None, fine)]
     acquire = [_Acquisition(s) for _ in range(3)]
     out = [[], [], []]
     received = 0

@@ -49,6 +49,8 @@ class PaperLike:
     velocity : Stribeck velocity, m/s.
     backlash : nut backlash half-width, m.
     noise_corner : the sensors' noise colour, Hz (-3 dB of a second-order low-pass).
+    force_delay, accel_delay : the sensors' pure delays, s (default 0: none; the
+        generator's ``GeneratorSettings.force_delay``).
     force_noise, accel_noise : sensor noise rms, N and m/s^2.
     calibration : the sensors' relative standard uncertainties; each record's
         sensitivities are drawn normal about 1 with them.
@@ -59,6 +61,8 @@ class PaperLike:
     velocity: tuple[float, float] = (5e-3, 2e-2)
     backlash: tuple[float, float] = (1e-6, 4e-6)
     noise_corner: float = 50.0
+    force_delay: float = 0.0
+    accel_delay: float = 0.0
     force_noise: float = 2.0
     accel_noise: float = 0.01
     calibration: SensorCalibration = SensorCalibration()
@@ -82,7 +86,8 @@ class PaperLike:
             stribeck_velocity=log_uniform(*self.velocity), backlash=log_uniform(*self.backlash),
             force_gain=float(1.0 + self.calibration.force * rng.standard_normal()),
             accel_gain=float(1.0 + self.calibration.accel * rng.standard_normal()),
-            noise_corner=self.noise_corner, force_noise=self.force_noise, accel_noise=self.accel_noise)
+            noise_corner=self.noise_corner, force_delay=self.force_delay, accel_delay=self.accel_delay,
+            force_noise=self.force_noise, accel_noise=self.accel_noise)
 
 
 def paper_like_record(name: str, freq: float, *, seed: int = 0, device: PaperLike | None = None,
