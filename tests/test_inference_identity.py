@@ -110,6 +110,19 @@ def test_a_difference_is_named_by_its_field(records):
     assert walkers.fix.startswith("use the same --walkers, or --fresh")
 
 
+def test_another_basis_of_the_deviations_is_refused(records, monkeypatch):
+    """A checkpoint written with other reversal polynomials (or any other basis of the
+    marginalised deviations) samples another posterior: it is not continued."""
+    from bayes_inerter.inference import reversals
+
+    stored = _stored(_identity(PosteriorModel(records[0])))
+    assert mismatch(stored, _identity(PosteriorModel(records[0]))) is None
+    monkeypatch.setattr(reversals, "DEGREES", reversals.DEGREES + 2)
+    found = mismatch(stored, _identity(PosteriorModel(records[0])))
+    assert found is not None and found.field == "deviations"
+    assert found.what.startswith("with another basis of its likelihood's marginalised deviations")
+
+
 def test_a_joint_models_records_are_named_by_their_place(records):
     joint = JointModel(records)
     stored = _stored(_identity(joint))

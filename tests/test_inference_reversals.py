@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bayes_inerter.inference.reversals import (DEGREES, DWELL, MIN_HALF_WIDTH, WIDEN, deviations_mean, reversal_correction,
-                                               reversal_windows, switched_sign, window_basis)
+from bayes_inerter.inference.reversals import (DEGREES, DWELL, MIN_HALF_WIDTH, WIDEN, deviations_mean,
+                                               reversal_correction, reversal_windows, switched_sign, window_basis)
 
 N, T = 4096, 2.0
 

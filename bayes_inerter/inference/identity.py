@@ -47,7 +47,15 @@ def run_identity(model, coordinates, adaptation, moves, nwalkers: int) -> dict:
         "nwalkers": int(nwalkers),
         "ndim": int(model.ndim),
         "reference": _plain(getattr(model, "reference", None)),
+        "deviations": [_deviations(p) for p in parts],
     }
+
+
+def _deviations(part):
+    """The sha256 of the motion-in likelihood's marginalised deviations' basis (its windows,
+    polynomials and law; ``motion.MotionData.basis``), None for the other likelihoods."""
+    motion = getattr(part, "motion", None)
+    return None if motion is None else _sha256(motion.basis)
 
 
 def _sha256(values) -> str:
@@ -103,6 +111,7 @@ _NAMES = {
     "nwalkers": "for another number of walkers",
     "ndim": "for another number of parameters",
     "reference": "with its likelihood's normaliser at another reference point",
+    "deviations": "with another basis of its likelihood's marginalised deviations",
 }
 
 
