@@ -63,7 +63,7 @@ def case(k: int) -> tuple[str, float]:
     return names[k % len(names)], FREQUENCIES[(k + k // len(names)) % len(FREQUENCIES)]
 
 
-def replicate(k: int, seed0: int, max_steps: int, family: str = "default") -> dict:
+def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "") -> dict:
     import arviz as az
 
     setting, freq = case(k)
@@ -80,7 +80,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default") -> di
            "b_median": float(np.median(b)), "converged": bool(res.converged), "steps": int(res.iterations),
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
-           "phi": res.b_interval.phi, "commit": _commit(), "family": family}
+           "phi": res.b_interval.phi, "commit": commit, "family": family}
     for level in LEVELS:
         lo, hi = az.hdi(b, hdi_prob=level)
         key = round(100 * level)
@@ -91,7 +91,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default") -> di
 
 
 def _commit() -> str:
-    """The code's commit (``git rev-parse --short HEAD``; "" outside a clone)."""
+    """The checkout's commit (``git rev-parse --short HEAD``; "" outside a clone)."""
     got = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
     return got.stdout.strip() if got.returncode == 0 else ""
 
@@ -101,8 +101,8 @@ def _file(out: Path, k: int) -> Path:
 
 
 def _run(args) -> dict:
-    k, seed0, max_steps, out, family = args
-    got = replicate(k, seed0, max_steps, family)
+    k, seed0, max_steps, out, family, commit = args
+    got = replicate(k, seed0, max_steps, family, commit)
     _file(out, k).write_text(json.dumps(got, indent=1) + "\n")
     return got
 
@@ -157,10 +157,11 @@ def main(argv=None) -> int:
               f"choose another --out", file=sys.stderr)
         return 2
     if not args.summarise:
+        commit = _commit()  # the code this run loaded, read once: HEAD may move while it runs
         todo = [k for k in range(args.replicates) if not _file(out, k).exists()]
         print(f"{args.replicates - len(todo)} of {args.replicates} replicates already there", flush=True)
         with ProcessPoolExecutor(max_workers=args.processes) as pool:
-            futures = {pool.submit(_run, (k, args.seed0, args.max_steps, out, args.family)): k for k in todo}
+            futures = {pool.submit(_run, (k, args.seed0, args.max_steps, out, args.family, commit)): k for k in todo}
             for i, fut in enumerate(as_completed(futures), 1):
                 try:
                     r = fut.result()
