@@ -121,6 +121,20 @@ def test_priors():
     assert np.all((x >= 0) & (x <= 2))
 
 
+def test_the_normal_prior_is_truncated_at_its_width():
+    from bayes_inerter.inference.priors import Normal, delay_prior
+
+    q = Normal(0.0, 2e-4, width=4.0)
+    assert q.bounds == pytest.approx((-8e-4, 8e-4))
+    assert q.logpdf(1e-4) == pytest.approx(stats.norm(0, 2e-4).logpdf(1e-4))
+    assert q.logpdf(9e-4) == -math.inf
+    x = q.sample(np.random.default_rng(2), 10000)
+    assert np.all(np.abs(x) <= 8e-4) and np.std(x) == pytest.approx(2e-4, rel=0.05)
+    assert delay_prior(3e-4) == Normal(0.0, 3e-4, width=4.0)
+    with pytest.raises(ValueError, match="Normal needs"):
+        Normal(0.0, -1.0)
+
+
 def test_contraction_of_prior_draws_is_zero_and_of_a_point_is_one(record):
     from bayes_inerter.inference.results import PosteriorSample, contraction
 

@@ -41,7 +41,8 @@ def cmd_fit(args) -> int:
         result = fit_record(
             rec, args.out, model=args.model, m_s=args.m_s, m_B=args.m_b, device=device, walkers=args.walkers,
             steps=args.steps, seed=args.seed, fresh=args.fresh, processes=processes,
-            likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample), progress=bar.step,
+            likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample,
+                                          delay_sd=args.delay_sd), progress=bar.step,
             report=bar.status, coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
             checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
             name=Path(args.record).name, convergence=convergence,

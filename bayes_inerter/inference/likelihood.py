@@ -74,6 +74,12 @@ class LikelihoodSettings:
         "reference" (default): the noise at a reference point, the start search's
         optimum (**assumption**; :mod:`.motion` explains why: with the parameters' own,
         the measured motion's noise pulls b low); "full": the parameters' own.
+    delay_sd : motion-in likelihood only: the prior sd (s) of ``delay``, the force
+        channel's delay behind the acceleration channel's (a conditioning amplifier's or
+        converter's latency the time stamps do not show), sampled with a normal prior
+        about 0; the predicted force at harmonic k is turned by exp(-i w_k delay).
+        Default 0: no delay, and none sampled (**assumption**: the channels are
+        simultaneous).
     law : motion-in likelihood only: marginalise an odd deviation of the plate's friction
         from Coulomb's and the viscous law, a function of the measured velocity
         (:mod:`.friction_law`; default True).
@@ -91,6 +97,7 @@ class LikelihoodSettings:
     decay: bool = False
     normaliser: str = "reference"
     law: bool = True
+    delay_sd: float = 0.0
 
     @property
     def hyper_names(self) -> tuple[str, ...]:
@@ -98,7 +105,9 @@ class LikelihoodSettings:
         motion-in likelihood's discrepancy is white, alpha 0, unless ``decay``)."""
         if self.residual in ("harmonic", "motion"):
             decay = self.residual == "harmonic" or self.decay
-            return ("tau",) + (("alpha",) if decay else ()) + (("gain",) if self.gain_sd > 0 else ())
+            delay = self.residual == "motion" and self.delay_sd > 0
+            return (("tau",) + (("alpha",) if decay else ()) + (("gain",) if self.gain_sd > 0 else ())
+                    + (("delay",) if delay else ()))
         return ("sigma", "rho") if self.residual == "ar1" else ("sigma",)
 
     def __post_init__(self) -> None:
@@ -110,6 +119,10 @@ class LikelihoodSettings:
             raise ValueError(f"settle must be a whole number >= 0, got {self.settle!r}")
         if self.normaliser not in NORMALISERS:
             raise ValueError(f"normaliser must be one of {', '.join(NORMALISERS)}, got {self.normaliser!r}")
+        if not (0 <= self.delay_sd < 0.01):
+            raise ValueError(f"delay_sd must lie in [0, 0.01) s, got {self.delay_sd}")
+        if self.delay_sd > 0 and self.residual != "motion":
+            raise ValueError("delay_sd needs the motion-in likelihood (residual='motion')")
         if not (0 <= self.gain_sd < 1):
             raise ValueError(f"gain_sd must lie in [0, 1), got {self.gain_sd}")
         if not self.cutoff > 0:

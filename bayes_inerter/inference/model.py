@@ -39,7 +39,7 @@ from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise
 from .motion import fundamental_misfit, motion_data, motion_loglik, motion_variance
 from .parameters import FRICTION_PAIRS, ParameterMap
 from .priors import (DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, MOTION_DISCREPANCY_PRIORS, NOISE_PRIORS,
-                     SPLIT_PRIORS, gain_prior)
+                     SPLIT_PRIORS, delay_prior, gain_prior)
 
 __all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
 
@@ -85,7 +85,7 @@ MOTION_LIMITS = {
 #: The harmonic likelihood's parameters where :meth:`PosteriorModel.to_theta` is not
 #: told them: a discrepancy of 0.01 (m/s^2 for the force-in likelihood, N for motion in,
 #: inside both priors) decaying as 1/k, and equal gains.
-HYPER_START = {"tau": 1e-2, "alpha": 1.0, "gain": 1.0}
+HYPER_START = {"tau": 1e-2, "alpha": 1.0, "gain": 1.0, "delay": 0.0}
 
 #: ``b_app`` (the inertance seen through the nut, to first order in k_n / (omega c_n))
 #: is reported only where k_n / (omega c_n) is below this: an assumption of this
@@ -163,8 +163,9 @@ class PosteriorModel:
             theta = np.asarray(self.reference, dtype=float)
             if len(theta) != self.ndim:
                 raise ValueError(f"the reference has {len(theta)} parameters; the model samples {self.ndim}")
-            self.reference_noise = motion_variance(self.motion, self.field_vector(theta), 0.0, 0.0,
-                                                   self.hyper(theta)["gain"])[0]
+            h = self.hyper(theta)
+            self.reference_noise = motion_variance(self.motion, self.field_vector(theta), 0.0, 0.0, h["gain"],
+                                                   h["delay"])[0]
 
     def _set_parameters(self) -> None:
         """The sampled parameters (``names``, split or not), their priors, and the derived
@@ -182,7 +183,8 @@ class PosteriorModel:
             raise ValueError(f"the {self.model} model has no bearing damper to sample as a damping ratio")
         self.map = ParameterMap(split=self.split, modal=self.modal, m_B=self.m_B)
         discrepancy = MOTION_DISCREPANCY_PRIORS if self.likelihood.residual == "motion" else DISCREPANCY_PRIORS
-        hyper = {**NOISE_PRIORS, **discrepancy, "gain": gain_prior(self.likelihood.gain_sd or 0.01)}
+        hyper = {**NOISE_PRIORS, **discrepancy, "gain": gain_prior(self.likelihood.gain_sd or 0.01),
+                 "delay": delay_prior(self.likelihood.delay_sd or 1e-4)}
         known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(MODAL_PRIORS) | set(hyper) | set(EFFECT_PRIORS)
         unknown = set(self.priors) - known
         if unknown:
@@ -403,11 +405,13 @@ class PosteriorModel:
 
     def hyper(self, theta) -> dict:
         """The likelihood's own parameters at theta (``LikelihoodSettings.hyper_names``),
-        in their units, by name; ``gain`` 1 and ``alpha`` 0 where they are not sampled."""
+        in their units, by name; ``gain`` 1, ``alpha`` and ``delay`` 0 where they are not
+        sampled."""
         vals = dict(zip(self.names[self.n_phys:], map(float, self.to_values(theta)[self.n_phys:])))
         if self.harmonic is not None:
             vals.setdefault("gain", 1.0)
             vals.setdefault("alpha", 0.0)
+            vals.setdefault("delay", 0.0)
         return vals
 
     def motion_terms(self, theta):
@@ -418,7 +422,7 @@ class PosteriorModel:
             x = self.field_vector(theta)
             h = self.hyper(theta)
             terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True,
-                                       reference=self.reference_noise)
+                                       reference=self.reference_noise, delay=h["delay"])
         except (SimulationError, ValueError):
             return None
         return (terms, phi) if np.all(np.isfinite(terms)) else None
@@ -428,7 +432,7 @@ class PosteriorModel:
         model's inertial force there, after what the marginalised deviations explain
         (``motion.fundamental_misfit``)."""
         h = self.hyper(theta)
-        return fundamental_misfit(self.motion, self.field_vector(theta), h["gain"], h["tau"], h["alpha"])
+        return fundamental_misfit(self.motion, self.field_vector(theta), h["gain"], h["tau"], h["alpha"], h["delay"])
 
     def accel_error_variance(self, theta) -> np.ndarray:
         """The variance of each harmonic's error as the likelihood sees it (noise and
@@ -437,7 +441,7 @@ class PosteriorModel:
         if self.motion is None:
             return self.harmonic_variance(theta)
         h = self.hyper(theta)
-        V, Y = motion_variance(self.motion, self.field_vector(theta), h["tau"], h["alpha"], h["gain"])
+        V, Y = motion_variance(self.motion, self.field_vector(theta), h["tau"], h["alpha"], h["gain"], h["delay"])
         return V / np.abs(Y) ** 2
 
     def transfer(self, theta) -> np.ndarray:

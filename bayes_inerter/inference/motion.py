@@ -38,6 +38,11 @@ Over the whole period the friction may also deviate from the model's law by an o
 function of the measured velocity (:mod:`.friction_law`, ``LikelihoodSettings.law``),
 its amplitudes marginalised in the same closed form.
 
+The two channels are taken as simultaneous unless ``LikelihoodSettings(delay_sd=...)``
+samples the force channel's delay d behind the acceleration channel's: the predicted
+force and its transfer are then turned by exp(-i w_k d) (a latency the time stamps do
+not show turns friction, in phase with the velocity, into the inertial phase by w d).
+
 The plate's mode and its chatter, and every simulation, leave the likelihood; what the
 data cannot pin (the bearing) stays with its prior. The residual F_k - F^_k(theta) is
 complex normal with
@@ -186,9 +191,10 @@ def _screw(iw, V, F2, x):
 
 
 @njit(cache=True)
-def _predicted(x, gain, omega, velocity, sign, bearing, simulated):
+def _predicted(x, gain, omega, velocity, sign, bearing, simulated, delay):
     """(F^_k, Y_k) of the module docstring for the parameters ``x`` in :data:`ORDER`;
-    with ``simulated``, the bearing's force is ``bearing`` (the drivetrain's simulation)."""
+    with ``simulated``, the bearing's force is ``bearing`` (the drivetrain's simulation);
+    both as the force channel records them ``delay`` s after the acceleration channel."""
     m_B, f1_0, c_f1, f2_0 = x[2], x[7], x[8], x[9]
     K = omega.shape[0]
     F = np.empty(K, dtype=np.complex128)
@@ -198,8 +204,9 @@ def _predicted(x, gain, omega, velocity, sign, bearing, simulated):
         V = velocity[k] / gain
         V_s, z_B, _, _, den = _screw(iw, V, f2_0 * sign[k], x)
         plate = (iw * m_B + c_f1) * V + f1_0 * sign[k]
-        F[k] = plate + (bearing[k] if simulated else z_B * (V - V_s))
-        Y[k] = (iw * m_B + c_f1 + z_B * (1.0 - z_B / den)) / iw / gain
+        late = np.exp(-iw * delay) if delay != 0.0 else 1.0 + 0.0j
+        F[k] = (plate + (bearing[k] if simulated else z_B * (V - V_s))) * late
+        Y[k] = (iw * m_B + c_f1 + z_B * (1.0 - z_B / den)) / iw / gain * late
     return F, Y
 
 
@@ -217,10 +224,10 @@ def _variance(Y, tau, alpha, var_force, var_accel, cov, periods):
 
 @njit(cache=True)
 def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, basis, scale, force, var_force, var_accel,
-           cov, periods, reference):
+           cov, periods, reference, delay):
     """Each harmonic's log-likelihood term (the reversals' marginal in equal shares), and
     the squared residuals' and the force's sums."""
-    F, Y = _predicted(x, gain, omega, velocity, sign, bearing, simulated)
+    F, Y = _predicted(x, gain, omega, velocity, sign, bearing, simulated, delay)
     V_all = _variance(Y, tau, alpha, var_force, var_accel, cov, periods)
     K = omega.shape[0]
     ok = True
@@ -300,53 +307,55 @@ def _inputs(data: MotionData, p, gain):
     return x, (np.zeros(data.harmonics, dtype=np.complex128) if bearing is None else bearing), bearing is not None
 
 
-def predicted_force(data: MotionData, p, gain: float = 1.0):
+def predicted_force(data: MotionData, p, gain: float = 1.0, delay: float = 0.0):
     """(F^_k, Y_k): the model's force at the harmonics for the physical parameters ``p``
     (by name, or a vector in :data:`ORDER`), and its transfer from the measured
-    acceleration, dF^_k / dA_k (the network linearised, the Coulomb forces out)."""
+    acceleration, dF^_k / dA_k (the network linearised, the Coulomb forces out), as the
+    force channel records them ``delay`` s behind the acceleration channel."""
     x, bearing, simulated = _inputs(data, p, gain)
-    return _predicted(x, float(gain), data.omega, data.velocity, data.sign, bearing, simulated)
+    return _predicted(x, float(gain), data.omega, data.velocity, data.sign, bearing, simulated, float(delay))
 
 
-def motion_variance(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0):
+def motion_variance(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0, delay: float = 0.0):
     """(V_k, Y_k): each harmonic's residual variance (noise of both channels and the
     discrepancy, N^2) and the model's transfer from the measured acceleration to the force
     (``p`` as for :func:`predicted_force`)."""
     h = data.harmonic
     _, Y = _predicted(_vector(p), float(gain), data.omega, data.velocity, data.sign,
-                      np.zeros(data.harmonics, dtype=np.complex128), False)
+                      np.zeros(data.harmonics, dtype=np.complex128), False, float(delay))
     return _variance(Y, float(tau), float(alpha), h.var_force, h.var_accel, h.cov, float(h.periods)), Y
 
 
 def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0, *,
-                  pointwise: bool = False, reference: np.ndarray | None = None):
+                  pointwise: bool = False, reference: np.ndarray | None = None, delay: float = 0.0):
     """(log L, phi of the force at the harmonics) of the module docstring; with
     ``pointwise``, each harmonic's term (an array) instead of log L. ``p`` as for
     :func:`predicted_force`. ``reference``: each harmonic's noise variance (N^2) that
     the normaliser uses in place of the parameters' own (see module docstring); None:
-    their own."""
+    their own. ``delay``: the force channel's behind the acceleration's, s."""
     h = data.harmonic
     x, bearing, simulated = _inputs(data, p, gain)
     terms, sq, norm = _terms(x, float(tau), float(alpha), float(gain), data.omega, data.velocity, data.sign, bearing,
                              simulated, data.basis, data.scale, h.force, h.var_force, h.var_accel, h.cov, float(h.periods),
-                             np.full(data.harmonics, -1.0) if reference is None else np.asarray(reference, float))
+                             np.full(data.harmonics, -1.0) if reference is None else np.asarray(reference, float),
+                             float(delay))
     phi = 1.0 - math.sqrt(sq / norm)
     return (terms if pointwise else float(terms.sum())), phi
 
 
 def fundamental_misfit(data: MotionData, p, gain: float = 1.0, tau: float | None = None,
-                       alpha: float = 0.0) -> float:
+                       alpha: float = 0.0, delay: float = 0.0) -> float:
     """The fit's residual at the drive's fundamental in phase with the model's inertial
     force there, as a share of that force: |Re(r_1 / (Y_1 A_1 / g))| (see
     :data:`FUNDAMENTAL_MAX`). With ``tau`` (the discrepancy, N) the marginalised
     deviations' posterior mean (the reversals' and the law's,
     ``reversals.deviations_mean``) is taken from the residual first: what they explain
     the posterior has accounted for; None: the residual of the mean prediction alone."""
-    F, Y = predicted_force(data, p, gain)
+    F, Y = predicted_force(data, p, gain, delay)
     r = data.harmonic.force - F
     if tau is not None and data.basis.shape[1]:
         x = _vector(p)
-        V, _ = motion_variance(data, x, tau, alpha, gain)
+        V, _ = motion_variance(data, x, tau, alpha, gain, delay)
         r = r - deviations_mean(data.basis, V, r, data.scale[:, 0] * x[7] + data.scale[:, 1] * x[9])
     inertial = Y[0] * data.harmonic.accel[0]  # Y already holds the gain
     return float(abs((r[0] / inertial).real))

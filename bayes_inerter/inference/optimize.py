@@ -272,7 +272,7 @@ def _with_noise_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
 
 def _with_discrepancy_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
     theta = _with_noise(model, phys)
-    start = {"tau": 1e-4, "alpha": 0.0, "gain": 1.0}  # a white discrepancy of the residual's size
+    start = {"tau": 1e-4, "alpha": 0.0, "gain": 1.0, "delay": 0.0}  # a white discrepancy of the residual's size
     try:
         if model.motion is not None:
             r = model.harmonic.force - predicted_force(model.motion, model.field_vector(theta))[0]
@@ -287,7 +287,8 @@ def _with_discrepancy_estimate(model: PosteriorModel, phys: np.ndarray) -> np.nd
             prior = model.all_priors[name]
             lo, hi = prior.bounds
             t = math.log(value) if prior.log_scale else value
-            theta[model.names.index(name)] = float(np.clip(t, lo + 0.01, hi - 0.01))
+            margin = min(0.01, 0.25 * (hi - lo))  # a narrow box (a delay's, in s) keeps its middle half
+            theta[model.names.index(name)] = float(np.clip(t, lo + margin, hi - margin))
     return theta
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LogUniform", "LogNormal", "Uniform", "DEFAULT_PRIORS", "SPLIT_PRIORS", "NOISE_PRIORS",
+__all__ = ["LogUniform", "LogNormal", "Uniform", "Normal", "delay_prior", "DEFAULT_PRIORS", "SPLIT_PRIORS", "NOISE_PRIORS",
            "DISCREPANCY_PRIORS", "MOTION_DISCREPANCY_PRIORS", "MODAL_PRIORS", "gain_prior"]
 
 
@@ -108,6 +108,39 @@ class LogNormal:
         return f"log-normal, median {self.median:g}, log-sd {self.sigma:g}"
 
 
+@dataclass(frozen=True)
+class Normal:
+    """Normal with mean ``mean`` and sd ``sd``, sampled as is and truncated to +- ``width``
+    sd (so the sampler and optimiser have bounds): a quantity of either sign."""
+
+    mean: float
+    sd: float
+    width: float = 4.0
+    log_scale = False
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.mean) and self.sd > 0 and self.width > 0):
+            raise ValueError("Normal needs a finite mean and positive sd and width")
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        return self.mean - self.width * self.sd, self.mean + self.width * self.sd
+
+    def logpdf(self, theta: float) -> float:
+        lo, hi = self.bounds
+        if not lo <= theta <= hi:
+            return -math.inf
+        z = (theta - self.mean) / self.sd
+        return -0.5 * z * z - math.log(self.sd * math.sqrt(2 * math.pi))
+
+    def sample(self, rng: np.random.Generator, size=None):
+        lo, hi = self.bounds
+        return np.clip(rng.normal(self.mean, self.sd, size), lo, hi)
+
+    def describe(self) -> str:
+        return f"normal, mean {self.mean:g}, sd {self.sd:g}"
+
+
 #: Default priors (SI units). Each spans at least three orders of magnitude around the
 #: paper's value (Table I; b across all nine flywheel settings).
 DEFAULT_PRIORS = {
@@ -164,6 +197,12 @@ MOTION_DISCREPANCY_PRIORS = {
     "tau": LogUniform(1e-3, 1e5),
     "alpha": Uniform(0.0, 2.0),
 }
+
+
+def delay_prior(sd: float) -> Normal:
+    """Prior of ``delay``, the force channel's delay behind the acceleration channel's, s:
+    normal about 0 with sd ``sd`` (``LikelihoodSettings.delay_sd``), truncated at 4 sd."""
+    return Normal(0.0, sd, width=4.0)
 
 
 def gain_prior(sd: float) -> LogNormal:
