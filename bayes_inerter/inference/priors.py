@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LogUniform", "LogNormal", "Uniform", "Normal", "delay_prior", "DEFAULT_PRIORS", "SPLIT_PRIORS", "NOISE_PRIORS",
-           "DISCREPANCY_PRIORS", "MOTION_DISCREPANCY_PRIORS", "MODAL_PRIORS", "gain_prior"]
+__all__ = ["LogUniform", "LogNormal", "Uniform", "Normal", "delay_prior", "DEFAULT_PRIORS", "SPLIT_PRIORS",
+           "NOISE_PRIORS", "DISCREPANCY_PRIORS", "MOTION_DISCREPANCY_PRIORS", "MODAL_PRIORS", "gain_prior"]
 
 
 @dataclass(frozen=True)
