@@ -182,3 +182,58 @@ def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_pat
     assert restarts == optimize.NM_RESTARTS and lp_start >= lp_centres
     fit_joint(records, tmp_path / "joint", likelihood=AR1, centres=centres, steps=5, plots=False)
     assert len(seen) == 1  # a continued chain does not look for a start again
+
+
+def test_the_motion_likelihoods_reference_is_each_records_part_of_the_joint_one():
+    """Under the motion-in likelihood (its normaliser's noise at a reference point) the
+    joint model takes each record's reference at its own part of the joint theta: its
+    log-likelihood is then the sum of the referenced records' (the parameters' own
+    normaliser's only at the reference), and the run's identity keeps the joint reference."""
+    settings = GeneratorSettings(duration=5.5, ramp=0.5)  # three steady periods after the first
+    recs = [generate_record(paper_parameters(s), f, settings=settings, rng=seed, setting_name=s)
+            for s, f, seed in [("A0", 1.0, 5), ("A2", 1.5, 6)]]
+    jm = JointModel(tuple(recs))
+    assert jm.needs_reference
+    medians = []
+    for part, s in zip(jm.parts, ("A0", "A2")):
+        p = dataclasses.replace(paper_parameters(s), c_B=2 * 0.02 * math.sqrt(paper_parameters(s).k_B * part.m_B))
+        medians.append(part.values(part.to_theta(p, hyper={"tau": 1.0})))
+    theta = jm.start(medians)
+    ref = jm.with_reference(theta)
+    assert not ref.needs_reference and ref.reference == tuple(theta) and ref.names == jm.names
+    for k, part in enumerate(ref.parts):
+        assert part.reference == tuple(jm.part_theta(theta, k)) and part.reference_noise is not None
+    parts = sum(part.log_likelihood(ref.part_theta(theta, k))[0] for k, part in enumerate(ref.parts))
+    assert ref.log_prob(theta)[0] == pytest.approx(ref.log_prior(theta) + parts, rel=1e-12)
+    # at the reference itself the two normalisers agree; away from it they differ
+    assert ref.log_prob(theta)[0] == pytest.approx(jm.log_prob(theta)[0], rel=1e-12)
+    moved = np.array(theta, dtype=float)
+    moved[jm.names.index("b_A0")] += math.log(1.05)
+    assert ref.log_prob(moved)[0] != pytest.approx(jm.log_prob(moved)[0], abs=1e-6)
+    assert ref.with_reference(theta).reference == ref.reference
+    identity = run_identity(ref, default_coordinates(ref), None, [], 24)
+    assert identity["reference"] == list(theta)
+    with pytest.raises(ValueError, match="the reference has 3 parameters"):
+        JointModel(tuple(recs), reference=(1.0, 2.0, 3.0))
+    ar1 = JointModel(tuple(recs), likelihood=AR1)
+    assert not ar1.needs_reference and ar1.with_reference(ar1.bounds().mean(axis=1)) is ar1
+
+
+@pytest.mark.slow
+def test_fit_joint_under_the_motion_likelihood_keeps_its_reference_and_continues(tmp_path):
+    from bayes_inerter.inference.checkpoint import stored_identity
+
+    settings = GeneratorSettings(duration=5.5, ramp=0.5)
+    recs = [generate_record(paper_parameters(s), f, settings=settings, rng=seed, setting_name=s)
+            for s, f, seed in [("A0", 1.0, 5), ("A2", 1.5, 6)]]
+    centres = []
+    for rec in recs:
+        pm, s = PosteriorModel(rec), rec.metadata["setting"]
+        p = dataclasses.replace(paper_parameters(s), c_B=2 * 0.02 * math.sqrt(paper_parameters(s).k_B * pm.m_B))
+        centres.append(pm.values(pm.to_theta(p, hyper={"tau": 1.0})))
+    first = fit_joint(recs, tmp_path / "j", centres=centres, steps=6, plots=False)
+    kept = stored_identity(tmp_path / "j" / "chain.h5")["reference"]
+    assert first.iterations == 6 and len(kept) == JointModel(tuple(recs)).ndim
+    again = fit_joint(recs, tmp_path / "j", centres=centres, steps=9, plots=False)
+    assert again.iterations == 9  # continued under the same reference
+    assert stored_identity(tmp_path / "j" / "chain.h5")["reference"] == kept

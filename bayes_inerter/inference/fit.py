@@ -264,6 +264,7 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
         got = _sample_into(out, jm, nwalkers=walkers, steps=steps, seed=seed, processes=processes,
                            convergence=convergence, progress=progress, report=report, start=start,
                            coordinates=coords, adaptation=adaptation)
+        jm = got.model if got.model is not None else jm  # with its reference point, if it took one
         got = _finish(out, jm, got, steps, convergence)
         run, sample = got.run, got.sample
         nb = len(jm.settings)

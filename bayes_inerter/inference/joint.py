@@ -25,6 +25,7 @@ model. ``log_prob`` returns (log posterior, mean phi over the records).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -59,6 +60,10 @@ class JointModel:
     priors: dict = field(default_factory=dict)
     likelihood: LikelihoodSettings = field(default_factory=LikelihoodSettings)
     model: str = "two-port"
+    #: the joint theta whose records' noise the motion-in likelihood's normaliser takes
+    #: (``LikelihoodSettings.normaliser``; :meth:`with_reference`), each record at its
+    #: own part of it
+    reference: tuple | None = None
 
     def __post_init__(self) -> None:
         self.records = tuple(self.records)
@@ -111,6 +116,26 @@ class JointModel:
                 else:
                     idx.append(pos[n])
             self._maps.append(np.array(idx))
+        if self.reference is not None:
+            ref = np.asarray(self.reference, dtype=float)
+            if len(ref) != self.ndim:
+                raise ValueError(f"the reference has {len(ref)} parameters; the joint model samples {self.ndim}")
+            self.parts = [p.with_reference(self.part_theta(ref, k)) for k, p in enumerate(self.parts)]
+
+    @property
+    def needs_reference(self) -> bool:
+        """True where the records' likelihood waits for a reference point
+        (``PosteriorModel.needs_reference``; :meth:`with_reference`)."""
+        return any(p.needs_reference for p in self.parts)
+
+    def with_reference(self, theta) -> JointModel:
+        """This model with each record's normaliser noise taken at its part of ``theta``
+        (``PosteriorModel.with_reference``); the model itself where no record's likelihood
+        has such a normaliser."""
+        if not any(p.needs_reference or p.reference is not None for p in self.parts):
+            return self
+        return dataclasses.replace(self, records=self.records,
+                                   reference=tuple(float(v) for v in np.asarray(theta, dtype=float)))
 
     @property
     def ndim(self) -> int:

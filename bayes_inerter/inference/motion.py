@@ -70,7 +70,8 @@ with_reference``; the sampler takes the start search's optimum, **assumption**,
 ``LikelihoodSettings(normaliser="full")`` restores W_k = V_k). Measured on one rigid
 device whose motion's noise is most of the variance (``tests/test_inference_motion.py``,
 40 records): the maximum-likelihood mass -4.57 +- 0.47 % with W_k = V_k, +0.14 +- 0.49 %
-with the reference. The joint model keeps W_k = V_k.
+with the reference. The joint model takes each record's at its part of the joint
+start (``JointModel.with_reference``).
 
 The fit accuracy reported with
 each evaluation is the force's at the harmonics, 1 - |F - F^| / |F| over k = 1..K
