@@ -172,6 +172,29 @@ def test_report_on_calibration_says_what_the_generated_records_can_check():
     assert calibration_text(inertance_table(fits), SensorCalibration(), truth, "b_cal_") == ""  # no b_cal columns
 
 
+def test_the_calibration_is_not_added_where_every_posterior_sampled_the_gain():
+    """A fit whose posterior sampled the sensors' relative gain (its summary has a gain
+    row: the harmonic and motion-in likelihoods) holds the calibration already: the
+    study adds it only where some two-port fit did not."""
+    from bayes_inerter.records.sensitivity import SensorCalibration
+    from bayes_inerter.study.analysis import added_calibration
+    from bayes_inerter.study.report_text import calibration_text
+
+    cal = SensorCalibration()
+    sampled = [fake_fit("A0", 1.0, 700.0, 2.0), fake_fit("A1", 1.0, 1000.0, 2.0),
+               fake_fit("A1", 1.0, 1.0, 1.0, "rigid")]
+    for f in sampled[:2]:
+        f.summary["gain"] = {"mean": 1.0, "sd": 0.005}
+    assert added_calibration(sampled, cal) is None  # the rigid fit does not count
+    assert added_calibration(sampled[:1] + [fake_fit("A1", 1.0, 1000.0, 2.0)], cal) is cal
+    assert added_calibration([], cal) is cal
+    rows = inertance_table(sampled, calibration=added_calibration(sampled, cal))
+    assert "b_cal_sd" not in rows[0]
+    text = calibration_text(rows, cal, None, "b_cal_", in_posterior=True)
+    assert "samples the sensors' relative gain" in text and "0.56 %" in text and "nothing is added" in text
+    assert calibration_text(rows, SensorCalibration(0.0, 0.0), None, "b_cal_", in_posterior=True) == ""
+
+
 def test_report_flags_records_that_disagree_beyond_chance():
     from bayes_inerter.study.report_text import how_identified
 

@@ -43,7 +43,7 @@ from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
 from ..records.sensitivity import SensorCalibration
 from .fits import RecordFit, collect, fit_loo  # the tables' input, named here as before
 
-__all__ = ["RecordFit", "birge_ratio", "collect", "inertance_table", "is_joint", "joint_estimate", "joint_inertance",
+__all__ = ["RecordFit", "birge_ratio", "collect", "added_calibration", "inertance_table", "is_joint", "joint_estimate", "joint_inertance",
            "record_table",
            "flywheel_regression", "phi_table", "model_comparison", "fit_loo", "contraction_table", "write_csv", "Z94"]
 
@@ -110,6 +110,17 @@ def _with_calibration(row: dict, calibration: SensorCalibration | None, mean: fl
     row.update({f"{prefix}sd": total, f"{prefix}hdi_3%": mean - Z94 * total, f"{prefix}hdi_97%": mean + Z94 * total})
     if truth is not None:
         row["covers_truth_cal"] = bool(abs(mean - truth) <= Z94 * total)
+
+
+def added_calibration(fits: list[RecordFit], calibration: SensorCalibration | None) -> SensorCalibration | None:
+    """The sensors' calibration to add to the two-port fits' b, or None where every one of
+    them sampled the sensors' relative gain (a ``gain`` row in its summary: the harmonic
+    and motion-in likelihoods), whose posterior then holds the calibration already;
+    adding it again would count it twice."""
+    two_port = [f for f in fits if f.model == "two-port"]
+    if two_port and all("gain" in f.summary for f in two_port):
+        return None
+    return calibration
 
 
 def inertance_table(fits: list[RecordFit], geometry=None, calibration: SensorCalibration | None = None) -> list[dict]:

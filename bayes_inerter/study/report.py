@@ -208,7 +208,8 @@ def _records_section(plan, inert, recs, tables, truth_b, truth_app) -> list[str]
                    {c: "{:.1f}" for c in ("b_mean", "b_hdi_3%", "b_hdi_97%", *app_cols)}), "",
             *([note, ""] if note else []),
             AMBIGUITY if recs and app_cols else "", "",
-            "### Sensor calibration", "", calibration_text(inert, plan.calibration, truth_b, "b_cal_", gains), ""]
+            "### Sensor calibration", "", calibration_text(inert, plan.calibration, truth_b, "b_cal_", gains,
+                                                              bool(tables.get("calibration_in_posterior"))), ""]
 
 
 def _regression_section(reg, inert, product) -> list[str]:

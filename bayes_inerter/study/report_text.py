@@ -101,14 +101,21 @@ def combination_note(inert, joint_rows) -> str:
             "The study's joint model (`--no-joint` left it out, or it has too few records) shares them.")
 
 
-def calibration_text(rows, calibration, truth_b: dict | None, prefix: str, gains=None) -> str:
+def calibration_text(rows, calibration, truth_b: dict | None, prefix: str, gains=None,
+                     in_posterior: bool = False) -> str:
     """What the sensors' calibration adds to b (``<prefix>hdi_*`` columns). ``gains``: the
     (load cell, accelerometer) sensitivity errors the records were generated with (None
     for a user's records); with errors and ``truth_b``, how often the widened intervals
-    hold the generating b."""
+    hold the generating b. ``in_posterior``: the fits sampled the sensors' relative gain
+    (``analysis.added_calibration``), so nothing was added."""
+    u = calibration.ratio_sd
+    if in_posterior and u > 0:
+        return (f"Each record's posterior samples the sensors' relative gain under a prior of the calibration's "
+                f"{100 * u:.2g} % (the load cell's {100 * calibration.force:.2g} % and the accelerometer's "
+                f"{100 * calibration.accel:.2g} %, an **assumption**: `--sensor-uncertainty`), so its intervals hold "
+                f"the calibration already and nothing is added to them.")
     if not rows or f"{prefix}hdi_3%" not in rows[0]:
         return ""
-    u = calibration.ratio_sd
     if u == 0:
         return ("The sensors' sensitivities are taken as exact (`--sensor-uncertainty 0 0`): no calibration "
                 "uncertainty is added to b.")

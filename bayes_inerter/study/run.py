@@ -18,6 +18,7 @@ from ..records import paper_grid, read_record, write_record
 from ..records.checks import b_range_for, require_physical
 from ..records.drive import resolve_drive
 from .analysis import (
+    added_calibration,
     collect,
     contraction_table,
     flywheel_regression,
@@ -224,10 +225,10 @@ def _truths(plan: StudyPlan, records: dict | None = None):
 def _tables(plan: StudyPlan, fits: list, joint, truth_b, truth_app) -> tuple[dict, dict]:
     """The study's tables by name, and the CSV file each one is written to (``joint_info``
     is for the report only)."""
-    cal = plan.calibration
+    cal = added_calibration(fits, plan.calibration)  # None where the posteriors hold it
     inert = inertance_table(fits, calibration=cal)  # each setting's records combined (product of normals)
     tables = {"records": record_table(fits), "phi": phi_table(fits), "models": model_comparison(fits),
-              "contraction": contraction_table(fits)}
+              "contraction": contraction_table(fits), "calibration_in_posterior": cal is None}
     files = {"records": "inertance_records.csv", "inertance": "inertance.csv", "regression": "flywheels.csv",
              "phi": "phi.csv", "models": "model_comparison.csv", "contraction": "contraction.csv"}
     draws = None
