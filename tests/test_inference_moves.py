@@ -299,7 +299,9 @@ def test_block_move_leaves_the_target_invariant(sizes, wide):
     assert p > 0.001  # as for the proposal in normal scores: the smallest of 5 p-values
 
 
-@pytest.mark.parametrize("broken", [pytest.param(_BlockWithoutJacobian, marks=pytest.mark.slow), _BlockWithoutHastings])
+# slow, both (6 s each): the negative controls of the invariance test kept in the quick subset
+@pytest.mark.parametrize("broken", [pytest.param(_BlockWithoutJacobian, marks=pytest.mark.slow),
+                                    pytest.param(_BlockWithoutHastings, marks=pytest.mark.slow)])
 def test_the_invariance_check_sees_a_block_move_without_its_factors(broken):
     assert _run_gaussian(broken(np.full(4, 0.3), np.diag([1.0, 2.0, 0.5, 1.0]), _SCORES), steps=30, n=800)[1] < 1e-6
 

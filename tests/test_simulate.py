@@ -35,6 +35,7 @@ def test_matches_independent_hybrid_reference(setting, freq, network):
     assert rel_error(a, ref) < 1e-3
 
 
+@pytest.mark.slow  # 8 s; the hybrid-reference tests check sticking in the quick subset
 def test_stick_slip_record_sticks():
     # A0 at 0.5 Hz: the plate's Coulomb friction dominates, the plate stops at reversals
     p = paper_parameters("A0")
@@ -267,6 +268,7 @@ def test_piecewise_laws_and_backlash_match_an_independent_hybrid_reference(netwo
     assert 0.0 < np.mean(a == 0.0) < 0.5  # stuck at the start, then sliding
 
 
+@pytest.mark.slow  # 5 s; the hybrid-reference tests check the Stribeck law in the quick subset
 def test_stribeck_in_pieces_follows_the_law_as_its_approximation_says():
     """Through the stiff solver (the same regularisation for both), the 4-piece form and
     Stribeck's law itself give accelerations that differ by less than the pieces' force
