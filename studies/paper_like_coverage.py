@@ -8,7 +8,8 @@ replicates hold each setting at each frequency once, the frequencies interleaved
 ``fit_record`` as ``bayes-inerter fit`` runs it (the default likelihood, each chain to the
 convergence rule, at most ``--max-steps``). Each replicate writes one JSON into
 ``--out``/replicates (a run that stops continues where it stopped: rerun the command);
-``--summarise`` writes coverage.csv and replicates.csv from them.
+``--summarise`` writes coverage.csv (coverage where b is identified, and again among
+the converged chains alone) and replicates.csv from them.
 
 Per replicate: b's posterior median, its 94 % and 50 % highest-density intervals and
 whether they hold the true b (Table 2's, which the generator uses), whether the fit
@@ -130,6 +131,10 @@ def summarise(out: Path) -> list[dict]:
             row[f"se{key}"] = round(math.sqrt(nominal * (1 - nominal) / n), 3) if n else ""
             row[f"median_width{key}_pct"] = round(float(np.median([r[f"width{key}_pct"] for r in ident])), 2) if n \
                 else ""
+        good = [r for r in ident if r["converged"]]  # what the issue asks of: converged chains
+        row["converged_identified"] = len(good)
+        for key in ("94", "50"):
+            row[f"coverage{key}_converged"] = round(sum(r[f"covered{key}"] for r in good) / len(good), 3) if good else ""
         row["median_seconds"] = round(float(np.median([r["seconds"] for r in sel])), 1)
         rows.append(row)
     with (out / "coverage.csv").open("w", newline="") as f:
