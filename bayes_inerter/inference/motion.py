@@ -224,6 +224,12 @@ def _variance(Y, tau, alpha, var_force, var_accel, cov, periods):
 
 
 @njit(cache=True)
+def _deviation_sd(scale, x):
+    """Each marginalised deviation's prior sd, N: ``scale[j] . (f1_0, f2_0)``."""
+    return scale[:, 0] * x[7] + scale[:, 1] * x[9]
+
+
+@njit(cache=True)
 def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, basis, scale, force, var_force, var_accel,
            cov, periods, reference, delay):
     """Each harmonic's log-likelihood term (the reversals' marginal in equal shares), and
@@ -235,7 +241,7 @@ def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, basis
     for k in range(K):
         if not V_all[k] > 0:
             ok = False
-    s = scale[:, 0] * x[7] + scale[:, 1] * x[9]  # each deviation's prior sd, N
+    s = _deviation_sd(scale, x)
     share = reversal_correction(basis, V_all, force - F, s) / K if ok else 0.0
     terms = np.empty(K)
     sq_sum = 0.0
@@ -355,8 +361,8 @@ def fundamental_misfit(data: MotionData, p, gain: float = 1.0, tau: float | None
     F, Y = predicted_force(data, p, gain, delay)
     r = data.harmonic.force - F
     if tau is not None and data.basis.shape[1]:
-        x = _vector(p)
-        V, _ = motion_variance(data, x, tau, alpha, gain, delay)
-        r = r - deviations_mean(data.basis, V, r, data.scale[:, 0] * x[7] + data.scale[:, 1] * x[9])
+        h = data.harmonic
+        V = _variance(Y, float(tau), float(alpha), h.var_force, h.var_accel, h.cov, float(h.periods))
+        r = r - deviations_mean(data.basis, V, r, _deviation_sd(data.scale, _vector(p)))
     inertial = Y[0] * data.harmonic.accel[0]  # Y already holds the gain
     return float(abs((r[0] / inertial).real))
