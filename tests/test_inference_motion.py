@@ -203,6 +203,56 @@ def test_the_reference_normaliser_takes_away_the_motion_noises_pull_on_the_mass(
     assert abs(ref.mean()) < 3 * se
 
 
+def test_the_laws_deviations_beyond_coulomb_and_viscous_leave_the_friction_unbiased():
+    """A rigid device with Coulomb friction alone (the model's own law, no deviation to
+    find): with the law's deviations free to mimic the Coulomb square wave, the
+    maximum-likelihood f1_0 of 6 records lies more than 3 standard errors below the
+    truth (their prior sd scales with f1_0 itself, so a smaller friction and a deviation
+    make the same force more cheaply); with them taken beyond the model's own law
+    (``law_orthogonal``) within 3."""
+    p = _rigid(friction=150.0)
+    M = p["b"] + p["m_s"] + p["m_B"]
+    w = 2 * math.pi * FREQ
+
+    def force(a):
+        t = np.arange(len(a)) / FS
+        return M * a + p["f1_0"] * np.sign(np.cos(w * t))
+
+    errors = {False: [], True: []}
+    for seed in range(6):
+        for orthogonal in errors:
+            data = motion_data(_record(force, noise_a=0.05, noise_f=2.0, seed=seed), FREQ, cutoff=30.0,
+                               law_orthogonal=orthogonal)
+            reference = motion_variance(data, p, 0.0, 0.0)[0]
+
+            def cost(f, data=data, reference=reference):
+                return -motion_loglik(data, {**p, "f1_0": f}, 0.3, 0.0, reference=reference)[0]
+
+            best = optimize.minimize_scalar(cost, bounds=(100.0, 200.0), method="bounded", options={"xatol": 1e-3})
+            errors[orthogonal].append(best.x - p["f1_0"])
+    mimic, beyond = np.array(errors[False]), np.array(errors[True])
+    se = max(mimic.std(ddof=1), beyond.std(ddof=1)) / math.sqrt(len(mimic))
+    assert mimic.mean() < -3 * se
+    assert abs(beyond.mean()) < 3 * se
+
+
+def test_the_deviations_prior_sd_is_taken_at_the_point_asked():
+    """``deviation_at``: the walker's own friction by default, or a fixed point's (the
+    reference's, ``LikelihoodSettings(deviation_scale="reference")``), which then scales
+    the deviations whatever the friction sampled."""
+    p = paper_parameters("A3")
+    rec = generate_record(p, 1.0, settings=GeneratorSettings(), rng=2, setting_name="A3")
+    data = motion_data(rec, 1.0, cutoff=30.0)
+    x = {n: getattr(p, n) for n in _rigid()}
+    more = {**x, "f1_0": 1.5 * x["f1_0"]}
+    own = motion_loglik(data, x, 1.0, 0.0)[0]
+    assert motion_loglik(data, x, 1.0, 0.0, deviation_at=x)[0] == own
+    assert motion_loglik(data, more, 1.0, 0.0, deviation_at=x)[0] != motion_loglik(data, more, 1.0, 0.0)[0]
+    with pytest.raises(ValueError, match="deviation_scale must be one of"):
+        from bayes_inerter.inference.likelihood import LikelihoodSettings
+        LikelihoodSettings(deviation_scale="walker")
+
+
 def test_a_sampled_delay_finds_the_load_cells_latency():
     """A generator record whose load cell lags the accelerometer by 0.5 ms: with the delay
     sampled, the likelihood at the true parameters peaks within 0.02 ms of it plus the

@@ -16,7 +16,10 @@ Stribeck fall that ends almost at once to one that spans the stroke). Each beta_
 normal with mean 0 and sd ``SD`` times the contacts' Coulomb forces (f1_0 + f2_0: the
 rotation's friction reaches the plate through the nut), and the betas are marginalised
 with the reversals' deviations (``reversals.reversal_correction``): the harmonics of
-phi_j are columns of the same basis.
+phi_j are columns of the same basis. Before they join it, the part of each column that
+the model's own f1_0 sgn(v) + c_f1 v can make is taken out (:func:`beyond`,
+``LikelihoodSettings.law_orthogonal``): the widest phi_j is almost the Coulomb square
+wave minus a viscous force, and left in it lets the friction and the deviation trade.
 
 Why it does not take b's place: for a sinusoidal motion v(t) = V cos(w t) every
 function of v is even in t and so has only cosine harmonics, in phase with the
@@ -28,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["WIDTHS", "SD", "law_basis"]
+__all__ = ["WIDTHS", "SD", "law_basis", "beyond"]
 
 #: **Assumption**: the widths of the law's deviations, shares of the peak plate velocity.
 WIDTHS = (0.03, 0.1, 0.3, 1.0)
@@ -52,3 +55,16 @@ def law_basis(velocity: np.ndarray, sign: np.ndarray, K: int) -> np.ndarray:
         X = np.fft.rfft(phi)[1: K + 1] / n * 2.0
         cols.append(np.concatenate([X.real, X.imag]))
     return np.column_stack(cols)
+
+
+def beyond(U: np.ndarray, *harmonics: np.ndarray) -> np.ndarray:
+    """U with the span of ``harmonics`` taken out (each a (K,) complex array that a real
+    parameter multiplies, as f1_0 does the sign's and c_f1 the velocity's): the part of
+    the law's deviations that the model's own Coulomb and viscous terms cannot make.
+    Left in, a deviation and the friction's parameters explain the same force, and the
+    deviations' prior sd, which scales with the friction, pulls the friction low."""
+    if U.shape[1] == 0:
+        return U
+    A = np.column_stack([np.concatenate([h.real, h.imag]) for h in harmonics])
+    Q, _ = np.linalg.qr(A)
+    return U - Q @ (Q.T @ U)

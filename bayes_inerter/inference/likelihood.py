@@ -14,11 +14,14 @@ from ..records.conditioning import LOWPASS_HZ
 from ..records.sensitivity import SensorCalibration
 from ..simulate import SAMPLINGS
 
-__all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "ar1_pointwise", "ar1_marginal"]
+__all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "DEVIATION_SCALES", "ar1_pointwise", "ar1_marginal"]
 
 #: The likelihoods: the time-domain residual as a stationary AR(1) process or white, and
 #: the harmonic likelihood with errors in both signals and a sampled discrepancy.
 RESIDUALS = ("ar1", "iid", "harmonic", "motion")
+#: Where the motion-in likelihood's marginalised deviations take the Coulomb forces that
+#: scale their prior sd (``LikelihoodSettings.deviation_scale``).
+DEVIATION_SCALES = ("parameters", "reference")
 #: The motion-in likelihood's normalisers (``LikelihoodSettings.normaliser``).
 NORMALISERS = ("reference", "full")
 
@@ -83,6 +86,16 @@ class LikelihoodSettings:
     law : motion-in likelihood only: marginalise an odd deviation of the plate's friction
         from Coulomb's and the viscous law, a function of the measured velocity
         (:mod:`.friction_law`; default True).
+    law_orthogonal : motion-in likelihood only: take the plate's own Coulomb and viscous
+        harmonics out of the law's deviations (``friction_law.beyond``), so that a
+        deviation cannot make the force that f1_0 and c_f1 make (default True). Left
+        in, the deviations and the friction's parameters explain the same force, and on
+        the model's own records the friction came out low and the viscous damping high.
+    deviation_scale : motion-in likelihood only: whose Coulomb forces scale the
+        marginalised deviations' prior sd (the reversals' and the law's).
+        "reference" (default): the reference point's, the start search's optimum
+        (**assumption**: an empirical-Bayes scale); "parameters": each walker's own,
+        whose Gaussian normaliser then pulls the sampled friction low.
     """
 
     residual: str = "motion"
@@ -98,6 +111,8 @@ class LikelihoodSettings:
     normaliser: str = "reference"
     law: bool = True
     delay_sd: float = 0.0
+    law_orthogonal: bool = True
+    deviation_scale: str = "reference"
 
     @property
     def hyper_names(self) -> tuple[str, ...]:
@@ -119,6 +134,9 @@ class LikelihoodSettings:
             raise ValueError(f"settle must be a whole number >= 0, got {self.settle!r}")
         if self.normaliser not in NORMALISERS:
             raise ValueError(f"normaliser must be one of {', '.join(NORMALISERS)}, got {self.normaliser!r}")
+        if self.deviation_scale not in DEVIATION_SCALES:
+            raise ValueError(f"deviation_scale must be one of {', '.join(DEVIATION_SCALES)}, "
+                             f"got {self.deviation_scale!r}")
         if not (0 <= self.delay_sd < 0.01):
             raise ValueError(f"delay_sd must lie in [0, 0.01) s, got {self.delay_sd}")
         if self.delay_sd > 0 and self.residual != "motion":

@@ -159,13 +159,17 @@ class PosteriorModel:
 
     def _set_reference(self) -> None:
         self.reference_noise = None
+        self.deviation_at = None
         if self.reference is not None and self._takes_reference:
             theta = np.asarray(self.reference, dtype=float)
             if len(theta) != self.ndim:
                 raise ValueError(f"the reference has {len(theta)} parameters; the model samples {self.ndim}")
             h = self.hyper(theta)
-            self.reference_noise = motion_variance(self.motion, self.field_vector(theta), 0.0, 0.0, h["gain"],
-                                                   h["delay"])[0]
+            if self.likelihood.normaliser == "reference":
+                self.reference_noise = motion_variance(self.motion, self.field_vector(theta), 0.0, 0.0, h["gain"],
+                                                       h["delay"])[0]
+            if self.likelihood.deviation_scale == "reference":
+                self.deviation_at = self.field_vector(theta)
 
     def _set_parameters(self) -> None:
         """The sampled parameters (``names``, split or not), their priors, and the derived
@@ -219,7 +223,8 @@ class PosteriorModel:
             )
         self.measured_lp = lowpass(rec.accel, self.fs, lk.cutoff)
         self.observed = self.measured_lp[self.grid]
-        self.motion = (motion_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle, law=lk.law)
+        self.motion = (motion_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle, law=lk.law,
+                                  law_orthogonal=lk.law_orthogonal)
                        if lk.residual == "motion" else None)
         self.harmonic = (self.motion.harmonic if self.motion is not None else
                          harmonic_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle)
@@ -422,7 +427,8 @@ class PosteriorModel:
             x = self.field_vector(theta)
             h = self.hyper(theta)
             terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True,
-                                       reference=self.reference_noise, delay=h["delay"])
+                                       reference=self.reference_noise, delay=h["delay"],
+                                       deviation_at=self.deviation_at)
         except (SimulationError, ValueError):
             return None
         return (terms, phi) if np.all(np.isfinite(terms)) else None
@@ -432,7 +438,8 @@ class PosteriorModel:
         model's inertial force there, after what the marginalised deviations explain
         (``motion.fundamental_misfit``)."""
         h = self.hyper(theta)
-        return fundamental_misfit(self.motion, self.field_vector(theta), h["gain"], h["tau"], h["alpha"], h["delay"])
+        return fundamental_misfit(self.motion, self.field_vector(theta), h["gain"], h["tau"], h["alpha"], h["delay"],
+                                  deviation_at=self.deviation_at)
 
     def accel_error_variance(self, theta) -> np.ndarray:
         """The variance of each harmonic's error as the likelihood sees it (noise and
@@ -562,17 +569,20 @@ class PosteriorModel:
 
     @property
     def needs_reference(self) -> bool:
-        """True where the likelihood's normaliser waits for a reference point
-        (:meth:`with_reference`): the motion-in likelihood with ``normaliser="reference"``."""
+        """True where the likelihood waits for a reference point (:meth:`with_reference`):
+        the motion-in likelihood with ``normaliser="reference"`` or
+        ``deviation_scale="reference"``."""
         return self._takes_reference and self.reference is None
 
     @property
     def _takes_reference(self) -> bool:
-        return self.motion is not None and self.likelihood.normaliser == "reference"
+        lk = self.likelihood
+        return self.motion is not None and (lk.normaliser == "reference" or lk.deviation_scale == "reference")
 
     def with_reference(self, theta) -> PosteriorModel:
-        """This model with the normaliser's noise taken at ``theta`` (``motion``'s module
-        docstring); the model itself where its likelihood has no such normaliser."""
+        """This model with the normaliser's noise, and the deviations' prior sd, taken at
+        ``theta`` where its likelihood settings ask (``motion``'s module docstring); the
+        model itself where they ask neither."""
         if not self._takes_reference:
             return self
         return self.replace(reference=tuple(float(v) for v in np.asarray(theta, dtype=float)))

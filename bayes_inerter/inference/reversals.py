@@ -22,7 +22,8 @@ around the reversal, so the likelihood marginalises it there:
 - its deviation from that mean: a_j P_j(x) with P_j the Legendre polynomials of degree
   j < d on the window (d at least ``DEGREES``, more for a wide window) and
   a_j ~ N(0, (``SD`` f1_0)^2) (**assumption**: the
-  deviation is of the friction's own size), whose harmonics form the columns of the
+  deviation is of the friction's own size; f1_0 the reference point's by default,
+  ``LikelihoodSettings.deviation_scale``), whose harmonics form the columns of the
   basis U (2K real rows: the real parts, then the imaginary parts).
 
 With the residual's other variance D (each harmonic's V_k / 2 for its real and its
