@@ -137,8 +137,9 @@ def test_settings_refuse_unknown_values():
         LikelihoodSettings(gain_sd=-0.1)
     assert LikelihoodSettings(residual="harmonic", gain_sd=0).hyper_names == ("tau", "alpha")
     # the motion-in discrepancy is white unless its decay is asked for
-    assert LikelihoodSettings(residual="motion").hyper_names == ("tau", "gain")
-    assert LikelihoodSettings(residual="motion", decay=True).hyper_names == ("tau", "alpha", "gain")
+    # and samples the channels' delay unless told the channels are simultaneous
+    assert LikelihoodSettings(residual="motion").hyper_names == ("tau", "gain", "delay")
+    assert LikelihoodSettings(residual="motion", decay=True, delay_sd=0).hyper_names == ("tau", "alpha", "gain")
 
 
 def test_the_command_lines_likelihoods_are_the_librarys():

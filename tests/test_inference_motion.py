@@ -283,4 +283,7 @@ def test_a_delay_needs_the_motion_likelihood_and_a_sane_sd():
         LikelihoodSettings(delay_sd=0.05)
     with pytest.raises(ValueError, match="needs the motion-in likelihood"):
         LikelihoodSettings(residual="harmonic", delay_sd=1e-4)
-    assert "delay" not in LikelihoodSettings().hyper_names
+    assert LikelihoodSettings().hyper_names[-1] == "delay"  # sampled by default under the motion likelihood
+    assert "delay" not in LikelihoodSettings(delay_sd=0).hyper_names
+    assert "delay" not in LikelihoodSettings(residual="harmonic").hyper_names
+    assert LikelihoodSettings(residual="ar1").sampled_delay_sd == 0.0

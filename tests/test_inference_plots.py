@@ -178,3 +178,15 @@ def test_fit_figures_are_titled_by_the_records_file_name():
     rec = generate_record(paper_parameters("A3"), 1.5, settings=GeneratorSettings(duration=4.0, ramp=0.5), rng=0,
                           setting_name="A3")
     assert _label(PosteriorModel(rec), "run1.csv") == "run1.csv, A3, 1.5 Hz"
+
+
+def test_corner_draws_the_channels_delay_as_it_is_either_sign(draws):
+    """The sampled delay (s) crosses zero: drawn in log10 its panels had no finite limits."""
+    rng = np.random.default_rng(4)
+    delay = rng.normal(0.0, 2e-4, len(draws))
+    assert np.any(delay < 0)
+    fig = plot_corner(np.column_stack([draws, delay]), NAMES + ["delay"])
+    assert fig.axes[-1].get_xlabel() == "delay [s]"
+    lo, hi = fig.axes[-1].get_xlim()
+    assert np.isfinite([lo, hi]).all() and lo < 0 < hi
+    plt.close(fig)

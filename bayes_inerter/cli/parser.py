@@ -143,9 +143,9 @@ def _add_fit(sub) -> argparse.ArgumentParser:
                         "harmonics given the measured motion (docs/inference.md)")
     p.add_argument("--upsample", type=_positive_int, default=1,
                    help="force reconstruction rate / record rate before simulating (%(default)s: linear interpolation)")
-    p.add_argument("--delay-sd", type=float, default=0.0, metavar="SECONDS",
-                   help="motion likelihood: sample the force channel's delay behind the accelerometer's with this "
-                        "prior sd, s (%(default)s: the channels taken as simultaneous)")
+    p.add_argument("--delay-sd", type=float, default=None, metavar="SECONDS",
+                   help="motion likelihood: the prior sd of the force channel's delay behind the accelerometer's, "
+                        "s (default 0.0005; 0: the channels taken as simultaneous)")
     p.add_argument("--processes", type=_positive_int, help="worker processes (default: up to 2)")
     p.add_argument("--fresh", action="store_true", help="start over instead of continuing the checkpoint")
     p.add_argument("--coordinates", choices=FIT_COORDINATES, default="impedance",

@@ -14,11 +14,15 @@ from ..records.conditioning import LOWPASS_HZ
 from ..records.sensitivity import SensorCalibration
 from ..simulate import SAMPLINGS
 
-__all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "DEVIATION_SCALES", "ar1_pointwise", "ar1_marginal"]
+__all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "DEVIATION_SCALES", "DELAY_SD", "ar1_pointwise", "ar1_marginal"]
 
 #: The likelihoods: the time-domain residual as a stationary AR(1) process or white, and
 #: the harmonic likelihood with errors in both signals and a sampled discrepancy.
 RESIDUALS = ("ar1", "iid", "harmonic", "motion")
+#: **Assumption**: the prior sd of the force channel's delay behind the acceleration
+#: channel's, s, that the motion-in likelihood samples by default
+#: (``LikelihoodSettings.delay_sd``).
+DELAY_SD = 5e-4
 #: Where the motion-in likelihood's marginalised deviations take the Coulomb forces that
 #: scale their prior sd (``LikelihoodSettings.deviation_scale``).
 DEVIATION_SCALES = ("parameters", "reference")
@@ -81,8 +85,10 @@ class LikelihoodSettings:
         channel's delay behind the acceleration channel's (a conditioning amplifier's or
         converter's latency the time stamps do not show), sampled with a normal prior
         about 0; the predicted force at harmonic k is turned by exp(-i w_k delay).
-        Default 0: no delay, and none sampled (**assumption**: the channels are
-        simultaneous).
+        Default None: ``DELAY_SD`` (0.5 ms, **assumption**: sensors' conditioning and
+        filters of unequal bandwidth, whose group delays differ by tens to hundreds of
+        microseconds) for the motion-in likelihood, none for the others; 0: the
+        channels taken as simultaneous.
     law : motion-in likelihood only: marginalise an odd deviation of the plate's friction
         from Coulomb's and the viscous law, a function of the measured velocity
         (:mod:`.friction_law`; default True).
@@ -110,9 +116,16 @@ class LikelihoodSettings:
     decay: bool = False
     normaliser: str = "reference"
     law: bool = True
-    delay_sd: float = 0.0
+    delay_sd: float | None = None
     law_orthogonal: bool = True
     deviation_scale: str = "reference"
+
+    @property
+    def sampled_delay_sd(self) -> float:
+        """The prior sd of the sampled channel delay, s (0: none sampled)."""
+        if self.residual != "motion":
+            return 0.0
+        return DELAY_SD if self.delay_sd is None else float(self.delay_sd)
 
     @property
     def hyper_names(self) -> tuple[str, ...]:
@@ -120,7 +133,7 @@ class LikelihoodSettings:
         motion-in likelihood's discrepancy is white, alpha 0, unless ``decay``)."""
         if self.residual in ("harmonic", "motion"):
             decay = self.residual == "harmonic" or self.decay
-            delay = self.residual == "motion" and self.delay_sd > 0
+            delay = self.residual == "motion" and self.sampled_delay_sd > 0
             return (("tau",) + (("alpha",) if decay else ()) + (("gain",) if self.gain_sd > 0 else ())
                     + (("delay",) if delay else ()))
         return ("sigma", "rho") if self.residual == "ar1" else ("sigma",)
@@ -137,9 +150,9 @@ class LikelihoodSettings:
         if self.deviation_scale not in DEVIATION_SCALES:
             raise ValueError(f"deviation_scale must be one of {', '.join(DEVIATION_SCALES)}, "
                              f"got {self.deviation_scale!r}")
-        if not (0 <= self.delay_sd < 0.01):
+        if self.delay_sd is not None and not (0 <= self.delay_sd < 0.01):
             raise ValueError(f"delay_sd must lie in [0, 0.01) s, got {self.delay_sd}")
-        if self.delay_sd > 0 and self.residual != "motion":
+        if self.delay_sd and self.residual != "motion":
             raise ValueError("delay_sd needs the motion-in likelihood (residual='motion')")
         if not (0 <= self.gain_sd < 1):
             raise ValueError(f"gain_sd must lie in [0, 1), got {self.gain_sd}")

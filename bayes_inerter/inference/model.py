@@ -188,7 +188,7 @@ class PosteriorModel:
         self.map = ParameterMap(split=self.split, modal=self.modal, m_B=self.m_B)
         discrepancy = MOTION_DISCREPANCY_PRIORS if self.likelihood.residual == "motion" else DISCREPANCY_PRIORS
         hyper = {**NOISE_PRIORS, **discrepancy, "gain": gain_prior(self.likelihood.gain_sd or 0.01),
-                 "delay": delay_prior(self.likelihood.delay_sd or 1e-4)}
+                 "delay": delay_prior(self.likelihood.sampled_delay_sd or 1e-4)}
         known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(MODAL_PRIORS) | set(hyper) | set(EFFECT_PRIORS)
         unknown = set(self.priors) - known
         if unknown:

@@ -19,14 +19,15 @@ from ..device import TABLE_I  # noqa: E402
 __all__ = ["plot_corner", "plot_bands", "plot_trace", "plot_phi", "reference_values"]
 
 UNITS = {"b": "kg", "f1_0": "N", "c_f1": "N s/m", "f2_0": "N", "c_f2": "N s/m", "c_n": "N s/m",
-         "k_n": "N/m", "c_B": "N s/m", "k_B": "N/m", "sigma": "m/s²", "f_0": "N", "c_f": "N s/m"}
-LINEAR = ("rho", "f_share", "c_share", "b")  # drawn as is; everything else in log10
+         "k_n": "N/m", "c_B": "N s/m", "k_B": "N/m", "sigma": "m/s²", "f_0": "N", "c_f": "N s/m", "delay": "s"}
+LINEAR = ("rho", "f_share", "c_share", "b", "delay")  # drawn as is; everything else in log10
 
 
 def _linear(name: str) -> bool:
     """Drawn as is: the inertance in kg (the joint model's ``b_<setting>`` too), shares,
-    AR(1) coefficients (the joint model's ``rho_<f>Hz`` too). The other parameters span
-    orders of magnitude and are drawn in log10."""
+    the channels' delay (of either sign), AR(1) coefficients (the joint model's
+    ``rho_<f>Hz`` too). The other parameters span orders of magnitude and are drawn in
+    log10."""
     return name in LINEAR or name.startswith("rho_") or name.startswith("b_")
 
 
