@@ -23,8 +23,10 @@ f2_0 / c_n in velocity, and it sticks at each reversal until the nut's force exc
 f2_0). Where f2_0 > 0 the drivetrain behind the plate (the screw's translation and
 rotation, Coulomb friction on the rotation, set-valued) is therefore **simulated**, driven
 by the measured plate velocity on ``DRIVE_GRID`` points a period with the exact kernel
-(``simulate.run_exact``), from the linear periodic state for ``DRIVE_SETTLE`` periods,
-and the bearing's force z_B (V - V_s) is taken from the period after. This replaced
+(``simulate.run_exact``), from the linear periodic state for ``DRIVE_SETTLE`` periods and
+then a period at a time until two successive periods' bearing force agree
+(``DRIVE_TOL``, at most ``DRIVE_MAX_PERIODS``), and the bearing's force z_B (V - V_s) is
+taken from the last. This replaced
 the algebra's F_2 = f2_0 S (the rotation reversing with the plate), which on a
 noise-free generator record of a rotation with f2_0 = 2,000 N behind a soft nut
 missed the measured force by 144 N rms a harmonic at the truth, the simulation by
@@ -111,7 +113,8 @@ from . import friction_law
 from .reversals import SD, deviations_mean, switched_sign, reversal_correction, reversal_windows, window_basis
 
 __all__ = ["MotionData", "motion_data", "predicted_force", "bearing_force", "motion_variance", "motion_loglik",
-           "fundamental_misfit", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "ORDER", "FUNDAMENTAL_MAX"]
+           "fundamental_misfit", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
+           "DRIVE_MAX_PERIODS", "ORDER", "FUNDAMENTAL_MAX"]
 
 #: **Assumption** of the reporting: b is called identified only where the fit reproduces
 #: the fundamental's force in phase with the acceleration (the inertial force, which b
@@ -129,6 +132,17 @@ SIGN_GRID = 8192
 DRIVE_GRID = 2048
 #: Periods the drivetrain is simulated, from the linear periodic state, before the one kept.
 DRIVE_SETTLE = 1
+#: **Assumption**: the drivetrain is simulated a period more, at most to ``DRIVE_MAX_PERIODS``
+#: in all, until two successive periods' bearing force differs by at most ``DRIVE_TOL`` (N)
+#: at every harmonic: a heavy rotation with a large drag behind a soft nut settles over
+#: several periods. On such a device (``tests/test_inference_motion.py``: b 18.5 t, c_f2
+#: 12.9 kN s/m, k_n 5.5e4 N/m, f2_0 3.0 kN, 1 Hz) one settling period left the bearing's
+#: force 3.8 N from its periodic value at a harmonic, this rule 0.035 N (a slow drift of
+#: 0.0015 N a period remains); on an SBC replicate of about that device (seed 2,
+#: replicate 1) four settling periods in place of one raised the log posterior by 7 nats
+#: at its optimum and by 10 at the truth.
+DRIVE_TOL = 0.005
+DRIVE_MAX_PERIODS = 8
 
 
 @dataclass(frozen=True)
@@ -302,10 +316,24 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
                   [-1.0, 0.0, 0.0, 0.0]])  # states v_s, v_th, x_s - x_th, x_B - x_s; input v_B
     B = np.array([[c_B / m_s], [0.0], [0.0], [1.0]])
     u = data.drive_input / gain
-    _, states = run_exact(A, B, _ROTATION, np.array([f2_0]), np.array([b]), u, 1.0 / (N * freq), x0=x0, store=True)
-    last = states[-N - 1: -1]
-    T_B = c_B * (v - last[:, 0]) + k_B * last[:, 3]
-    return np.fft.fft(T_B)[1: data.harmonics + 1] / N * 2.0
+    h = 1.0 / (N * freq)
+    _, states = run_exact(A, B, _ROTATION, np.array([f2_0]), np.array([b]), u, h, x0=x0, store=True)
+    before = _bearing_harmonics(states[-2 * N - 1: -N - 1], v, c_B, k_B, data.harmonics)
+    got = _bearing_harmonics(states[-N - 1: -1], v, c_B, k_B, data.harmonics)
+    one = u[-N - 1:]  # one period and the next sample
+    for _ in range(DRIVE_MAX_PERIODS - DRIVE_SETTLE - 1):
+        if float(np.max(np.abs(got - before))) <= DRIVE_TOL:
+            break
+        _, states = run_exact(A, B, _ROTATION, np.array([f2_0]), np.array([b]), one, h, x0=states[-1], store=True)
+        before, got = got, _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
+    return got
+
+
+def _bearing_harmonics(period: np.ndarray, v: np.ndarray, c_B: float, k_B: float, K: int) -> np.ndarray:
+    """The bearing's force z_B (V - V_s) at the harmonics 1..K from one period of the
+    drivetrain's states (rows from t = 0) and the plate's velocity ``v`` on the same grid."""
+    T_B = c_B * (v - period[:, 0]) + k_B * period[:, 3]
+    return np.fft.fft(T_B)[1: K + 1] / v.shape[0] * 2.0
 
 
 _ROTATION = np.array([1], dtype=np.int64)  # the drivetrain's contact: the rotation (state 1)
