@@ -164,12 +164,11 @@ class PosteriorModel:
             theta = np.asarray(self.reference, dtype=float)
             if len(theta) != self.ndim:
                 raise ValueError(f"the reference has {len(theta)} parameters; the model samples {self.ndim}")
-            h = self.hyper(theta)
+            h, x = self.hyper(theta), self.field_vector(theta)
             if self.likelihood.normaliser == "reference":
-                self.reference_noise = motion_variance(self.motion, self.field_vector(theta), 0.0, 0.0, h["gain"],
-                                                       h["delay"])[0]
+                self.reference_noise = motion_variance(self.motion, x, 0.0, 0.0, h["gain"], h["delay"])[0]
             if self.likelihood.deviation_scale == "reference":
-                self.deviation_at = self.field_vector(theta)
+                self.deviation_at = x
 
     def _set_parameters(self) -> None:
         """The sampled parameters (``names``, split or not), their priors, and the derived

@@ -184,7 +184,7 @@ def _plate_motion(record: Record, freq: float, band: float, pool: int, settle: i
 
 
 def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, settle: int = 1,
-                sign_band: float = SIGN_BAND, law: bool = True, law_orthogonal: bool = False) -> MotionData:
+                sign_band: float = SIGN_BAND, law: bool = True, law_orthogonal: bool = True) -> MotionData:
     """:class:`MotionData` of ``record`` driven at ``freq`` Hz (see module docstring);
     ``law_orthogonal``: the law's deviations with the plate's own Coulomb and viscous
     harmonics taken out (``friction_law.beyond``)."""
@@ -195,15 +195,16 @@ def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, se
     switched = switched_sign(v, windows)
     sign = (np.fft.rfft(switched) / SIGN_GRID * 2.0)[1: data.harmonics + 1]
     K = data.harmonics
+    V = data.accel / (1j * data.omega)  # the plate's velocity at the harmonics
     parts = [(window_basis(windows, K), (SD, 0.0))]
     if law:
         U = friction_law.law_basis(v, switched, K)
         if law_orthogonal:
-            U = friction_law.beyond(U, sign, data.accel / (1j * data.omega))
+            U = friction_law.beyond(U, sign, V)
         parts.append((U, (friction_law.SD, friction_law.SD)))
     basis = np.hstack([U for U, _ in parts])
     scale = np.array([c for U, c in parts for _ in range(U.shape[1])], dtype=float).reshape(-1, 2)
-    return MotionData(data, data.accel / (1j * data.omega), sign, data.omega, velocity(DRIVE_GRID),
+    return MotionData(data, V, sign, data.omega, velocity(DRIVE_GRID),
                       basis, scale, windows)
 
 
