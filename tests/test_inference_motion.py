@@ -277,6 +277,29 @@ def test_the_deviations_prior_sd_is_taken_at_the_point_asked():
         LikelihoodSettings(deviation_scale="walker")
 
 
+def test_the_reversals_scale_with_the_total_coulomb_force_whatever_its_split():
+    """``reversal_scale="total"``: the reversals' deviations take their prior sd from
+    f1_0 + f2_0, so a reference that puts all the friction on the rotation (the split the
+    records tell least) scales them as the truth does; with "plate" the same reference
+    leaves them almost nothing to explain the plate's switches with, and the true
+    parameters lose many nats."""
+    p = paper_parameters("A3")
+    rec = generate_record(p, 0.5, settings=GeneratorSettings(), rng=3, setting_name="A3")
+    x = {n: getattr(p, n) for n in _rigid()}
+    x.update(f1_0=200.0, f2_0=60.0)  # a plate friction the reversals must absorb
+    swap = {**x, "f1_0": 0.0, "f2_0": x["f1_0"] + x["f2_0"]}
+    got = {}
+    for scale in ("plate", "total"):
+        data = motion_data(rec, 0.5, cutoff=30.0, reversal_scale=scale)
+        got[scale] = (motion_loglik(data, x, 1.0, 0.0, deviation_at=x)[0],
+                      motion_loglik(data, x, 1.0, 0.0, deviation_at=swap)[0])
+    assert got["total"][1] == pytest.approx(got["total"][0], rel=1e-12, abs=1e-9)
+    assert got["plate"][1] < got["plate"][0] - 10.0
+    with pytest.raises(ValueError, match="reversal_scale must be"):
+        from bayes_inerter.inference.likelihood import LikelihoodSettings
+        LikelihoodSettings(reversal_scale="rotation")
+
+
 def test_a_sampled_delay_finds_the_load_cells_latency():
     """A generator record whose load cell lags the accelerometer by 0.5 ms: with the delay
     sampled, the likelihood at the true parameters peaks within 0.02 ms of it plus the

@@ -27,6 +27,10 @@ DELAY_SD = 5e-4
 #: Where the motion-in likelihood's marginalised deviations take the Coulomb forces that
 #: scale their prior sd (``LikelihoodSettings.deviation_scale``).
 DEVIATION_SCALES = ("parameters", "reference")
+#: Whose Coulomb force scales the motion-in likelihood's reversal deviations
+#: (``LikelihoodSettings.reversal_scale``): the plate's alone, or the plate's and the
+#: rotation's together.
+REVERSAL_SCALES = ("plate", "total")
 #: The motion-in likelihood's normalisers (``LikelihoodSettings.normaliser``).
 NORMALISERS = ("reference", "full")
 
@@ -103,6 +107,13 @@ class LikelihoodSettings:
         "reference" (default): the reference point's, the start search's optimum
         (**assumption**: an empirical-Bayes scale); "parameters": each walker's own,
         whose Gaussian normaliser then pulls the sampled friction low.
+    reversal_scale : motion-in likelihood only: the Coulomb force in the prior sd of the
+        friction's deviations at the plate's reversals (``reversals.SD`` times it):
+        "total" (default), f1_0 + f2_0, or "plate", f1_0 alone, the earlier default.
+        Under ``deviation_scale="reference"`` the forces are the reference's, and the
+        split of the Coulomb force between plate and rotation is what a record tells
+        least: a reference with the friction on the rotation left the reversals no
+        room for the plate's (docs/inference.md, "The reversals' scale").
     """
 
     residual: str = "motion"
@@ -120,6 +131,7 @@ class LikelihoodSettings:
     delay_sd: float | None = None
     law_orthogonal: bool = True
     deviation_scale: str = "reference"
+    reversal_scale: str = "total"
 
     @property
     def sampled_delay_sd(self) -> float:
@@ -151,6 +163,9 @@ class LikelihoodSettings:
         if self.deviation_scale not in DEVIATION_SCALES:
             raise ValueError(f"deviation_scale must be one of {', '.join(DEVIATION_SCALES)}, "
                              f"got {self.deviation_scale!r}")
+        if self.reversal_scale not in REVERSAL_SCALES:
+            raise ValueError(f"reversal_scale must be one of {', '.join(REVERSAL_SCALES)}, "
+                             f"got {self.reversal_scale!r}")
         if self.delay_sd is not None and not (0 <= self.delay_sd < 0.01):
             raise ValueError(f"delay_sd must lie in [0, 0.01) s, got {self.delay_sd}")
         if self.delay_sd and self.residual != "motion":

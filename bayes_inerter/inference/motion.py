@@ -184,10 +184,15 @@ def _plate_motion(record: Record, freq: float, band: float, pool: int, settle: i
 
 
 def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, settle: int = 1,
-                sign_band: float = SIGN_BAND, law: bool = True, law_orthogonal: bool = True) -> MotionData:
+                sign_band: float = SIGN_BAND, law: bool = True, law_orthogonal: bool = True,
+                reversal_scale: str = "total") -> MotionData:
     """:class:`MotionData` of ``record`` driven at ``freq`` Hz (see module docstring);
     ``law_orthogonal``: the law's deviations with the plate's own Coulomb and viscous
-    harmonics taken out (``friction_law.beyond``)."""
+    harmonics taken out (``friction_law.beyond``); ``reversal_scale``: the reversals'
+    deviations scaled by the plate's Coulomb force ("plate") or by the plate's and the
+    rotation's ("total"; ``LikelihoodSettings.reversal_scale``)."""
+    if reversal_scale not in ("plate", "total"):
+        raise ValueError(f"reversal_scale must be 'plate' or 'total', got {reversal_scale!r}")
     data = harmonic_data(record, freq, cutoff=cutoff, pool=pool, settle=settle)
     velocity, accel, sigma_v = _plate_motion(record, freq, max(sign_band, cutoff), pool, settle)
     v = velocity(SIGN_GRID)
@@ -196,7 +201,7 @@ def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, se
     sign = (np.fft.rfft(switched) / SIGN_GRID * 2.0)[1: data.harmonics + 1]
     K = data.harmonics
     V = data.accel / (1j * data.omega)  # the plate's velocity at the harmonics
-    parts = [(window_basis(windows, K), (SD, 0.0))]
+    parts = [(window_basis(windows, K), (SD, SD if reversal_scale == "total" else 0.0))]
     if law:
         U = friction_law.law_basis(v, switched, K)
         if law_orthogonal:

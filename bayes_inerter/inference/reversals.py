@@ -21,8 +21,10 @@ around the reversal, so the likelihood marginalises it there:
   windows took in the slow stretch around a reversal);
 - its deviation from that mean: a_j P_j(x) with P_j the Legendre polynomials of degree
   j < d on the window (d at least ``DEGREES``, more for a wide window) and
-  a_j ~ N(0, (``SD`` f1_0)^2) (**assumption**: the
-  deviation is of the friction's own size; f1_0 the reference point's by default,
+  a_j ~ N(0, (``SD`` f_0)^2) (**assumption**: the
+  deviation is of the friction's own size; f_0 = f1_0 + f2_0, the Coulomb force of
+  plate and rotation together (``LikelihoodSettings.reversal_scale``; "plate" takes
+  f1_0 alone), the reference point's by default,
   ``LikelihoodSettings.deviation_scale``), whose harmonics form the columns of the
   basis U (2K real rows: the real parts, then the imaginary parts).
 
@@ -31,7 +33,7 @@ imaginary part) the marginal adds to the independent harmonics' log-likelihood
 
     -1/2 log det(I + s^2 U' D^-1 U) + 1/2 s^2 w' (I + s^2 U' D^-1 U)^-1 w,   w = U' D^-1 r,
 
-s = SD f1_0 (Woodbury's identity: the density of r under D + s^2 U U'). This is the
+s = SD f_0 (Woodbury's identity: the density of r under D + s^2 U U'). This is the
 "variance that lives at velocity reversals" of the likelihood's design: what the model
 cannot know is left free where it is, not smeared over every harmonic.
 """
@@ -65,7 +67,8 @@ DWELL = 0.02
 #: that sticks through its reversal).
 DEGREES = 8
 MAX_DEGREES = 24
-#: **Assumption**: the prior sd of each deviation's amplitude, in units of f1_0.
+#: **Assumption**: the prior sd of each deviation's amplitude, in units of the Coulomb
+#: force (f1_0 + f2_0, or f1_0 alone: ``LikelihoodSettings.reversal_scale``).
 SD = 1.0
 
 
