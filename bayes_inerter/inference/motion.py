@@ -109,6 +109,7 @@ from ..models import FIELDS
 from ..records.record import Record
 from ..simulate import run_exact
 from .harmonic import HarmonicData, harmonic_data
+from .likelihood import REVERSAL_SCALES
 from . import friction_law
 from .reversals import SD, deviations_mean, switched_sign, reversal_correction, reversal_windows, window_basis
 
@@ -191,8 +192,8 @@ def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, se
     harmonics taken out (``friction_law.beyond``); ``reversal_scale``: the reversals'
     deviations scaled by the plate's Coulomb force ("plate") or by the plate's and the
     rotation's ("total"; ``LikelihoodSettings.reversal_scale``)."""
-    if reversal_scale not in ("plate", "total"):
-        raise ValueError(f"reversal_scale must be 'plate' or 'total', got {reversal_scale!r}")
+    if reversal_scale not in REVERSAL_SCALES:
+        raise ValueError(f"reversal_scale must be one of {', '.join(REVERSAL_SCALES)}, got {reversal_scale!r}")
     data = harmonic_data(record, freq, cutoff=cutoff, pool=pool, settle=settle)
     velocity, accel, sigma_v = _plate_motion(record, freq, max(sign_band, cutoff), pool, settle)
     v = velocity(SIGN_GRID)
