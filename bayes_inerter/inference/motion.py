@@ -340,7 +340,7 @@ def _bearing_harmonics(period: np.ndarray, v: np.ndarray, c_B: float, k_B: float
     """The bearing's force z_B (V - V_s) at the harmonics 1..K from one period of the
     drivetrain's states (rows from t = 0) and the plate's velocity ``v`` on the same grid."""
     T_B = c_B * (v - period[:, 0]) + k_B * period[:, 3]
-    return np.fft.fft(T_B)[1: K + 1] / v.shape[0] * 2.0
+    return np.fft.rfft(T_B)[1: K + 1] / v.shape[0] * 2.0  # real: rfft's harmonics are fft's, in half the time
 
 
 _ROTATION = np.array([1], dtype=np.int64)  # the drivetrain's contact: the rotation (state 1)
