@@ -1,4 +1,4 @@
-"""Plots of a posterior: corner, credible bands, traces, phi.
+"""Plots of a posterior: corner, credible bands, traces, phi, force loops.
 
 In corner's shape: the data first, options by keyword, ``ax=`` (one panel) or ``fig=``
 (several) to draw into the caller's axes or figure, the figure returned; nothing is
@@ -12,11 +12,12 @@ import matplotlib
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..device import TABLE_I  # noqa: E402
 
-__all__ = ["plot_corner", "plot_bands", "plot_trace", "plot_phi", "reference_values"]
+__all__ = ["plot_corner", "plot_bands", "plot_trace", "plot_phi", "plot_loops", "reference_values"]
 
 UNITS = {"b": "kg", "f1_0": "N", "c_f1": "N s/m", "f2_0": "N", "c_f2": "N s/m", "c_n": "N s/m",
          "k_n": "N/m", "c_B": "N s/m", "k_B": "N/m", "sigma": "m/s²", "f_0": "N", "c_f": "N s/m", "delay": "s"}
@@ -334,4 +335,53 @@ def plot_phi(phi: np.ndarray, *, paper: float | None = None, title: str = "", ax
     ax.set_xlabel("fit accuracy φ (%), low-passed")
     ax.set_ylabel("draws")
     ax.set_title(title, fontsize=10)
+    return fig
+
+
+def _arcs(x: np.ndarray) -> list[np.ndarray]:
+    """Indices of a closed curve's two arcs on which ``x`` is monotonic (from its minimum
+    to its maximum and back), so that a band along each can be filled over x."""
+    n = len(x)
+    lo, hi = int(np.argmin(x)), int(np.argmax(x))
+    up = np.arange(lo, hi + 1 if hi >= lo else hi + n + 1) % n
+    down = np.arange(hi, lo + 1 if lo >= hi else lo + n + 1) % n
+    return [up, down]
+
+
+def plot_loops(loops, titles, *, level: float = 0.94, per_row: int | None = None, fig=None):
+    """Force-displacement and force-velocity loops over one steady period
+    (``loops.PeriodLoops``), two panels per record: the measured force (black) and the
+    model's predicted force given the measured motion, its posterior median (red) and
+    ``level`` credible band (orange), filled along each half of the loop.
+    ``loops``, ``titles``: one each per record. ``per_row``: records side by side in a
+    row (default 1 for up to three records, else 3). ``fig``: draw into this (empty)
+    figure."""
+    loops = list(loops)
+    titles = list(titles)
+    if len(loops) != len(titles) or not loops:
+        raise ValueError(f"give one title per record's loops, got {len(loops)} loops and {len(titles)} titles")
+    per_row = per_row or (1 if len(loops) <= 3 else 3)
+    rows = -(-len(loops) // per_row)
+    fig = _figure(fig, figsize=(10 * per_row, 3.4 * rows + 0.4), layout="constrained")
+    axes = np.atleast_2d(fig.subplots(rows, 2 * per_row))
+    for k, (lp, title) in enumerate(zip(loops, titles)):
+        pair = axes[k // per_row, 2 * (k % per_row): 2 * (k % per_row) + 2]
+        lo, mid, hi = lp.band(level)
+        for ax, x, unit in ((pair[0], lp.displacement, "displacement (mm)"), (pair[1], lp.velocity, "velocity (mm/s)")):
+            for arc in _arcs(x):
+                ax.fill_between(x[arc] * 1e3, lo[arc] / 1e3, hi[arc] / 1e3, color="tab:orange", alpha=0.45, lw=0)
+            closed = np.append(np.arange(len(x)), 0)
+            ax.plot(x[closed] * 1e3, lp.measured[closed] / 1e3, color="k", lw=1.0)
+            ax.plot(x[closed] * 1e3, mid[closed] / 1e3, color="tab:red", lw=0.9, ls="--")
+            ax.set_xlabel(unit)
+            ax.set_ylabel("force (kN)")
+            ax.grid(alpha=0.3)
+        pair[0].set_title(title, fontsize=10, loc="left")
+    for ax in axes.ravel()[2 * len(loops):]:
+        ax.set_visible(False)
+    handles = [plt.Line2D([], [], color="k", lw=1.0), plt.Line2D([], [], color="tab:red", lw=0.9, ls="--"),
+               Patch(color="tab:orange", alpha=0.45)]
+    fig.legend(handles, ["measured (the steady periods' mean)", "model given the measured motion, posterior median",
+                         f"{level:.0%} credible band (parameters)"], fontsize=8, loc="outside upper center", ncol=3,
+               frameon=False)
     return fig
