@@ -63,6 +63,7 @@ def test_fit_writes_every_output(tmp_path, ar1_record_file, capsys):
     for name in ("summary.csv", "posterior.nc", "loo.json", "chain.h5", "corner.png", "bands.png", "trace.png",
                  "phi.png", "fit.json"):
         assert (out / name).exists(), name
+    assert not (out / "loops.png").exists()  # the time-domain likelihoods predict no force
     header = (out / "summary.csv").read_text().splitlines()[0]
     assert header == "name,kind,mean,sd,hdi_3%,hdi_97%,r_hat,ess_bulk,ess_tail,flag"
     import arviz as az
@@ -106,8 +107,9 @@ def test_the_default_likelihoods_fit_writes_every_output(tmp_path, record_file, 
                  "--processes", "1"]) == 0
     text = capsys.readouterr().out
     for name in ("summary.csv", "posterior.nc", "loo.json", "chain.h5", "corner.png", "bands.png", "trace.png",
-                 "phi.png", "fit.json"):
+                 "phi.png", "loops.png", "fit.json"):
         assert (out / name).exists(), name
+    assert "loops.png, fit.json" in text
     info = json.loads((out / "fit.json").read_text())
     assert info["likelihood"]["residual"] == "motion"
     rows = {r["name"]: r for r in csv.DictReader(open(out / "summary.csv"))}

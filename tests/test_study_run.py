@@ -342,7 +342,7 @@ def test_report_command_draws_the_figures_again(study, capsys):
         png.unlink()
     assert main(["report", str(fit)]) == 0
     assert "drew the figures of 1 of 1 fits" in capsys.readouterr().out
-    assert {p.name for p in fit.glob("*.png")} == {"corner.png", "bands.png", "trace.png", "phi.png"}
+    assert {p.name for p in fit.glob("*.png")} == {"corner.png", "bands.png", "trace.png", "phi.png", "loops.png"}
     (fit / "chain.h5").rename(fit / "kept.h5")
     try:
         assert main(["report", str(fit)]) == 1

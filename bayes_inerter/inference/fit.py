@@ -42,6 +42,9 @@ __all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versi
 DRAWS_FILE = "b_draws.npz"
 #: Every sampled parameter's kept draws of a joint fit, by name (``fit_joint(all_draws=True)``).
 ALL_DRAWS_FILE = "draws.npz"
+#: Posterior draws (evenly spaced over the kept chain) whose predicted force makes
+#: loops.png's band.
+LOOP_DRAWS = 200
 
 
 @dataclass
@@ -366,10 +369,12 @@ def _run_info(name: str, model, got: _Sampled, seed: int, extra: dict) -> dict:
 
 
 def _write_joint_plots(out: Path, jm, sample, warmup: int) -> None:
-    """corner.png (the b's, with the records' true b's where all have one) and trace.png."""
+    """corner.png (the b's, with the records' true b's where all have one), trace.png,
+    and for the motion-in likelihood loops.png (two panels per record, as a single fit's)."""
     import matplotlib.pyplot as plt
 
-    from .plots import plot_corner, plot_trace
+    from .loops import period_loops
+    from .plots import plot_corner, plot_loops, plot_trace
 
     nb = len(jm.settings)
     flat = sample.values.reshape(-1, jm.ndim)
@@ -379,6 +384,10 @@ def _write_joint_plots(out: Path, jm, sample, warmup: int) -> None:
                                       truths=truths if all(t is not None for t in truths) else None,
                                       title=f"joint model, {len(jm.records)} records: inertance per setting"),
             "trace.png": plot_trace(sample.theta, jm.names, burn=sample.burn, thin=sample.thin, warmup=warmup)}
+    if all(part.motion is not None for part in jm.parts):
+        thetas = _loop_draws(sample.theta, jm.ndim)
+        figs["loops.png"] = plot_loops([period_loops(part, [jm.part_theta(t, k) for t in thetas])
+                                        for k, part in enumerate(jm.parts)], joint_records(jm))
     for name, fig in figs.items():
         fig.savefig(out / name, dpi=100)
         plt.close(fig)
@@ -449,14 +458,23 @@ def _label(pm: PosteriorModel, name: str | None) -> str:
     return ", ".join(words) + f", {pm.drive.hz:.4g} Hz"
 
 
+def _loop_draws(theta: np.ndarray, ndim: int) -> np.ndarray:
+    """Up to :data:`LOOP_DRAWS` kept draws, evenly spaced over the chain (walkers x draws x
+    ndim), for the loops' band."""
+    flat = theta.reshape(-1, ndim)
+    return flat[np.unique(np.linspace(0, len(flat) - 1, min(LOOP_DRAWS, len(flat))).astype(int))]
+
+
 def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, warmup: int, b_interval=None,
                  b_theory: float | None = None) -> None:
     """corner.png (with b's reported interval, where it identifies b, and the device
-    file's theoretical b), bands.png, trace.png (naming the burn-in as ``fit`` prints it)
-    and phi.png."""
+    file's theoretical b), bands.png, trace.png (naming the burn-in as ``fit`` prints it),
+    phi.png, and for the motion-in likelihood loops.png (the force against displacement
+    and velocity over a steady period, measured and predicted, ``loops``)."""
     import matplotlib.pyplot as plt
 
-    from .plots import plot_bands, plot_corner, plot_phi, plot_trace, reference_values
+    from .loops import period_loops
+    from .plots import plot_bands, plot_corner, plot_loops, plot_phi, plot_trace, reference_values
 
     meta = pm.record.metadata
     flat = sample.values.reshape(-1, len(sample.names))
@@ -474,6 +492,9 @@ def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, war
         "trace.png": plot_trace(sample.theta, sample.names, burn=sample.burn, thin=sample.thin, warmup=warmup),
         "phi.png": plot_phi(sample.phi, title=f"{label}: fit accuracy"),
     }
+    if pm.motion is not None:
+        figs["loops.png"] = plot_loops([period_loops(pm, _loop_draws(sample.theta, pm.ndim))],
+                                       [f"{label}: force over a steady period ({pm.model} model)"])
     for name, fig in figs.items():
         fig.savefig(out / name, dpi=100)
         plt.close(fig)

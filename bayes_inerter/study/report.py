@@ -59,7 +59,9 @@ def _joint_section(rows, info, calibration=None, truth_b=None, gains=None) -> li
     out = ["### Joint model: all records at once", "", text, "",
            table(rows, [c for c in cols if c in rows[0]],
                   {c: "{:.1f}" for c in one} | {"r_hat": "{:.3f}", "ess_bulk": "{:.0f}"}), "",
-           "The joint posterior's corner plot is `joint/corner.png`, drawn where the joint chain ran.", ""]
+           "The joint posterior's corner plot is `joint/corner.png`, and its force-displacement and "
+           "force-velocity loops over a steady period, two panels per record, `joint/loops.png` (the "
+           "motion-in likelihood's fits); both are drawn where the joint chain ran.", ""]
     return out
 
 
