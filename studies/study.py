@@ -32,7 +32,7 @@ from bayes_inerter.study import write_headline
 OUT = Path(__file__).resolve().parents[1] / "results" / "full"
 HEADLINE = OUT / "paper-like"
 #: Studies made from these results whose SECTION.md the report takes in (run them, then
-#: this again: every fit is reused).
+#: this again with --report-only).
 MORE = [OUT.parent / "structure", OUT.parent / "leave-one-frequency-out", OUT.parent / "prior-sensitivity",
         OUT.parent / "study-calibration"]
 
@@ -60,7 +60,13 @@ if __name__ == "__main__":
     ap.add_argument("--scheduler", default=None)
     ap.add_argument("--seed", type=int, default=0, help="the paper-like laboratory's seed (0)")
     ap.add_argument("--paper-like-steps", type=int, default=3000, help="steps of each paper-like chain (3000)")
+    ap.add_argument("--report-only", action="store_true",
+                    help="only write REPORT.md again from the results there (the other studies' SECTION.md included)")
     args = ap.parse_args()
+    summary = SUMMARY.format(seed=args.seed, steps=args.paper_like_steps)
+    if args.report_only:
+        print(f"wrote {write_headline(OUT, HEADLINE, title=TITLE, summary=summary, more=[p / 'SECTION.md' for p in MORE])}")
+        sys.exit(0)
     pool = (["--processes", args.processes] if args.processes else []) + (
         ["--scheduler", args.scheduler] if args.scheduler else [])
     _run(["study", "--out", str(OUT), *pool])
@@ -69,7 +75,5 @@ if __name__ == "__main__":
         _run(["generate", "--paper-grid", "--truth", "paper-like", "--seed", str(args.seed), "--out", str(records)])
     _run(["study", "--records", str(records), "--out", str(HEADLINE), "--no-joint",
           "--steps", str(args.paper_like_steps), *pool])
-    path = write_headline(OUT, HEADLINE, title=TITLE, summary=SUMMARY.format(seed=args.seed,
-                                                                             steps=args.paper_like_steps),
-                          more=[p / "SECTION.md" for p in MORE])
+    path = write_headline(OUT, HEADLINE, title=TITLE, summary=summary, more=[p / "SECTION.md" for p in MORE])
     print(f"wrote {path}")
