@@ -1,5 +1,6 @@
 """docs/performance.md from results/performance/*.csv: one table per benchmark file, each
-row with its commit, machine and date.
+row with its commit, machine and date, after the file's note (<name>.md beside it) where
+there is one.
 
     python benchmarks/performance_table.py
 
@@ -45,7 +46,10 @@ def main():
              "and writes its rows to `results/performance/`). Made by `python benchmarks/performance_table.py`; "
              "do not edit by hand. Every number holds for the machine and commit of its row only.", ""]
     for path in sorted(SOURCE.glob("*.csv")):
-        lines += [f"## {path.stem}", "", f"`results/performance/{path.name}`", "", *table(path), ""]
+        note = path.with_suffix(".md")  # what the columns mean, where a benchmark keeps one
+        lines += [f"## {path.stem}", "", f"`results/performance/{path.name}`", ""]
+        lines += [note.read_text().strip(), ""] if note.is_file() else []
+        lines += [*table(path), ""]
     OUT.write_text("\n".join(lines))
     print(f"wrote {OUT}")
 

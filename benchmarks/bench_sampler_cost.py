@@ -1,0 +1,157 @@
+"""Benchmark: what a fit costs beyond its log-probability evaluations (issue 40, item 2).
+
+One fit of a paper-like record (``records.paper_like``, laboratory ``--seed``) for a fixed
+``--steps`` on one process, ``fit_record`` as ``bayes-inerter fit`` runs it, timed in
+phases from its own callbacks:
+
+- **start search**: from the call to the sampler's first report (the start search and the
+  likelihood's reference point);
+- **first step**: from there to the first step (the initial ensemble and one step);
+- **sampling**: the remaining steps, wall time, and in it
+  - the evaluations: every ``PosteriorModel.log_prob`` call, counted and timed in the run;
+  - the adaptation: ``Adaptation.fit``, the fitted moves' refits;
+  - the rest: emcee, the moves' proposals, the checkpoint, the callbacks;
+- **outputs**: the posterior draws and files after sampling (no figures).
+
+Then the same evaluations at the log-probability's own speed: every 50th point the
+sampler evaluated, timed again alone (median of 5 passes), times the count. The ratio
+sampling / that is what the sampler costs per evaluation (target: at most 1.25). One
+row per run goes to results/performance/sampler_cost.csv.
+
+    python benchmarks/bench_sampler_cost.py [--setting A3] [--freq 1.0] [--steps 1000] [--seed 0]
+
+The machine is shared and noisy: the ratios within a run are what to read.
+"""
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from _timing import record_row
+
+from bayes_inerter.inference import PosteriorModel, fit_record
+from bayes_inerter.inference.sampler import Adaptation
+from bayes_inerter.records.paper_like import PaperLike, paper_like_record
+
+TARGET_RATIO = 1.25
+KEEP_EVERY = 50
+
+
+class _Clock:
+    """Wraps PosteriorModel.log_prob and Adaptation.fit for one run: counts and times them
+    while ``on`` is set, and keeps every KEEP_EVERY-th point evaluated."""
+
+    def __init__(self):
+        self.on = False
+        self.calls = 0
+        self.eval_s = 0.0
+        self.adapt_s = 0.0
+        self.kept = []
+        self.model = None
+        self._log_prob = PosteriorModel.log_prob
+        self._fit = Adaptation.fit
+
+    def __enter__(self):
+        clock = self
+
+        def log_prob(model, theta):
+            if not clock.on:
+                return clock._log_prob(model, theta)
+            t0 = time.perf_counter()
+            got = clock._log_prob(model, theta)
+            clock.eval_s += time.perf_counter() - t0
+            if clock.calls % KEEP_EVERY == 0:
+                clock.kept.append(np.array(theta, dtype=float))
+                clock.model = model
+            clock.calls += 1
+            return got
+
+        def fit(adaptation, chain, log_prob_values):
+            t0 = time.perf_counter()
+            got = clock._fit(adaptation, chain, log_prob_values)
+            if clock.on:
+                clock.adapt_s += time.perf_counter() - t0
+            return got
+
+        PosteriorModel.log_prob = log_prob
+        Adaptation.fit = fit
+        return self
+
+    def __exit__(self, *exc):
+        PosteriorModel.log_prob = self._log_prob
+        Adaptation.fit = self._fit
+
+
+def _alone(model, thetas, passes: int = 5) -> float:
+    """Median seconds per log_prob over ``thetas``, timed alone."""
+    per = []
+    for _ in range(passes):
+        t0 = time.perf_counter()
+        for theta in thetas:
+            model.log_prob(theta)
+        per.append((time.perf_counter() - t0) / len(thetas))
+    return float(np.median(per))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--setting", default="A3")
+    ap.add_argument("--freq", type=float, default=1.0)
+    ap.add_argument("--steps", type=int, default=1000)
+    ap.add_argument("--seed", type=int, default=0, help="the paper-like laboratory's seed and the fit's")
+    args = ap.parse_args()
+    record = paper_like_record(args.setting, args.freq, seed=args.seed, device=PaperLike())
+    marks = {}
+
+    def report(status):
+        marks.setdefault("reported", time.perf_counter())
+
+    def progress(iteration, target):
+        now = time.perf_counter()
+        if "first" not in marks:
+            marks["first"] = now
+            clock.on = True
+        marks["last"] = now
+
+    with tempfile.TemporaryDirectory() as tmp, _Clock() as clock:
+        t0 = time.perf_counter()
+        res = fit_record(record, Path(tmp) / "fit", steps=args.steps, seed=args.seed, processes=1, plots=False,
+                         report=report, progress=progress)
+        t_end = time.perf_counter()
+        clock.on = False
+        alone = _alone(clock.model, clock.kept)
+    start_s = marks["reported"] - t0
+    first_s = marks["first"] - marks["reported"]
+    sampling_s = marks["last"] - marks["first"]
+    outputs_s = t_end - marks["last"]
+    at_own_speed = clock.calls * alone
+    ratio = sampling_s / at_own_speed
+    rest_s = sampling_s - clock.eval_s - clock.adapt_s
+    total = t_end - t0
+    print(f"{args.setting} {args.freq:g} Hz paper-like (seed {args.seed}), {args.steps} steps, "
+          f"{res.idata.posterior.sizes['chain']} walkers, one process")
+    print(f"  start search      {start_s:8.1f} s  ({start_s / total:.1%} of the run)")
+    print(f"  first step        {first_s:8.1f} s")
+    print(f"  sampling          {sampling_s:8.1f} s  ({clock.calls} evaluations)")
+    print(f"    evaluations     {clock.eval_s:8.1f} s  (in the run: {1e3 * clock.eval_s / clock.calls:.3f} ms each)")
+    print(f"    adaptation      {clock.adapt_s:8.1f} s")
+    print(f"    the rest        {rest_s:8.1f} s  (emcee, moves, checkpoint, callbacks)")
+    print(f"  outputs           {outputs_s:8.1f} s")
+    print(f"  alone: {1e3 * alone:.3f} ms per evaluation ({len(clock.kept)} of the run's points, median of 5 "
+          f"passes); the evaluations at that speed {at_own_speed:.1f} s")
+    print(f"  sampling / evaluations at their own speed: {ratio:.2f} (target at most {TARGET_RATIO})")
+    path = record_row("sampler_cost", {
+        "record": f"{args.setting}_{args.freq:g}Hz", "truth": "paper-like", "seed": args.seed, "steps": args.steps,
+        "walkers": int(res.idata.posterior.sizes["chain"]), "evaluations": clock.calls,
+        "start_search_s": round(start_s, 2), "first_step_s": round(first_s, 2), "sampling_s": round(sampling_s, 2),
+        "evaluations_s": round(clock.eval_s, 2), "adaptation_s": round(clock.adapt_s, 2), "rest_s": round(rest_s, 2),
+        "outputs_s": round(outputs_s, 2), "ms_per_eval_alone": round(1e3 * alone, 4),
+        "ratio": round(ratio, 3), "start_share": round(start_s / total, 3), "met": ratio <= TARGET_RATIO})
+    print(f"wrote a row to {path}")
+
+
+if __name__ == "__main__":
+    main()
