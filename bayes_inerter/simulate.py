@@ -52,6 +52,7 @@ __all__ = [
     "Drive",
     "run_piecewise_linear",
     "run_exact",
+    "exact_runner",
     "contacts",
     "SimulationError",
     "MAX_EVENTS_PER_STEP",
@@ -215,15 +216,29 @@ def run_exact(A, B, nodes, f0, mass, inputs, h, *, x0=None, store=False, max_eve
     """:func:`run_piecewise_linear` given the contacts as arrays: their ``nodes`` (int),
     Coulomb bounds ``f0`` (N, > 0) and node masses (kg). The likelihood's entry point,
     which forms these without building a network (``models.linear_chain``)."""
+    return exact_runner(A, B, nodes, f0, mass, h, max_events=max_events, sampling=sampling)(inputs, x0=x0, store=store)
+
+
+def exact_runner(A, B, nodes, f0, mass, h, *, max_events=MAX_EVENTS_PER_STEP, sampling="instant"):
+    """:func:`run_exact` with everything but the inputs fixed: a callable
+    ``run(inputs, x0=None, store=False)`` returning what :func:`run_exact` returns. The
+    augmented matrix and the kernel are formed once, so a caller that simulates the same
+    network piece by piece (a period at a time, each from the last one's end state) pays
+    for them once."""
     n = A.shape[0]
     B = np.ascontiguousarray(B, dtype=float).reshape(n, -1)
     n_in = B.shape[1]
     nodes = np.asarray(nodes, dtype=np.int64)
-    Abar = _augmented(np.ascontiguousarray(A, dtype=float), B, nodes, np.asarray(mass, dtype=float))
-    z0 = _initial(x0, n)
+    mass = np.asarray(mass, dtype=float)
+    Abar = _augmented(np.ascontiguousarray(A, dtype=float), B, nodes, mass)
     kernel = _kernel.kernel_for(n, n_in, nodes, 0, (Abar != 0).tobytes())
-    out = kernel(Abar, n, n_in, nodes, f0, mass, _inputs(inputs, n_in), float(h), z0, 0, store, int(max_events))
-    return _outputs(out, h, max_events, sampling)
+    h, max_events = float(h), int(max_events)
+
+    def run(inputs, x0=None, store=False):
+        out = kernel(Abar, n, n_in, nodes, f0, mass, _inputs(inputs, n_in), h, _initial(x0, n), 0, store, max_events)
+        return _outputs(out, h, max_events, sampling)
+
+    return run
 
 
 def _initial(x0, n):

@@ -331,3 +331,28 @@ def test_output_is_finite_over_wide_parameters():
 
     finite_or_refused()
     assert sum(simulated.values()) >= len(simulated) / 2, simulated
+
+
+def test_an_exact_runner_is_run_exact_with_the_network_fixed():
+    """``exact_runner`` forms the network once; each call is ``run_exact``'s, bit for bit,
+    and keeps no state between calls (the motion-in likelihood's drivetrain, a period at a
+    time)."""
+    from bayes_inerter.simulate import exact_runner, run_exact
+
+    b, m_s, c_n, k_n, c_B, k_B, c_f2 = 3000.0, 20.0, 5e5, 2e6, 50.0, 6e7, 200.0
+    A = np.array([[-(c_B + c_n) / m_s, c_n / m_s, -k_n / m_s, k_B / m_s], [c_n / b, -(c_n + c_f2) / b, k_n / b, 0.0],
+                  [1.0, -1.0, 0.0, 0.0], [-1.0, 0.0, 0.0, 0.0]])
+    B = np.array([[c_B / m_s], [0.0], [0.0], [1.0]])
+    h = 1e-3
+    t = np.arange(2001) * h
+    u = (0.06 * np.cos(2 * np.pi * t)).reshape(-1, 1)  # a plate velocity, m/s
+    args = (A, B, np.array([1]), np.array([2000.0]), np.array([b]))  # f2_0 2 kN: the rotation sticks at reversals
+    run = exact_runner(*args, h)
+    first = run(u, store=True)
+    whole = run_exact(*args, u, h, store=True)
+    assert np.array_equal(first[0], whole[0]) and np.array_equal(first[1], whole[1])
+    v_th = first[1][:, 1]
+    assert np.sum(np.diff(v_th) == 0.0) > 10 and np.ptp(v_th) > 0.01  # the rotation sticks at times, and slides
+    again = run(u[1000:], x0=first[1][1000], store=True)
+    assert np.array_equal(again[1], run_exact(*args, u[1000:], h, x0=first[1][1000], store=True)[1])
+    assert np.array_equal(run(u, store=True)[1], first[1])  # no state kept between calls

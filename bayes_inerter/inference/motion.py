@@ -23,7 +23,7 @@ f2_0 / c_n in velocity, and it sticks at each reversal until the nut's force exc
 f2_0). Where f2_0 > 0 the drivetrain behind the plate (the screw's translation and
 rotation, Coulomb friction on the rotation, set-valued) is therefore **simulated**, driven
 by the measured plate velocity on ``DRIVE_GRID`` points a period with the exact kernel
-(``simulate.run_exact``), from the linear periodic state for ``DRIVE_SETTLE`` periods and
+(``simulate.exact_runner``), from the linear periodic state for ``DRIVE_SETTLE`` periods and
 then a period at a time until two successive periods' bearing force agree
 (``DRIVE_TOL``, at most ``DRIVE_MAX_PERIODS``), and the bearing's force z_B (V - V_s) is
 taken from the last. This replaced
@@ -107,7 +107,7 @@ from numba import njit
 
 from ..models import FIELDS
 from ..records.record import Record
-from ..simulate import run_exact
+from ..simulate import exact_runner
 from .harmonic import HarmonicData, harmonic_data
 from .likelihood import REVERSAL_SCALES
 from . import friction_law
@@ -323,15 +323,15 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
                   [-1.0, 0.0, 0.0, 0.0]])  # states v_s, v_th, x_s - x_th, x_B - x_s; input v_B
     B = np.array([[c_B / m_s], [0.0], [0.0], [1.0]])
     u = data.drive_input / gain
-    h = 1.0 / (N * freq)
-    _, states = run_exact(A, B, _ROTATION, np.array([f2_0]), np.array([b]), u, h, x0=x0, store=True)
+    run = exact_runner(A, B, _ROTATION, np.array([f2_0]), np.array([b]), 1.0 / (N * freq))
+    _, states = run(u, x0=x0, store=True)
     before = _bearing_harmonics(states[-2 * N - 1: -N - 1], v, c_B, k_B, data.harmonics)
     got = _bearing_harmonics(states[-N - 1: -1], v, c_B, k_B, data.harmonics)
     one = u[-N - 1:]  # one period and the next sample
     for _ in range(DRIVE_MAX_PERIODS - DRIVE_SETTLE - 1):
         if float(np.max(np.abs(got - before))) <= DRIVE_TOL:
             break
-        _, states = run_exact(A, B, _ROTATION, np.array([f2_0]), np.array([b]), one, h, x0=states[-1], store=True)
+        _, states = run(one, x0=states[-1], store=True)
         before, got = got, _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
     return got
 
