@@ -19,7 +19,10 @@ zeroth harmonic, a static offset the model does not make) is left out of both. T
 predicted force is the **model's** force alone: the deviations the likelihood
 marginalises at the reversals and for the friction law's shape (``reversals``,
 ``friction_law``) are not in it, so a loop shows what the physical model explains and
-where it does not.
+where it does not. Both curves hold only the harmonics the likelihood compares (up to its
+cutoff, 30 Hz by default): the model's Coulomb switch is a step, and its truncated
+harmonics ripple after each reversal (Gibbs), where a real contact's smoother switch
+rings less.
 """
 
 from __future__ import annotations
