@@ -386,8 +386,11 @@ def _write_joint_plots(out: Path, jm, sample, warmup: int) -> None:
             "trace.png": plot_trace(sample.theta, jm.names, burn=sample.burn, thin=sample.thin, warmup=warmup)}
     if all(part.motion is not None for part in jm.parts):
         thetas = _loop_draws(sample.theta, jm.ndim)
-        figs["loops.png"] = plot_loops([period_loops(part, [jm.part_theta(t, k) for t in thetas])
-                                        for k, part in enumerate(jm.parts)], joint_records(jm))
+        try:  # as a single fit's: no usable draw, no loops, the other outputs kept
+            figs["loops.png"] = plot_loops([period_loops(part, [jm.part_theta(t, k) for t in thetas])
+                                            for k, part in enumerate(jm.parts)], joint_records(jm))
+        except ValueError:
+            pass
     for name, fig in figs.items():
         fig.savefig(out / name, dpi=100)
         plt.close(fig)
@@ -493,8 +496,11 @@ def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, war
         "phi.png": plot_phi(sample.phi, title=f"{label}: fit accuracy"),
     }
     if pm.motion is not None:
-        figs["loops.png"] = plot_loops([period_loops(pm, _loop_draws(sample.theta, pm.ndim))],
-                                       [f"{label}: force over a steady period ({pm.model} model)"])
+        try:  # a figure never costs the fit's other outputs: without a usable draw there is no loop
+            figs["loops.png"] = plot_loops([period_loops(pm, _loop_draws(sample.theta, pm.ndim))],
+                                           [f"{label}: force over a steady period ({pm.model} model)"])
+        except ValueError:
+            pass
     for name, fig in figs.items():
         fig.savefig(out / name, dpi=100)
         plt.close(fig)
