@@ -34,8 +34,7 @@ import numpy as np
 
 from _timing import record_row
 
-from bayes_inerter.inference import PosteriorModel, fit_record
-from bayes_inerter.inference.sampler import Adaptation
+from bayes_inerter.inference import Adaptation, PosteriorModel, fit_record
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 
 TARGET_RATIO = 1.25
