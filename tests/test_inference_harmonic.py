@@ -148,3 +148,13 @@ def test_the_command_lines_likelihoods_are_the_librarys():
 
     assert FIT_RESIDUALS == RESIDUALS
     assert DEFAULT_RESIDUAL == LikelihoodSettings().residual
+
+
+def test_at_times_sums_the_harmonics_back_to_a_signal():
+    from bayes_inerter.inference.harmonic import at_times
+
+    omega = 2 * np.pi * np.array([1.0, 3.0])
+    t = np.array([0.0, 0.25, 1 / 12])
+    X = np.array([2.0, -0.5j])  # 2 cos(w t) + 0.5 sin(3 w t)
+    expected = 2 * np.cos(omega[0] * t) + 0.5 * np.sin(omega[1] * t)
+    np.testing.assert_allclose(at_times(X, omega, t), expected, atol=1e-12)

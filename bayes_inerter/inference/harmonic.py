@@ -52,7 +52,7 @@ import numpy as np
 from ..records.drive import steady_periods
 from ..records.record import Record
 
-__all__ = ["HarmonicData", "harmonic_data", "linear_transfer", "harmonic_variance", "harmonic_loglik"]
+__all__ = ["HarmonicData", "harmonic_data", "linear_transfer", "harmonic_variance", "harmonic_loglik", "at_times"]
 
 
 @dataclass(frozen=True)
@@ -156,6 +156,12 @@ def harmonic_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, 
                         _pooled((np.abs(dA) ** 2).sum(axis=0) / dof, pool),
                         _pooled((np.abs(dF) ** 2).sum(axis=0) / dof, pool),
                         _pooled((dA * np.conj(dF)).sum(axis=0) / dof, pool))
+
+
+def at_times(X: np.ndarray, omega: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The periodic signal with harmonics ``X`` (complex amplitudes at ``omega``, rad/s) at
+    the times ``t`` (s): Re sum_k X_k exp(i omega_k t)."""
+    return np.real(np.exp(1j * np.outer(t, omega)) @ X)
 
 
 def linear_transfer(A: np.ndarray, B: np.ndarray, omega: np.ndarray) -> np.ndarray:

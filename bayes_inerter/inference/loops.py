@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..simulate import SimulationError
+from .harmonic import at_times
 from .motion import predicted_force
 
 __all__ = ["PeriodLoops", "period_loops", "POINTS"]
@@ -68,11 +69,6 @@ class PeriodLoops:
         return lo, mid, hi
 
 
-def _on_period(X: np.ndarray, omega: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Re sum_k X_k exp(i w_k t) at the times t."""
-    return np.real(np.exp(1j * np.outer(t, omega)) @ X)
-
-
 def period_loops(model, thetas, *, points: int = POINTS) -> PeriodLoops:
     """The loops of ``model`` (a ``PosteriorModel`` of the motion-in likelihood) at the
     posterior draws ``thetas`` (draws x ndim, the model's sampled coordinates).
@@ -96,8 +92,8 @@ def period_loops(model, thetas, *, points: int = POINTS) -> PeriodLoops:
         except (SimulationError, ValueError):
             continue
         if np.all(np.isfinite(F)):
-            predicted.append(_on_period(F, omega, t))
+            predicted.append(at_times(F, omega, t))
     if not predicted:
         raise ValueError("no posterior draw gave a predicted force")
-    return PeriodLoops(t, _on_period(accel / (1j * omega) ** 2, omega, t), _on_period(accel / (1j * omega), omega, t),
-                       _on_period(data.harmonic.force, omega, t), np.array(predicted))
+    return PeriodLoops(t, at_times(accel / (1j * omega) ** 2, omega, t), at_times(accel / (1j * omega), omega, t),
+                       at_times(data.harmonic.force, omega, t), np.array(predicted))

@@ -108,7 +108,7 @@ from numba import njit
 from ..models import FIELDS
 from ..records.record import Record
 from ..simulate import exact_runner
-from .harmonic import HarmonicData, harmonic_data
+from .harmonic import HarmonicData, at_times, harmonic_data
 from .likelihood import REVERSAL_SCALES
 from . import friction_law
 from .reversals import SD, deviations_mean, switched_sign, reversal_correction, reversal_windows, window_basis
@@ -179,7 +179,7 @@ def _plate_motion(record: Record, freq: float, band: float, pool: int, settle: i
     sigma_v = math.sqrt(float(np.sum(fine.var_accel / fine.omega ** 2)) / (2.0 * fine.periods))
 
     def on_grid(X):
-        return lambda n: np.real(np.exp(1j * np.outer(np.arange(n) / (n * freq), fine.omega)) @ X)
+        return lambda n: at_times(X, fine.omega, np.arange(n) / (n * freq))
 
     return on_grid(V), on_grid(fine.accel), sigma_v
 

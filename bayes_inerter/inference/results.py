@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .harmonic import at_times
 from .model import PosteriorModel
 
 __all__ = ["PosteriorSample", "ar1_noise", "posterior_sample", "contraction", "to_inference_data", "summary_rows",
@@ -159,8 +160,7 @@ def _predictive_error(model: PosteriorModel, theta, rng: np.random.Generator) ->
         return ar1_noise(rng, len(model.grid), sigma, rho)
     V = model.accel_error_variance(theta)
     z = (rng.standard_normal(len(V)) + 1j * rng.standard_normal(len(V))) * np.sqrt(V / 2.0)
-    t = model.record.time[model.grid]
-    return np.real(np.exp(1j * np.outer(t, model.harmonic.omega)) @ z)
+    return at_times(z, model.harmonic.omega, model.record.time[model.grid])
 
 
 def ar1_noise(rng, n, sigma, rho):
