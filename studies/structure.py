@@ -83,7 +83,8 @@ def main() -> int:
     OUT.mkdir(parents=True, exist_ok=True)
     priors = StructurePriors()
     with np.load(FULL / "joint" / "b_draws.npz") as npz:
-        precise = identified_from_draws({k: npz[k] for k in npz.files}, "control: joint posterior draws")
+        draws = {k: npz[k] for k in npz.files}
+    precise = identified_from_draws(draws, "control: joint posterior draws")
     control = with_identification_error(precise, args.per_setting, args.common)
     paper_like = with_identification_error(
         identified_from_intervals(_rows(FULL / "paper-like" / "inertance.csv"), "b_honest_3%", "b_honest_97%",
@@ -125,8 +126,7 @@ def main() -> int:
                                                   "per_setting_sd": args.per_setting, "common_sd": args.common,
                                                   "priors": {k: getattr(priors, k) for k in priors.__dataclass_fields__},
                                                   "sources": {k: v.source for k, v in sets.items()}}, indent=2) + "\n")
-    with np.load(FULL / "joint" / "b_draws.npz") as npz:
-        rest = identified_from_draws({k: npz[k] for k in npz.files if k != "b_A0"}, "control without A0")
+    rest = identified_from_draws({k: v for k, v in draws.items() if k != "b_A0"}, "control without A0")
     without_a0 = explanations(with_identification_error(rest, args.per_setting, args.common), priors)[3]
     (OUT / "SECTION.md").write_text(_section(expl, fits, freq, priors, args, without_a0,
                                              _rows(FULL / "paper-like" / "least_squares.csv")))
