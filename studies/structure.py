@@ -107,10 +107,11 @@ def main() -> int:
                       "3%": None, "97%": None})
     _write(OUT / "explanations.csv", expl)
     _write(OUT / "terms.csv", terms)
+    least_squares = _rows(FULL / "paper-like" / "least_squares.csv")
     freq = ([{"identified": "control (posterior HDI)", **r} for r in
              frequency_shares(_rows(FULL / "inertance_records.csv"), "b_hdi_3%", "b_hdi_97%")]
             + [{"identified": "paper-like (honest, identified records)", **r} for r in
-               frequency_shares(_rows(FULL / "paper-like" / "least_squares.csv"), "b_honest_3%", "b_honest_97%")])
+               frequency_shares(least_squares, "b_honest_3%", "b_honest_97%")])
     _write(OUT / "frequency.csv", freq)
     import matplotlib
 
@@ -128,8 +129,7 @@ def main() -> int:
                                                   "sources": {k: v.source for k, v in sets.items()}}, indent=2) + "\n")
     rest = identified_from_draws({k: v for k, v in draws.items() if k != "b_A0"}, "control without A0")
     without_a0 = explanations(with_identification_error(rest, args.per_setting, args.common), priors)[3]
-    (OUT / "SECTION.md").write_text(_section(expl, fits, freq, priors, args, without_a0,
-                                             _rows(FULL / "paper-like" / "least_squares.csv")))
+    (OUT / "SECTION.md").write_text(_section(expl, fits, freq, priors, args, without_a0, least_squares))
     for r in expl:
         print(f"{r['identified']:>10}: {r['explanation']:<48} chi2 {r['chi2']:>12.1f} worst {r['worst_setting']} "
               f"z {r['worst_z']:+.1f} max error {100 * r['max_rel_error']:.2f} %")

@@ -83,7 +83,6 @@ def period_loops(model, thetas, *, points: int = POINTS) -> PeriodLoops:
         raise ValueError(f"a loop needs at least 8 points, got {points}")
     omega = data.omega
     t = np.arange(points) / points * (2.0 * np.pi / omega[0])
-    accel = data.harmonic.accel
     predicted = []
     for theta in np.atleast_2d(np.asarray(thetas, dtype=float)):
         h = model.hyper(theta)
@@ -95,5 +94,5 @@ def period_loops(model, thetas, *, points: int = POINTS) -> PeriodLoops:
             predicted.append(at_times(F, omega, t))
     if not predicted:
         raise ValueError("no posterior draw gave a predicted force")
-    return PeriodLoops(t, at_times(accel / (1j * omega) ** 2, omega, t), at_times(accel / (1j * omega), omega, t),
+    return PeriodLoops(t, at_times(data.velocity / (1j * omega), omega, t), at_times(data.velocity, omega, t),
                        at_times(data.harmonic.force, omega, t), np.array(predicted))
