@@ -89,8 +89,8 @@ COEFFICIENTS = {
 #: The Coulomb kernel's arguments and its calls of the compiled helpers.
 CALLS = {
     "kernel_params": "Abar, n_, n_in_, node, f0, mass, inputs, h, z_init, out_node_, store, max_events",
-    "setup": ["J, F, VD, RD, OUT, R = setup(Abar, n, n_in, node, mass, h, out_node_)"],
-    "start": ["z, sgn, mode = start(z_init, inputs, n, n_in, m, node, R, f0)"],
+    "setup": ["J, F, VD, RD, OUT, R = setup(Abar, np.int64(n), np.int64(n_in), node, mass, h, out_node_)"],
+    "start": ["z, sgn, mode = start(z_init, inputs, np.int64(n), np.int64(n_in), np.int64(m), node, R, f0)"],
     "events_params": "F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events",
     "events_args": "F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events",
 }
@@ -211,7 +211,7 @@ class _Blocks:
             "stuck_rates": self.stuck_rates(), "clear_test": self.clear_test(),
             "output_sample": self.output_sample(),
             "store_state": [f"states[k + 1, {i}] = z{i}" for i in range(s.n)],
-            **CALLS, "switch_call": f"switch(z, mode, {nc}, node, R, f0, sgn, wcol)",
+            **CALLS, "switch_call": f"switch(z, mode, np.int64({nc}), node, R, f0, sgn, np.int64(wcol))",
         }
 
 
