@@ -16,6 +16,10 @@ from bayes_inerter.study import FitJob, quick_plan, run_jobs, run_study
 from bayes_inerter.study import least_squares as least_squares_module
 from bayes_inerter.study import runner as runner_module
 
+#: One worker runs this module (``test.sh``'s ``--dist loadgroup``): the study fixture is
+#: the quick subset's longest set-up, and each worker that ran a test of it would run it.
+pytestmark = pytest.mark.xdist_group("study_run")
+
 #: 5.5 s at 1 Hz: three steady drive periods after the first, what the study's likelihood
 #: (the default, motion in, force out) needs.
 TINY = GeneratorSettings(duration=5.5, ramp=0.6)
