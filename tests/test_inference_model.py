@@ -176,6 +176,7 @@ def test_start_guess_finds_the_basin(record):
         assert g["f1_0"] + g["f2_0"] == pytest.approx(p.f1_0 + p.f2_0, rel=0.15)
 
 
+@pytest.mark.slow  # 25 to 29 s from a fresh clone: the corners' networks lose contacts, two kernels of their own
 def test_edges_of_the_prior_give_a_number_or_minus_infinity(record):
     """At corners of the prior box (every parameter at a bound) the simulator either
     returns finite accelerations or refuses (SimulationError, e.g. contacts chattering);

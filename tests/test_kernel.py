@@ -65,6 +65,7 @@ def test_generated_kernel_follows_the_plain_reference(network, setting, freq, sc
         assert stats[0] > 0  # the contacts switched: the rare path ran too
 
 
+@pytest.mark.slow  # 12 s from a fresh clone: the dense kernel is compiled for this test alone
 @pytest.mark.parametrize("network, setting, freq, scale", DENSE_CASES)
 @pytest.mark.parametrize("store", [False, True])
 def test_dense_and_sparse_kernels_agree_bit_for_bit(network, setting, freq, scale, store):

@@ -125,7 +125,7 @@ def events(F, mode, J, h, z, va, da, sgn, f0, node, R, VD, RD, stats, max_events
         z[1] = z1
         z[2] = z2
         z[3] = z3
-        new_mode = switch(z, mode, 1, node, R, f0, sgn, wcol)
+        new_mode = switch(z, mode, np.int64(1), node, R, f0, sgn, np.int64(wcol))
         z0 = z[0]
         z1 = z[1]
         z2 = z[2]
@@ -160,12 +160,12 @@ def kernel(Abar, n_, n_in_, node, f0, mass, inputs, h, z_init, out_node_, store,
     n_in = 1
     m = 4
     K = inputs.shape[0]
-    J, F, VD, RD, OUT, R = setup(Abar, n, n_in, node, mass, h, out_node_)
+    J, F, VD, RD, OUT, R = setup(Abar, np.int64(n), np.int64(n_in), node, mass, h, out_node_)
     accel = np.full(K, np.nan)
     vel = np.full(K, np.nan)
     stats = np.zeros(2, dtype=np.int64)
     states = np.zeros((K if store else 0, n))
-    z, sgn, mode = start(z_init, inputs, n, n_in, m, node, R, f0)
+    z, sgn, mode = start(z_init, inputs, np.int64(n), np.int64(n_in), np.int64(m), node, R, f0)
     z0 = z[0]
     z1 = z[1]
     z2 = z[2]
