@@ -13,7 +13,10 @@ the converged chains alone) and replicates.csv from them.
 
 Per replicate: b's posterior median, its 94 % and 50 % highest-density intervals and
 whether they hold the true b (Table 2's, which the generator uses), whether the fit
-calls b identified (``FitResult.b_interval.identified``), the chain's state and seconds.
+calls b identified (``FitResult.b_interval.identified``), the chain's state and seconds;
+in replicates.csv also b's error beside the part its laboratory's sensor gains explain
+(``with_errors``), so a bias of the likelihood is not confused with a laboratory's
+miscalibrated sensors.
 
 ``--family`` makes the records of a device family the likelihood was not designed on
 (``FAMILIES``: a wider nut backlash, a larger break-away, noise coloured at 20 Hz, the two
@@ -43,7 +46,7 @@ import numpy as np
 from bayes_inerter import SETTINGS, paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
-from bayes_inerter.records.paper_like import PaperLike, paper_like_record
+from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]
 FREQUENCIES = (0.5, 1.0, 1.5)
@@ -108,11 +111,26 @@ def _run(args) -> dict:
     return got
 
 
+def with_errors(r: dict) -> dict:
+    """A replicate with b's error beside the part of it its laboratory's sensors explain.
+
+    A load cell that reads g_F times the force and an accelerometer that reads g_a times
+    the acceleration make any model's b come out b g_F / g_a: ``gain_ratio_pct`` is
+    100 (g_F / g_a - 1) of the replicate's laboratory (``records.paper_like.laboratory``),
+    which the fit cannot learn from the record (it samples the ratio with its prior), and
+    ``error_beyond_gain_pct`` the error that is left after it."""
+    lab = laboratory(r["seed"], device=FAMILIES[r.get("family", "default")])
+    gain = lab.force_gain / lab.accel_gain
+    return {**r, "error_pct": 100.0 * (r["b_median"] / r["b_true"] - 1.0), "gain_ratio_pct": 100.0 * (gain - 1.0),
+            "error_beyond_gain_pct": 100.0 * (r["b_median"] / (r["b_true"] * gain) - 1.0)}
+
+
 def summarise(out: Path) -> list[dict]:
-    reps = [json.loads(p.read_text()) for p in sorted((out / "replicates").glob("*.json"))]
+    reps = [with_errors(json.loads(p.read_text())) for p in sorted((out / "replicates").glob("*.json"))]
     with (out / "replicates.csv").open("w", newline="") as f:
         fields = ["replicate", "setting", "freq_hz", "seed", "b_true", "b_median", "hdi94", "hdi50", "covered94",
-                  "covered50", "width94_pct", "identified", "converged", "steps", "tau_max", "seconds", "phi"]
+                  "covered50", "width94_pct", "identified", "converged", "steps", "tau_max", "seconds", "phi",
+                  "error_pct", "gain_ratio_pct", "error_beyond_gain_pct"]
         w = csv.DictWriter(f, fields)
         w.writeheader()
         for r in reps:
@@ -136,6 +154,8 @@ def summarise(out: Path) -> list[dict]:
         for key in ("94", "50"):
             row[f"coverage{key}_converged"] = round(sum(r[f"covered{key}"] for r in good) / len(good), 3) if good else ""
         row["median_seconds"] = round(float(np.median([r["seconds"] for r in sel])), 1)
+        for key in ("error_pct", "error_beyond_gain_pct"):
+            row[f"mean_{key}"] = round(float(np.mean([r[key] for r in sel])), 2)
         rows.append(row)
     with (out / "coverage.csv").open("w", newline="") as f:
         w = csv.DictWriter(f, list(rows[0]))

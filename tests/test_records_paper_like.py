@@ -7,7 +7,7 @@ import pytest
 
 from bayes_inerter.device import paper_parameters
 from bayes_inerter.records.generator import GeneratorSettings
-from bayes_inerter.records.paper_like import PaperLike, paper_like_record
+from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
 from bayes_inerter.records.sensitivity import SensorCalibration
 
 
@@ -53,5 +53,7 @@ def test_a_paper_like_record_keeps_the_papers_b_and_says_what_it_is():
     np.testing.assert_array_equal(rec.accel, again.accel)
     # one seed, one laboratory: the same device at another frequency, with its own noise
     other = paper_like_record("A1", 1.0, seed=2, device=dev).metadata["generator"]
+    lab = laboratory(2, device=dev)  # what a study reads to tell the sensors' share of an error
     for key in ("stribeck_ratio", "stribeck_velocity", "backlash", "force_gain", "accel_gain"):
-        assert other[key] == rec.metadata["generator"][key]
+        assert other[key] == rec.metadata["generator"][key] == getattr(lab, key)
+    assert laboratory(3, device=dev).force_gain != lab.force_gain

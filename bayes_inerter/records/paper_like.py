@@ -35,7 +35,7 @@ from .generator import GeneratorSettings, generate_record
 from .record import Record
 from .sensitivity import SensorCalibration
 
-__all__ = ["PaperLike", "paper_like_record", "paper_like_grid"]
+__all__ = ["PaperLike", "laboratory", "paper_like_record", "paper_like_grid"]
 
 
 @dataclass(frozen=True)
@@ -90,6 +90,19 @@ class PaperLike:
             force_noise=self.force_noise, accel_noise=self.accel_noise)
 
 
+def _streams(seed: int, frequencies, names) -> list:
+    """The seed's streams: the laboratory's first, then one per record in the grid's order."""
+    return np.random.SeedSequence(seed).spawn(1 + len(list(names)) * len(list(frequencies)))
+
+
+def laboratory(seed: int, *, device: PaperLike | None = None, frequencies=FREQUENCIES_HZ,
+               names=tuple(SETTINGS)) -> GeneratorSettings:
+    """The generator settings every record of ``seed`` is made with (its device's effect
+    sizes and its pair of sensors, ``force_gain`` and ``accel_gain`` among them): what a
+    study needs to tell an error the sensors' calibration explains from the rest."""
+    return (device or PaperLike()).draw(np.random.default_rng(_streams(seed, frequencies, names)[0]))
+
+
 def paper_like_record(name: str, freq: float, *, seed: int = 0, device: PaperLike | None = None,
                       frequencies=FREQUENCIES_HZ, names=tuple(SETTINGS)) -> Record:
     """The paper-like record of setting ``name`` at ``freq``: the device drawn from the
@@ -99,8 +112,8 @@ def paper_like_record(name: str, freq: float, *, seed: int = 0, device: PaperLik
     names, frequencies = list(names), list(frequencies)
     if name not in names or freq not in frequencies:
         raise ValueError(f"no setting {name!r} at {freq:g} Hz in the grid")
-    seeds = np.random.SeedSequence(seed).spawn(1 + len(names) * len(frequencies))
-    settings = (device or PaperLike()).draw(np.random.default_rng(seeds[0]))
+    seeds = _streams(seed, frequencies, names)
+    settings = laboratory(seed, device=device, frequencies=frequencies, names=names)
     rng = np.random.default_rng(seeds[1 + names.index(name) * len(frequencies) + frequencies.index(freq)])
     rec = generate_record(paper_parameters(name), freq, settings=settings, rng=rng, setting_name=name)
     rec.metadata["truth"] = "paper-like"
