@@ -39,18 +39,18 @@ def cmd_fit(args) -> int:
     rec, device, masses, drive = load_record(args, need_masses=True)
     print(f"masses: {masses.describe()}", flush=True)
     print(f"drive frequency: {drive.describe()}", flush=True)
-    bar = StepProgress("sampling", total=args.steps, check_interrupt=_check_interrupt, cap=convergence.max_steps)
     processes = args.processes or min(2, os.cpu_count() or 1)
+    options = dict(m_s=args.m_s, m_B=args.m_b, device=device, walkers=args.walkers, steps=args.steps,
+                   seed=args.seed, fresh=args.fresh, processes=processes,
+                   likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample, delay_sd=args.delay_sd),
+                   coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
+                   checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
+                   name=Path(args.record).name, convergence=convergence)
+    if args.model == "compare":
+        return _compare(rec, args, options)
+    bar = StepProgress("sampling", total=args.steps, check_interrupt=_check_interrupt, cap=convergence.max_steps)
     try:
-        result = fit_record(
-            rec, args.out, model=args.model, m_s=args.m_s, m_B=args.m_b, device=device, walkers=args.walkers,
-            steps=args.steps, seed=args.seed, fresh=args.fresh, processes=processes,
-            likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample,
-                                          delay_sd=args.delay_sd), progress=bar.step,
-            report=bar.status, coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
-            checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
-            name=Path(args.record).name, convergence=convergence,
-        )
+        result = fit_record(rec, args.out, model=args.model, progress=bar.step, report=bar.status, **options)
     except BaseException:
         bar.close(done=False)
         raise
@@ -75,4 +75,44 @@ def cmd_fit(args) -> int:
     drawn = [] if args.no_plots else [n for n in FIGURES if (Path(args.out) / n).exists()]
     figures = "".join(f"{n}, " for n in drawn)
     print(f"wrote {args.out}/summary.csv, posterior.nc, loo.json, chain.h5 (and its twin), {figures}fit.json")
+    return EXIT_OK
+
+
+def _compare(rec, args, options) -> int:
+    """``fit --model compare``: every model the likelihood knows, compared by LOO."""
+    from ..cli_progress import StepProgress
+    from ..inference.compare import PARETO_K_LIMIT, compare_models
+    from . import EXIT_OK, _check_interrupt
+
+    bars = []
+
+    def progress_for(model):
+        if bars:
+            bars[-1].close()
+        bars.append(StepProgress(f"sampling {model}", total=args.steps, check_interrupt=_check_interrupt,
+                                 cap=options["convergence"].max_steps))
+        return bars[-1].step, bars[-1].status
+
+    def on_model(model, reason):
+        if reason:
+            print(f"{model}: left out ({reason})", flush=True)
+
+    try:
+        c = compare_models(rec, args.out, on_model=on_model, progress_for=progress_for, **options)
+    except BaseException:
+        if bars:
+            bars[-1].close(done=False)
+        raise
+    if bars:
+        bars[-1].close()
+    residual = options["likelihood"].residual
+    print(f"models compared by PSIS-LOO under the {residual} likelihood, stacked by their LOO weights:")
+    width = max(len(f.model) for f in c.fitted)
+    for f in c.fitted:
+        flags = "" if f.loo_reliable else f"; Pareto k {f.pareto_k_max:.2f} > {PARETO_K_LIMIT:g}: its LOO is unreliable"
+        flags += "" if f.converged else f"; not converged after {f.steps} steps"
+        print(f"  {f.model:<{width}}  b = {f.b_median:.6g} kg (94 % HDI {f.b_lo:.6g} to {f.b_hi:.6g}), "
+              f"elpd_loo {f.elpd_loo:.1f} (se {f.elpd_se:.1f}), weight {f.weight:.2f}{flags}")
+    print(f"stacked: b = {c.b_median:.6g} kg (94 % HDI {c.b_lo:.6g} to {c.b_hi:.6g})")
+    print(f"wrote {args.out}/compare.csv, compare.json, and each model's fit in {args.out}/<model>/")
     return EXIT_OK

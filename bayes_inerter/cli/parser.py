@@ -124,9 +124,10 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("record", help="record CSV file")
     p.add_argument("--out", required=True, help="output folder (a checkpoint there is continued)")
     _add_record_options(p)
-    p.add_argument("--model", choices=FIT_MODELS, default="two-port",
+    p.add_argument("--model", choices=FIT_MODELS + ("compare",), default="two-port",
                    help="model (%(default)s); two-port-stribeck, -backlash and -rich add Stribeck friction, nut "
-                        "backlash or both (docs/inference.md)")
+                        "backlash or both; compare fits every model the likelihood knows, each into --out/<model>, "
+                        "and compares them by LOO with b stacked over them (docs/inference.md)")
     p.add_argument("--interval", choices=FIT_INTERVALS, default=None,
                    help="b's reported interval: honest widens the posterior's by the sensors' calibration and the "
                         "model discrepancy the record shows; posterior is the posterior's alone (default: posterior "

@@ -41,7 +41,7 @@ from .parameters import FRICTION_PAIRS, ParameterMap
 from .priors import (DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, MOTION_DISCREPANCY_PRIORS, NOISE_PRIORS,
                      SPLIT_PRIORS, delay_prior, gain_prior)
 
-__all__ = ["MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses"]
+__all__ = ["MODELS", "MOTION_MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses", "refusal"]
 
 PHYSICAL = ("b", "f1_0", "c_f1", "f2_0", "c_f2", "c_n", "k_n", "c_B", "k_B")
 
@@ -71,6 +71,18 @@ MODELS = {
     "linear": ("linear", ("b", "c_n", "k_n", "c_B", "k_B")),
     **{name: ("reduced", PHYSICAL + extra) for name, extra in EFFECTS.items()},
 }
+#: The models the motion-in likelihood knows: the two-port network and its limits.
+MOTION_MODELS = ("two-port", "rigid", "linear")
+
+
+def refusal(model: str, likelihood: LikelihoodSettings) -> str | None:
+    """Why ``model`` cannot be fitted under ``likelihood`` (None: it can)."""
+    if model not in MODELS:
+        return f"unknown model {model!r}; choose one of {', '.join(MODELS)}"
+    if likelihood.residual == "motion" and model not in MOTION_MODELS:
+        return (f"the motion-in likelihood knows the two-port network and its limits, not the {model} model's "
+                f"effects; fit it with --residual harmonic or ar1")
+    return None
 
 
 #: The motion-in likelihood's algebra (``motion``) is the two-port network's; the nested
@@ -139,11 +151,9 @@ class PosteriorModel:
     reference: tuple | None = None
 
     def __post_init__(self) -> None:
-        if self.model not in MODELS:
-            raise ValueError(f"unknown model {self.model!r}; choose one of {', '.join(MODELS)}")
-        if self.likelihood.residual == "motion" and self.model not in ("two-port", "rigid", "linear"):
-            raise ValueError(f"the motion-in likelihood knows the two-port network and its limits, not the "
-                             f"{self.model} model's effects; fit it with --residual harmonic or ar1")
+        why = refusal(self.model, self.likelihood)
+        if why is not None:
+            raise ValueError(why)
         rec = self.record
         check_record(rec.time, rec.force, rec.accel, names=("force", "accel"))
         self.m_s, self.m_B = record_masses(rec, self.m_s, self.m_B)
