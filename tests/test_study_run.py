@@ -45,9 +45,10 @@ def _quick_identify(record, out, starts=4, seed=0):
 @pytest.fixture(scope="module")
 def study(tmp_path_factory):
     out = tmp_path_factory.mktemp("study")
-    with pytest.MonkeyPatch.context() as mp:  # the worker processes are forked from here
+    # one worker process (forked from here, so it sees the patch): two compiled every kernel twice
+    with pytest.MonkeyPatch.context() as mp:
         mp.setattr(least_squares_module, "identify_one", _quick_identify)
-        return run_study(tiny_plan(identify=True), out, processes=2)
+        return run_study(tiny_plan(identify=True), out, processes=1)
 
 
 def report_head(out):
