@@ -28,7 +28,7 @@ import numpy as np
 
 from .fit import check_output_folder, fit_record
 from .model import MODELS, LikelihoodSettings, refusal
-from .results import loo_summary
+from .results import loo_data, loo_summary
 
 __all__ = ["ModelFit", "Comparison", "compare_models", "stack_draws", "COMPARED", "PARETO_K_LIMIT", "COMPARE_FILE"]
 
@@ -114,7 +114,7 @@ def _weights(idatas: dict) -> dict:
 
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")  # large Pareto k: flagged per fit instead
-        table = az.compare(idatas, ic="loo", method="stacking")
+        table = az.compare({m: loo_data(d) for m, d in idatas.items()}, ic="loo", method="stacking")
     return {m: float(table.loc[m, "weight"]) for m in idatas}
 
 

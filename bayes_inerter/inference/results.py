@@ -29,7 +29,7 @@ import numpy as np
 from .harmonic import at_times
 from .model import PosteriorModel
 
-__all__ = ["PosteriorSample", "ar1_noise", "posterior_sample", "contraction", "to_inference_data", "summary_rows",
+__all__ = ["PosteriorSample", "ar1_noise", "loo_data", "posterior_sample", "contraction", "to_inference_data", "summary_rows",
            "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "NUMBER_COLUMNS",
            "MAX_DRAWS"]
 
@@ -247,6 +247,18 @@ def write_summary(path, rows: list[dict]) -> None:
             w.writerow([r["name"], r.get("kind", "")] + [f"{r[c]:.10g}" for c in NUMBER_COLUMNS] + [r.get("flag", "")])
 
 
+def loo_data(idata):
+    """``idata``'s log-likelihood with the posterior variables that are finite in every
+    draw: what PSIS-LOO reads. A derived quantity defined on some draws only (``b_app``,
+    NaN elsewhere) enters arviz's relative efficiency, which ignores it, and made arviz
+    log "Array contains NaN-value" for every fit; without it the LOO is the same."""
+    import arviz as az
+
+    post = idata.posterior
+    finite = [v for v in post.data_vars if np.all(np.isfinite(np.asarray(post[v])))]
+    return az.InferenceData(posterior=post[finite], log_likelihood=idata.log_likelihood)
+
+
 def loo_summary(idata) -> dict:
     """PSIS-LOO of a fit's InferenceData (arviz): elpd_loo, its standard error, p_loo,
     the largest Pareto k and the number of points. Small enough to keep beside a fit's
@@ -258,7 +270,7 @@ def loo_summary(idata) -> dict:
 
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a large Pareto k is reported in the result instead
-        loo = az.loo(idata, pointwise=True)
+        loo = az.loo(loo_data(idata), pointwise=True)
     k = np.asarray(loo.pareto_k)
     return {"elpd_loo": float(loo.elpd_loo), "elpd_se": float(loo.se), "p_loo": float(loo.p_loo),
             "pareto_k_max": float(np.max(k)), "n_points": int(k.size)}
