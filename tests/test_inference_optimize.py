@@ -153,3 +153,23 @@ def test_start_refuses_unknown_objectives():
 
     with pytest.raises(ValueError, match="start objectives"):
         find_start(object(), np.random.default_rng(0), objectives=("least-squares",))
+
+
+
+@pytest.mark.slow  # a paper-like record (the rich kernel) and two full start searches
+def test_a_start_far_from_the_rigid_guess_is_checked_against_its_polish(monkeypatch):
+    """The record where the evolved optimum lost b's basin (paper-like B1 at 1.5 Hz,
+    laboratory 1016: b at a third, the stiffnesses exchanged): with the check the start
+    lies in the truth's basin, without it (the ratio infinite) it does not."""
+    from bayes_inerter import paper_parameters
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference import optimize
+    from bayes_inerter.records.paper_like import paper_like_record
+
+    model = PosteriorModel(paper_like_record("B1", 1.5, seed=1016))
+    b_true = paper_parameters("B1").b
+    theta, lp = optimize.find_start(model, np.random.default_rng(1016))
+    assert abs(model.parameters(theta).b / b_true - 1.0) < 0.05
+    monkeypatch.setattr(optimize, "RIGID_CHECK_RATIO", np.inf)
+    theta_wrong, lp_wrong = optimize.find_start(model, np.random.default_rng(1016))
+    assert model.parameters(theta_wrong).b / b_true < 0.5 and lp > lp_wrong
