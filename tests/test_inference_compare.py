@@ -101,3 +101,4 @@ def test_fit_compare_says_which_models_it_left_out(record, tmp_path, capsys, mon
     assert ("two-port  b = 4500 kg (94 % HDI 4400 to 4600), elpd_loo -100.0 (se 5.0), weight 1.00; Pareto k 0.90 > "
             "0.7: its LOO is unreliable; not converged after 20 steps") in text
     assert "stacked: b = 4500 kg (94 % HDI 4400 to 4600)" in text
+    assert "warning: 1 of 1 models' LOO is unreliable or their chain unconverged (two-port)" in text

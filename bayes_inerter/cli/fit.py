@@ -114,5 +114,10 @@ def _compare(rec, args, options) -> int:
         print(f"  {f.model:<{width}}  b = {f.b_median:.6g} kg (94 % HDI {f.b_lo:.6g} to {f.b_hi:.6g}), "
               f"elpd_loo {f.elpd_loo:.1f} (se {f.elpd_se:.1f}), weight {f.weight:.2f}{flags}")
     print(f"stacked: b = {c.b_median:.6g} kg (94 % HDI {c.b_lo:.6g} to {c.b_hi:.6g})")
+    unreliable = [f.model for f in c.fitted if not f.loo_reliable or not f.converged]
+    if unreliable:
+        print(f"warning: {len(unreliable)} of {len(c.fitted)} models' LOO is unreliable or their chain unconverged "
+              f"({', '.join(unreliable)}): the weights and the stacked b are indicative only; quote b under a "
+              f"converged model")
     print(f"wrote {args.out}/compare.csv, compare.json, and each model's fit in {args.out}/<model>/")
     return EXIT_OK
