@@ -325,32 +325,39 @@ def test_ctrl_c_in_the_start_search_in_sampling_and_in_a_continued_run(tmp_path,
     np.testing.assert_array_equal(now[: len(kept)], kept)
 
 
+#: Steps of the runs interrupted at many moments: enough that no run ends between two looks
+#: at its checkpoint (30 did, on a processor where a step of this record takes 20 ms).
+MOMENTS_STEPS = 120
+
+
 @pytest.mark.slow  # about a minute: five interrupted runs, a finished one and an uninterrupted one
 def test_ctrl_c_at_many_moments_then_the_chain_an_uninterrupted_run_gives(tmp_path, record_file):
-    out = tmp_path / "fit"
-    cmd = _fit(record_file, out, steps=30)
+    start = tmp_path / "start"  # its own folder: a fast machine may sample past 3 s, or finish
     for seconds in (0.2, 3.0):  # early and late in the start search
-        run = _Run(cmd)
+        run = _Run(_fit(record_file, start, steps=MOMENTS_STEPS))
         run.wait_for("drive frequency:")
         time.sleep(seconds)
-        if run.proc.poll() is None and steps_written(out / "chain.h5") == 0:
+        if run.proc.poll() is None and steps_written(start / "chain.h5") == 0:
             _assert_interrupted(run, run.ctrl_c())
         else:
             run.kill()
+    out = tmp_path / "fit"
+    cmd = _fit(record_file, out, steps=MOMENTS_STEPS)
     kept = None
     for at in (1, 9, 17):  # during sampling, the step watched in the checkpoint
         run = _Run(cmd)
+        run.wait_for("drive frequency:")  # past its imports: its Ctrl-C handler is in place
         _wait_for_steps(run, out, at)
         _assert_interrupted(run, run.ctrl_c())
         now = read_chain(out / "chain.h5")
-        assert at <= len(now) < 30
+        assert at <= len(now) < MOMENTS_STEPS
         if kept is not None:
-            assert "continuing to step 30" in "".join(run.err)
+            assert f"continuing to step {MOMENTS_STEPS}" in "".join(run.err)
             np.testing.assert_array_equal(now[: len(kept)], kept)
         kept = now
     finished = subprocess.run(cmd, capture_output=True, text=True)
     assert finished.returncode == 0, finished.stderr
-    assert f"the checkpoint holds {len(kept)} steps; continuing to step 30" in finished.stderr
+    assert f"the checkpoint holds {len(kept)} steps; continuing to step {MOMENTS_STEPS}" in finished.stderr
     whole = tmp_path / "whole"
-    assert subprocess.run(_fit(record_file, whole, steps=30), capture_output=True).returncode == 0
+    assert subprocess.run(_fit(record_file, whole, steps=MOMENTS_STEPS), capture_output=True).returncode == 0
     np.testing.assert_array_equal(read_chain(out / "chain.h5"), read_chain(whole / "chain.h5"))
