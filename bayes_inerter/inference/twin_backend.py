@@ -201,11 +201,11 @@ class TwinBackend(_Backend):
             for _, ds in sets:
                 if ds.shape[0] < need:
                     ds.resize(need, axis=0)
-            for i, row in enumerate(rows):
-                stored = [np.asarray(row[k], dtype=dt) for (k, _), dt in zip(sets, dtypes)]
-                for (_, ds), v in zip(sets, stored):
-                    ds[it + i] = v
-                h = _step_hash(h, *stored)
+            stored = [[np.asarray(row[k], dtype=dt) for (k, _), dt in zip(sets, dtypes)] for row in rows]
+            for j, (_, ds) in enumerate(sets):  # one block a dataset: a row at a time cost a write per row
+                ds[it:need] = np.stack([values[j] for values in stored])
+            for values in stored:
+                h = _step_hash(h, *values)
             acc = g["accepted"]
             accepted = acc[:] + np.sum([r[3] for r in rows], axis=0).astype(acc.dtype)
             acc[:] = accepted
