@@ -19,12 +19,13 @@ def _idata(with_nan: bool, seed: int = 0):
     return az.from_dict(posterior=post, log_likelihood={"y": ll})
 
 
-def test_loo_reads_the_finite_posterior_variables_and_is_unchanged_by_the_others(capfd):
+def test_loo_reads_the_finite_posterior_variables_and_is_unchanged_by_the_others():
+    # arviz warns "Array contains NaN-value" once per process (its logger caches messages, and
+    # the CLI raises its level), so the log is no stable witness: the variables given are.
     with_nan, without = _idata(True), _idata(False)
-    assert list(loo_data(with_nan).posterior.data_vars) == ["b"]
-    capfd.readouterr()
-    az.loo(with_nan)  # arviz on the whole posterior: its logger writes to stderr
-    assert "NaN" in capfd.readouterr().err
+    assert np.isnan(with_nan.posterior["b_app"].values).any()
+    given = loo_data(with_nan).posterior
+    assert list(given.data_vars) == ["b"]
+    assert all(np.isfinite(given[name].values).all() for name in given.data_vars)
     got = loo_summary(with_nan)
-    assert "NaN" not in capfd.readouterr().err  # a fit's LOO says nothing of a derived quantity's gaps
     assert got == pytest.approx(loo_summary(without)) and got["n_points"] == 25
