@@ -9,4 +9,8 @@ if [ "${1:-}" = "--all" ]; then
     shift
     exec python -m pytest "$@"
 fi
+# Two workers on two cores: each keeps its BLAS to one thread, or the workers' thread pools
+# oversubscribe the cores (a test's SVDs ran 3 to 20 times slower beside the other worker).
+export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}" OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}" \
+    MKL_NUM_THREADS="${MKL_NUM_THREADS:-1}"
 exec python -m pytest -m "not slow" -n 2 --dist loadgroup "$@"
