@@ -3,9 +3,11 @@
 import os
 import signal
 
+import numpy as np
 import pytest
+import threadpoolctl
 
-from bayes_inerter.executor import LocalProcesses, Serial, WorkerDied, make_executor
+from bayes_inerter.executor import LocalProcesses, Serial, WorkerDied, blas_threads, make_executor
 
 
 def _square(x):
@@ -61,3 +63,19 @@ def test_a_local_worker_that_dies_takes_only_its_own_item():
         outcomes = sorted(ex.as_completed(_dies_on_one, [0, 1, 2]), key=lambda o: o.index)
     assert [o.ok for o in outcomes] == [True, False, True]
     assert isinstance(outcomes[1].error, WorkerDied) and "exit code -9" in str(outcomes[1].error)
+
+
+def _blas_threads(_):
+    np.linalg.svd(np.ones((4, 4)))  # BLAS loaded and in use
+    return [pool["num_threads"] for pool in threadpoolctl.threadpool_info() if pool["user_api"] == "blas"]
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_each_local_worker_keeps_its_share_of_the_cores_for_blas(workers):
+    share = max(1, (os.cpu_count() or 1) // workers)
+    assert blas_threads(workers) == share and blas_threads(10_000) == 1
+    with LocalProcesses(workers) as ex:
+        pooled = ex.map(_blas_threads, range(workers))
+        alone = [o.value for o in ex.as_completed(_blas_threads, range(2))]
+    found = [n for threads in pooled + alone for n in threads]
+    assert found and set(found) == {share}
