@@ -10,7 +10,8 @@ from scipy import stats
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
-from bayes_inerter.inference.coordinates import COORDINATES, default_coordinates, drive_omega, driving_point
+from bayes_inerter.inference.coordinates import (COORDINATES, SeriesStiffness, default_coordinates, drive_omega,
+                                                 driving_point)
 from bayes_inerter.inference.joint import JointModel
 from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.inference.sampler import run_sampler
@@ -118,6 +119,41 @@ def test_log_jacobian_is_the_finite_difference_determinant(records, name):
     assert checked >= 15
 
 
+def test_series_coordinates_round_trip_with_their_jacobian(two_port):
+    """k_n and k_B walked as series stiffness and ratio: one to one over the prior box, the
+    log-Jacobian the finite-difference determinant's, and the rest as the impedance's."""
+    coords = default_coordinates(two_port, "series")
+    imp = default_coordinates(two_port, "impedance")
+    i, j = two_port.names.index("k_n"), two_port.names.index("k_B")
+    assert coords.kind == "series" and coords.series == (i, j) and not coords.logit[[i, j]].any()
+    assert "series stiffness" in coords.describe()
+    rng = np.random.default_rng(6)
+    theta = _random_thetas(two_port, 300, rng)
+    u = coords.to_u(theta)
+    ok = np.all(np.isfinite(u), axis=1)
+    assert np.array_equal(ok, np.all(np.isfinite(imp.to_u(theta)), axis=1))  # the same domain
+    assert np.max(np.abs(coords.to_theta(u[ok]) - theta[ok])) < 1e-9
+    others = [k for k in range(len(u[0])) if k not in (i, j)]
+    assert np.allclose(u[ok][:, others], imp.to_u(theta[ok])[:, others])
+    checked = 0
+    for x in u[ok][:40]:  # eps small: where d's range switches bound the map bends (error ~ eps^2)
+        n, eps = len(x), 1e-7
+        jac = np.empty((n, n))
+        for k in range(n):
+            e = np.zeros(n)
+            e[k] = eps
+            jac[:, k] = (coords.to_theta(x + e) - coords.to_theta(x - e)) / (2 * eps)
+        if np.all(np.isfinite(jac)):
+            assert coords.log_jacobian(x) == pytest.approx(np.linalg.slogdet(jac)[1], abs=1e-4)
+            checked += 1
+    assert checked >= 15
+    # any walked pair lands in the prior box
+    lo, hi = two_port.bounds()[[i, j]].T
+    a, c, logj = SeriesStiffness(lo[0], hi[0], lo[1], hi[1]).to_logs(*rng.normal(0.0, 4.0, (2, 5000)))
+    assert np.all(np.isfinite(logj)) and np.all((a >= lo[0] - 1e-9) & (a <= hi[0] + 1e-9))
+    assert np.all((c >= lo[1] - 1e-9) & (c <= hi[1] + 1e-9))
+
+
 def test_physical_coordinates_are_theta_itself(two_port):
     coords = default_coordinates(two_port, "physical")
     theta = _random_thetas(two_port, 5, np.random.default_rng(3))
@@ -162,9 +198,9 @@ def _u_log_target(coords, centre, sd, jacobian=True):
     return f
 
 
-def _invariance_pvalues(model, jacobian):
+def _invariance_pvalues(model, jacobian, kind="impedance"):
     centre, sd = _target(model)
-    coords = default_coordinates(model)
+    coords = default_coordinates(model, kind)
     rng = np.random.default_rng(4)
     theta0 = rng.normal(centre, sd, size=(3000, len(centre)))  # exact draws
     u0 = coords.to_u(theta0)
@@ -179,8 +215,9 @@ def _invariance_pvalues(model, jacobian):
     return [stats.kstest(theta[:, i], stats.norm(centre[i], sd[i]).cdf).pvalue for i in range(len(centre))]
 
 
-def test_walks_in_u_keep_the_target_in_theta(two_port):
-    p = _invariance_pvalues(two_port, jacobian=True)
+@pytest.mark.parametrize("kind", ["impedance", "series"])
+def test_walks_in_u_keep_the_target_in_theta(two_port, kind):
+    p = _invariance_pvalues(two_port, jacobian=True, kind=kind)
     assert min(p) > 1e-3, p
 
 
