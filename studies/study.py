@@ -9,8 +9,9 @@ Two studies, then one report:
 2. the headline (into results/full/paper-like): the 27 records of one paper-like
    laboratory (``bayes-inerter generate --paper-grid --truth paper-like``: the full
    network, Stribeck friction, nut backlash, sensor errors, coloured noise; laboratory
-   seed ``--seed``), fitted with the same models, each chain ``--paper-like-steps``
-   steps (chains under model error mix slowly: see docs/studies.md), no joint model;
+   seed ``--seed``), fitted with the same models, each chain until the convergence rule
+   holds (at most its 20,000 steps; ``--paper-like-steps N`` fixes N instead: chains
+   under model error mix slowly, see docs/studies.md), no joint model;
 3. results/full/REPORT.md led by the headline's inertance with its honest intervals,
    phi beside Table 2 and its limitations; the control's report moved to CONTROL.md
    (``bayes_inerter.study.write_headline``).
@@ -19,10 +20,11 @@ Running it again reuses finished fits and the paper-like records (delete
 results/full/paper-like/records to draw another laboratory with --seed).
 
     python studies/study.py [--processes 2] [--scheduler tcp://host:port] [--seed 0]
-                            [--paper-like-steps 3000]
+                            [--paper-like-steps N]
 """
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -43,9 +45,22 @@ SUMMARY = ("The records: the paper's 27 (nine flywheel settings at 0.5, 1 and 1.
            "noise (`records.paper_like`, one laboratory: seed {seed}; results/paper-like says how its sizes were "
            "chosen). Each record carries the b it was made with, so every interval below is checked against it. "
            "The interval to quote is the honest one (docs/inference.md); the posterior's is beside it to show what "
-           "model error does to it. Each chain ran a fixed {steps} steps and is not converged by the package's rule "
-           "(limitations below): read the posterior's intervals as indicative; the honest ones are dominated by the "
-           "discrepancy and sensor terms, which do not depend on the chain's length.")
+           "model error does to it. {chains}")
+
+
+def chains_sentence(headline: Path) -> str:
+    """What SUMMARY says of the two-port chains, read from their fit.json files: how many
+    met the convergence rule and how long they were."""
+    fits = [json.loads(p.read_text()) for p in sorted((headline / "fits" / "two-port").glob("*/fit.json"))]
+    if not fits:
+        return ""
+    done = sum(bool(f["converged"]) for f in fits)
+    steps = [int(f["iterations"]) for f in fits]
+    length = f"{steps[0]:,} steps each" if min(steps) == max(steps) else f"{min(steps):,} to {max(steps):,} steps"
+    text = f"{done} of the {len(fits)} two-port chains met the package's convergence rule ({length})."
+    if done < len(fits):
+        text += " Read the intervals of the others as indicative (limitations below)."
+    return text
 
 
 def _run(argv):
@@ -59,12 +74,13 @@ if __name__ == "__main__":
     ap.add_argument("--processes", default=None)
     ap.add_argument("--scheduler", default=None)
     ap.add_argument("--seed", type=int, default=0, help="the paper-like laboratory's seed (0)")
-    ap.add_argument("--paper-like-steps", type=int, default=3000, help="steps of each paper-like chain (3000)")
+    ap.add_argument("--paper-like-steps", type=int, default=None,
+                    help="steps of each paper-like chain (default: until converged)")
     ap.add_argument("--report-only", action="store_true",
                     help="only write REPORT.md again from the results there (the other studies' SECTION.md included)")
     args = ap.parse_args()
-    summary = SUMMARY.format(seed=args.seed, steps=args.paper_like_steps)
     if args.report_only:
+        summary = SUMMARY.format(seed=args.seed, chains=chains_sentence(HEADLINE))
         print(f"wrote {write_headline(OUT, HEADLINE, title=TITLE, summary=summary, more=[p / 'SECTION.md' for p in MORE])}")
         sys.exit(0)
     pool = (["--processes", args.processes] if args.processes else []) + (
@@ -73,7 +89,8 @@ if __name__ == "__main__":
     records = HEADLINE / "records"
     if not records.is_dir():
         _run(["generate", "--paper-grid", "--truth", "paper-like", "--seed", str(args.seed), "--out", str(records)])
-    _run(["study", "--records", str(records), "--out", str(HEADLINE), "--no-joint",
-          "--steps", str(args.paper_like_steps), *pool])
+    steps = [] if args.paper_like_steps is None else ["--steps", str(args.paper_like_steps)]
+    _run(["study", "--records", str(records), "--out", str(HEADLINE), "--no-joint", *steps, *pool])
+    summary = SUMMARY.format(seed=args.seed, chains=chains_sentence(HEADLINE))
     path = write_headline(OUT, HEADLINE, title=TITLE, summary=summary, more=[p / "SECTION.md" for p in MORE])
     print(f"wrote {path}")
