@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.adaptation import STRETCH, Adaptation, Schedule
+from bayes_inerter.inference import adaptation as adaptation_module
+from bayes_inerter.inference.adaptation import FIT_MAX_STEPS, STRETCH, Adaptation, Schedule
 from bayes_inerter.inference.moves import BlockMove
 
 
@@ -24,6 +25,21 @@ def test_adaptation_fits_after_the_transient_only():
                 dict(knots=3), dict(blocks=1.0)):
         with pytest.raises(ValueError, match="adaptation"):
             Adaptation(**bad)
+
+
+def test_a_long_chain_is_fitted_from_its_steps_thinned_to_the_most_a_fit_takes(monkeypatch):
+    rng = np.random.default_rng(2)
+    chain = rng.normal(size=(900, 10, 3)) * np.linspace(1.0, 3.0, 900)[:, None, None]  # the spread grows
+    still = rng.normal(0.0, 1.0, size=(900, 10))
+    adapt = Adaptation(every=200, knots=None, blocks=0.0)
+    whole = adapt.fit(chain, still)[0]
+    every_third = adapt.fit(chain[::3], still[::3])[0]  # 300 steps: fitted from each
+    monkeypatch.setattr(adaptation_module, "FIT_MAX_STEPS", 300)
+    thinned = adapt.fit(chain, still)[0]
+    np.testing.assert_array_equal(thinned.chol, every_third.chol)
+    np.testing.assert_array_equal(thinned.mean, every_third.mean)
+    assert not np.allclose(thinned.chol, whole.chol, rtol=1e-6)
+    assert FIT_MAX_STEPS >= 1000  # a chain of a few thousand steps is thinned a few times at most
 
 
 def test_adaptation_describes_one_t_in_the_sampler_coordinates_as_before():
