@@ -329,6 +329,17 @@ def test_block_move_changes_only_its_block_and_follows_the_conditional():
     assert np.median(np.abs(log_p(q) - log_p(x) + factors)) < 0.2
 
 
+def test_a_block_moves_proposals_are_the_same_with_its_blocks_formed_before():
+    cov = np.array([[1.0, 0.5, 0.1, 0.0], [0.5, 2.0, 0.3, 0.2], [0.1, 0.3, 0.5, 0.1], [0.0, 0.2, 0.1, 1.0]])
+    x = np.random.default_rng(29).lognormal(size=(40, 4))
+    fresh, used = (BlockMove(np.full(4, 0.3), cov, _SCORES) for _ in range(2))
+    for seed in range(20):  # every block of 1 to 3 of the 4 coordinates formed and kept
+        used._propose(x, np.random.RandomState(seed))
+    a, b = fresh._propose(x, np.random.RandomState(31)), used._propose(x, np.random.RandomState(31))
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])
+
+
 def test_block_move_refuses_what_defines_none():
     assert BlockMove.fit(np.ones((100, 3)), knots=50) is None
     assert BlockMove.fit(np.zeros((2, 3)), knots=50) is None
