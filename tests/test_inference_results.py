@@ -4,7 +4,7 @@ import arviz as az
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.results import loo_data, loo_summary
+from bayes_inerter.inference.results import every_nth, loo_data, loo_summary
 
 
 def _idata(with_nan: bool, seed: int = 0):
@@ -29,3 +29,10 @@ def test_loo_reads_the_finite_posterior_variables_and_is_unchanged_by_the_others
     assert all(np.isfinite(given[name].values).all() for name in given.data_vars)
     got = loo_summary(with_nan)
     assert got == pytest.approx(loo_summary(without)) and got["n_points"] == 25
+
+
+def test_every_nth_says_which_draws_are_kept_in_words():
+    assert [every_nth(n) for n in (1, 2, 3, 4, 11, 12, 13, 21, 22, 23, 101, 111)] == [
+        "every step", "every 2nd step", "every 3rd step", "every 4th step", "every 11th step", "every 12th step",
+        "every 13th step", "every 21st step", "every 22nd step", "every 23rd step", "every 101st step",
+        "every 111th step"]

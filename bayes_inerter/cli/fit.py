@@ -27,6 +27,7 @@ def cmd_fit(args) -> int:
     from ..inference import fit_record
     from ..inference.convergence import Convergence
     from ..inference.model import LikelihoodSettings
+    from ..inference.results import every_nth
     from ..inference.sampler import Adaptation
     from . import EXIT_OK, CliError, _check_interrupt
     from .records import load_record
@@ -67,7 +68,7 @@ def cmd_fit(args) -> int:
     phi = result.row("phi")
     print(f"phi = {phi['mean']:.2%} (94 % HDI {_percent_interval(phi['hdi_3%'], phi['hdi_97%'])})")
     print(f"kept: the draws after step {result.burn_in} (a warm-up of {result.warmup} steps, then 2 tau), "
-          f"every {result.thin}th")
+          f"{every_nth(result.thin)}")
     for w in result.warnings:  # fit.json keeps the same lines
         print(f"warning: {w.message}")
     if result.converged:

@@ -16,6 +16,7 @@ from matplotlib.patches import Patch  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..device import TABLE_I  # noqa: E402
+from .results import every_nth  # noqa: E402
 
 __all__ = ["plot_corner", "plot_bands", "plot_trace", "plot_phi", "plot_loops", "reference_values"]
 
@@ -317,7 +318,7 @@ def plot_trace(theta: np.ndarray, names, *, burn: int = 0, thin: int = 1, warmup
         ax.tick_params(labelsize=7)
     # the same two numbers ``fit`` prints: the warm-up, and 2 tau after it
     how = f": a warm-up of {warmup}, then 2 tau" if warmup is not None and warmup < burn else ""
-    axes[-1].set_xlabel(f"step (the first {burn} discarded{how}; every {thin}th shown)")
+    axes[-1].set_xlabel(f"step (the first {burn} discarded{how}; {every_nth(thin)} shown)")
     return fig
 
 

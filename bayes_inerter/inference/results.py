@@ -31,7 +31,15 @@ from .model import PosteriorModel
 
 __all__ = ["PosteriorSample", "ar1_noise", "loo_data", "posterior_sample", "contraction", "to_inference_data", "summary_rows",
            "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "NUMBER_COLUMNS",
-           "MAX_DRAWS"]
+           "MAX_DRAWS", "every_nth"]
+
+
+def every_nth(thin: int) -> str:
+    """Words for keeping every ``thin``-th draw: "every step", "every 2nd step", ..."""
+    if thin == 1:
+        return "every step"
+    suffix = "th" if 10 <= thin % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(thin % 10, "th")
+    return f"every {thin}{suffix} step"
 
 SUMMARY_COLUMNS = ("name", "kind", "mean", "sd", "hdi_3%", "hdi_97%", "r_hat", "ess_bulk", "ess_tail", "flag")
 #: The columns that hold numbers.
