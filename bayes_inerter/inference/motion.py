@@ -103,6 +103,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import threadpoolctl
 from numba import njit
 
 from ..models import FIELDS
@@ -194,6 +195,14 @@ def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, se
     rotation's ("total"; ``LikelihoodSettings.reversal_scale``)."""
     if reversal_scale not in REVERSAL_SCALES:
         raise ValueError(f"reversal_scale must be one of {', '.join(REVERSAL_SCALES)}, got {reversal_scale!r}")
+    # on one BLAS thread whatever the process's: the basis's digits (which a checkpoint's
+    # identity hashes) would otherwise depend on how many threads its SVDs ran on, and a
+    # fit made in a study's worker (its share of the cores) be refused by `report` after
+    with threadpoolctl.threadpool_limits(limits=1, user_api="blas"):
+        return _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogonal, reversal_scale)
+
+
+def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogonal, reversal_scale) -> MotionData:
     data = harmonic_data(record, freq, cutoff=cutoff, pool=pool, settle=settle)
     velocity, accel, sigma_v = _plate_motion(record, freq, max(sign_band, cutoff), pool, settle)
     v = velocity(SIGN_GRID)
