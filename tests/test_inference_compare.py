@@ -62,8 +62,10 @@ def test_each_model_is_fitted_compared_and_stacked(record, tmp_path):
     assert rows[2]["skipped"] and float(rows[3]["b_median"]) == pytest.approx(c.b_median)
     info = json.loads((tmp_path / "c" / "compare.json").read_text())
     assert info["likelihood"] == "motion" and info["models"][2]["b_median"] is None  # NaN written as null
-    for m in ("rigid", "linear"):
+    for m, f in zip(("rigid", "linear"), fitted):
         assert (tmp_path / "c" / m / "fit.json").is_file()
+        kept = json.loads((tmp_path / "c" / m / "loo.json").read_text())  # each fit's own LOO, as compared
+        assert (f.elpd_loo, f.elpd_se, f.pareto_k_max) == (kept["elpd_loo"], kept["elpd_se"], kept["pareto_k_max"])
 
 
 @pytest.mark.slow  # a fit of each of three models from the command line

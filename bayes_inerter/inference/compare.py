@@ -28,7 +28,7 @@ import numpy as np
 
 from .fit import check_output_folder, fit_record
 from .model import MODELS, LikelihoodSettings, refusal
-from .results import LOO_FILE, loo_data
+from .results import loo_data
 
 __all__ = ["ModelFit", "Comparison", "compare_models", "stack_draws", "COMPARED", "PARETO_K_LIMIT", "COMPARE_FILE"]
 
@@ -151,7 +151,7 @@ def compare_models(record, out, *, models=COMPARED, likelihood: LikelihoodSettin
         res = fit_record(record, out / m, model=m, likelihood=likelihood, seed=seed, **fit_options)
         b = np.asarray(res.idata.posterior["b"], dtype=float)
         lo, hi = _hdi(b.ravel())
-        loo = json.loads((out / m / LOO_FILE).read_text())  # fit_record's own PSIS-LOO (loo_summary)
+        loo = res.loo
         idatas[m], draws[m] = res.idata, b
         fits[m] = ModelFit(m, float(np.median(b)), lo, hi, loo["elpd_loo"], loo["elpd_se"], loo["p_loo"],
                            loo["pareto_k_max"], converged=bool(res.converged), steps=int(res.iterations))

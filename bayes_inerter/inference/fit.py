@@ -79,6 +79,8 @@ class FitResult:
     burn_in: int = 0
     warmup: int = 0
     thin: int = 1
+    #: the fit's PSIS-LOO as loo.json holds it (``results.loo_summary``; empty for the joint model)
+    loo: dict = field(default_factory=dict)
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -190,7 +192,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         idata, sims = to_inference_data(pm, sample, rng=np.random.default_rng(seed + 1))
         t_post = time.perf_counter() - t0 - got.seconds
         idata.to_netcdf(str(out / "posterior.nc"))
-        write_loo(out, idata)
+        loo = write_loo(out, idata)
         best = sample.theta.reshape(-1, pm.ndim)[int(np.argmax(sample.lp))]
         b_interval = inertance_interval(pm, sample.values[..., pm.names.index("b")], best,
                                         cov=laplace_covariance(pm, best) if interval_settings.others == "free"
@@ -211,7 +213,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, idata,
                          info["timings_s"], got.shrink, run.recovered, warnings=got.ended, masses=masses,
                          b_theory=b_theory, b_interval=b_interval, drive=drive, burn_in=sample.burn,
-                         warmup=int(run.warmup), thin=sample.thin)
+                         warmup=int(run.warmup), thin=sample.thin, loo=loo)
 
 
 def _interval_settings(interval) -> IntervalSettings:
