@@ -63,8 +63,8 @@ import numpy as np
 
 from .impedance import EDGE_WARNING, MAX_SENSITIVITY_CHANGE, ImpedanceMap, driving_point
 
-__all__ = ["Coordinates", "ImpedanceMap", "SeriesStiffness", "driving_point", "default_coordinates", "COORDINATES", "drive_omega",
-           "reference_tolerance", "continue_at",
+__all__ = ["Coordinates", "ImpedanceMap", "SeriesStiffness", "driving_point", "default_coordinates", "COORDINATES",
+           "drive_omega", "reference_tolerance", "continue_at",
            "MAX_SENSITIVITY_CHANGE", "EDGE_WARNING"]
 
 #: The coordinate systems a fit can use (``--coordinates``).
@@ -101,11 +101,8 @@ class Coordinates:
         u = np.array(u, dtype=float)
         logj = np.zeros(u.shape[:-1])
         if self.logit.any():
-            z = u[..., self.logit]
-            lo, hi = self.lo[self.logit], self.hi[self.logit]
-            with np.errstate(over="ignore"):
-                u[..., self.logit] = lo + (hi - lo) / (1.0 + np.exp(-z))
-            logj = logj + np.sum(np.log(hi - lo) - np.logaddexp(0.0, -z) - np.logaddexp(0.0, z), axis=-1)
+            u[..., self.logit], lj = _from_logit(u[..., self.logit], self.lo[self.logit], self.hi[self.logit])
+            logj = logj + np.sum(lj, axis=-1)
         if self.series is not None:
             i, j = self.series
             a, c, lj = self._pair().to_logs(u[..., i], u[..., j])
@@ -131,9 +128,7 @@ class Coordinates:
         theta = np.asarray(theta, dtype=float)
         u = theta.copy() if self.impedance is None else self.impedance.forward(theta)
         if self.logit.any():
-            p = (theta[..., self.logit] - self.lo[self.logit]) / (self.hi[self.logit] - self.lo[self.logit])
-            with np.errstate(divide="ignore"):
-                u[..., self.logit] = np.log(p) - np.log1p(-p)
+            u[..., self.logit] = _to_logit(theta[..., self.logit], self.lo[self.logit], self.hi[self.logit])
         if self.series is not None:
             i, j = self.series
             u[..., i], u[..., j] = self._pair().from_logs(theta[..., i], theta[..., j])
@@ -161,8 +156,18 @@ class Coordinates:
         return f"{self.kind} ({walked} at {imp.omega / (2 * math.pi):.6g} Hz; logit elsewhere)"
 
 
-def _softplus(x):
-    return np.logaddexp(0.0, x)
+def _from_logit(z, lo, hi):
+    """The point at logit ``z`` of its place in [lo, hi], and log |dx/dz| (elementwise)."""
+    with np.errstate(over="ignore"):
+        x = lo + (hi - lo) / (1.0 + np.exp(-z))
+    return x, np.log(hi - lo) - np.logaddexp(0.0, -z) - np.logaddexp(0.0, z)
+
+
+def _to_logit(x, lo, hi):
+    """The logit of ``x``'s place in [lo, hi] (infinite on its ends, NaN outside)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = (x - lo) / (hi - lo)
+        return np.log(p) - np.log1p(-p)
 
 
 def _log_expm1(x):
@@ -202,24 +207,15 @@ class SeriesStiffness:
 
     def to_logs(self, z_s, z_d):
         """(log k_n, log k_B, log |det d(log k_n, log k_B) / d(z_s, z_d)|)."""
-        s_lo, s_hi = self.s_range
-        with np.errstate(over="ignore"):
-            s = s_lo + (s_hi - s_lo) / (1.0 + np.exp(-z_s))
-            d_lo, d_hi = self.d_range(s)
-            d = d_lo + (d_hi - d_lo) / (1.0 + np.exp(-z_d))
-        logj = (np.log(s_hi - s_lo) - _softplus(-z_s) - _softplus(z_s)
-                + np.log(d_hi - d_lo) - _softplus(-z_d) - _softplus(z_d))  # (s, d) -> logs keeps volume
-        return s + _softplus(-d), s + _softplus(d), logj
+        s, lj_s = _from_logit(z_s, *self.s_range)
+        d, lj_d = _from_logit(z_d, *self.d_range(s))
+        # (s, d) -> (log k_n, log k_B) keeps volume: only the logits' Jacobians remain
+        return s + np.logaddexp(0.0, -d), s + np.logaddexp(0.0, d), lj_s + lj_d
 
     def from_logs(self, a, c):
         """(z_s, z_d) at log k_n = a, log k_B = c (NaN or infinite outside the box)."""
         s = -np.logaddexp(-a, -c)
-        d = c - a
-        s_lo, s_hi = self.s_range
-        d_lo, d_hi = self.d_range(s)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            p, q = (s - s_lo) / (s_hi - s_lo), (d - d_lo) / (d_hi - d_lo)
-            return np.log(p) - np.log1p(-p), np.log(q) - np.log1p(-q)
+        return _to_logit(s, *self.s_range), _to_logit(c - a, *self.d_range(s))
 
 
 def drive_omega(record) -> float:
