@@ -113,9 +113,9 @@ class Serial(Executor):
 def blas_threads(workers: int) -> int:
     """The BLAS threads each of ``workers`` local worker processes may use: its share of
     the machine's cores (at least one). Each worker's BLAS would otherwise start a thread
-    per core, and the workers' pools oversubscribe the cores (an assumption the paper does
-    not need: measured here, the quick study on 2 processes took 27 s at one thread a
-    worker and 33 s at the library's default, and a test's SVDs up to 20 times longer)."""
+    per core, and the workers' pools would oversubscribe the cores. Measured on a 2-core
+    machine: the quick study on 2 processes took 27 s at one thread a worker and 33 s at
+    BLAS's default, and a test's SVDs ran up to 20 times longer beside another worker."""
     return max(1, (os.cpu_count() or 1) // workers)
 
 

@@ -29,8 +29,8 @@ import numpy as np
 from .harmonic import at_times
 from .model import PosteriorModel
 
-__all__ = ["PosteriorSample", "ar1_noise", "loo_data", "posterior_sample", "contraction", "to_inference_data", "summary_rows",
-           "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "NUMBER_COLUMNS",
+__all__ = ["PosteriorSample", "ar1_noise", "loo_data", "posterior_sample", "contraction", "to_inference_data",
+           "summary_rows", "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "NUMBER_COLUMNS",
            "MAX_DRAWS", "every_nth"]
 
 
