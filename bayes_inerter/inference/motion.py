@@ -23,10 +23,14 @@ f2_0 / c_n in velocity, and it sticks at each reversal until the nut's force exc
 f2_0). Where f2_0 > 0 the drivetrain behind the plate (the screw's translation and
 rotation, Coulomb friction on the rotation, set-valued) is therefore **simulated**, driven
 by the measured plate velocity on ``DRIVE_GRID`` points a period with the exact kernel
-(``simulate.exact_runner``), from the linear periodic state for ``DRIVE_SETTLE`` periods and
-then a period at a time until two successive periods' bearing force agree
-(``DRIVE_TOL``, at most ``DRIVE_MAX_PERIODS``), and the bearing's force z_B (V - V_s) is
-taken from the last. This replaced
+(``simulate.exact_runner``), from the linear periodic state for ``DRIVE_SETTLE`` periods,
+then with a Newton step on the periodic state (the period map's monodromy: the linear
+flow between the rotation's reversals and each reversal's saltation) before each pair of
+periods, until two successive periods' bearing force agree (``DRIVE_TOL``, at most
+``DRIVE_MAX_PERIODS``); the bearing's force z_B (V - V_s) is taken from the last. The
+Newton steps matter where the flywheel rings on the nut and the bearing, lightly damped:
+simulated period by period such a drivetrain approaches its periodic state by a factor of
+about 0.8 a period. This replaced
 the algebra's F_2 = f2_0 S (the rotation reversing with the plate), which on a
 noise-free generator record of a rotation with f2_0 = 2,000 N behind a soft nut
 missed the measured force by 144 N rms a harmonic at the truth, the simulation by
@@ -132,18 +136,24 @@ SIGN_GRID = 8192
 #: Points per period on which the drivetrain behind the plate is simulated (the bearing's
 #: force changed by under 0.1 N between 1024 and 16384 on the records checked).
 DRIVE_GRID = 2048
-#: Periods the drivetrain is simulated, from the linear periodic state, before the one kept.
+#: Periods the drivetrain is simulated, from the linear periodic state, before its first
+#: Newton step (``bearing_force``).
 DRIVE_SETTLE = 1
-#: **Assumption**: the drivetrain is simulated a period more, at most to ``DRIVE_MAX_PERIODS``
-#: in all, until two successive periods' bearing force differs by at most ``DRIVE_TOL`` (N)
-#: at every harmonic: a heavy rotation with a large drag behind a soft nut settles over
-#: several periods. On such a device (``tests/test_inference_motion.py``: b 18.5 t, c_f2
+#: **Assumption**: the drivetrain is simulated, with Newton steps on its periodic state
+#: between periods, at most to ``DRIVE_MAX_PERIODS`` in all, until two successive periods'
+#: bearing force differs by at most ``DRIVE_TOL`` (N) at every harmonic. Without the
+#: Newton steps a lightly damped drivetrain converges slowly: on a heavy rotation with a
+#: large drag behind a soft nut (``tests/test_inference_motion.py``: b 18.5 t, c_f2
 #: 12.9 kN s/m, k_n 5.5e4 N/m, f2_0 3.0 kN, 1 Hz) one settling period left the bearing's
-#: force 3.8 N from its periodic value at a harmonic, this rule 0.035 N (a slow drift of
-#: 0.0015 N a period remains); on an SBC replicate of about that device (seed 2,
-#: replicate 1) four settling periods in place of one raised the log posterior by 7 nats
-#: at its optimum and by 10 at the truth.
+#: force 3.8 N from its periodic value at a harmonic; on the posterior draws of a
+#: paper-like A3 record at 1 Hz, where the flywheel rings on the nut and the bearing at a
+#: damping ratio of 0.1 to 1 %, eight periods of plain simulation left it up to 90 N
+#: from a 300-period run (7.8 N at the 90th percentile), and with the Newton steps
+#: 0.006 N (``docs/inference.md``).
 DRIVE_TOL = 0.005
+#: Newton steps are taken while the period-to-period change falls; where it grows, or the
+#: rotation sticks within a period (the monodromy below assumes it slides), the
+#: drivetrain is simulated on period by period.
 DRIVE_MAX_PERIODS = 8
 
 
@@ -162,10 +172,10 @@ class MotionData:
     windows: tuple = ()  # the reversals' windows, shares of the period (``reversals.reversal_windows``)
 
     @functools.cached_property
-    def drive_input(self) -> np.ndarray:
-        """The drivetrain simulation's input: ``drive`` over DRIVE_SETTLE + 1 periods and
-        the next sample, as a column."""
-        return np.append(np.tile(self.drive, DRIVE_SETTLE + 1), self.drive[0]).reshape(-1, 1)
+    def period_input(self) -> np.ndarray:
+        """The drivetrain simulation's input over one period: ``drive`` and the next
+        period's first sample, as a column."""
+        return np.append(self.drive, self.drive[0]).reshape(-1, 1)
 
     @property
     def harmonics(self) -> int:
@@ -331,18 +341,81 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
                   [1.0, -1.0, 0.0, 0.0],
                   [-1.0, 0.0, 0.0, 0.0]])  # states v_s, v_th, x_s - x_th, x_B - x_s; input v_B
     B = np.array([[c_B / m_s], [0.0], [0.0], [1.0]])
-    u = data.drive_input / gain
-    run = exact_runner(A, B, _ROTATION, np.array([f2_0]), np.array([b]), 1.0 / (N * freq))
-    _, states = run(u, x0=x0, store=True)
-    before = _bearing_harmonics(states[-2 * N - 1: -N - 1], v, c_B, k_B, data.harmonics)
-    got = _bearing_harmonics(states[-N - 1: -1], v, c_B, k_B, data.harmonics)
-    one = u[-N - 1:]  # one period and the next sample
-    for _ in range(DRIVE_MAX_PERIODS - DRIVE_SETTLE - 1):
-        if float(np.max(np.abs(got - before))) <= DRIVE_TOL:
-            break
-        _, states = run(one, x0=states[-1], store=True)
-        before, got = got, _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
-    return got
+    u = data.period_input / gain
+    T = 1.0 / freq
+    run = exact_runner(A, B, _ROTATION, np.array([f2_0]), np.array([b]), T / N)
+    start = x0
+    for _ in range(DRIVE_SETTLE - 1):
+        start = run(u, x0=start, store=True)[1][-1]
+    _, states = run(u, x0=start, store=True)  # the period the first Newton step learns from
+    periods, last, newton = DRIVE_SETTLE, math.inf, True
+    while True:
+        if newton and periods + 2 <= DRIVE_MAX_PERIODS:
+            step = _newton_step(A, f2_0, b, states, T, start)
+            if step is not None and np.all(np.isfinite(step)):
+                start = start + step
+                _, states = run(u, x0=start, store=True)
+                periods += 1
+        before, start = _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics), states[-1]
+        _, states = run(u, x0=start, store=True)
+        periods += 1
+        got = _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
+        change = float(np.max(np.abs(got - before)))
+        if change <= DRIVE_TOL or periods >= DRIVE_MAX_PERIODS:
+            return got
+        newton = newton and change < last
+        last = change
+
+
+def _newton_step(A, f2_0, b, states, T, start):
+    """The step from ``start`` to the drivetrain's periodic state that the monodromy of
+    the period ``states`` (simulated from ``start``) predicts, or None."""
+    ok, M = _monodromy(A, f2_0, b, states, T)
+    if not ok:
+        return None
+    try:
+        return np.linalg.solve(np.eye(4) - M, states[-1] - start)
+    except np.linalg.LinAlgError:
+        return None
+
+
+@njit(cache=True)
+def _monodromy(A, f2_0, b, states, T):
+    """(ok, M): the drivetrain's monodromy matrix dx(T)/dx(0) over one period of stored
+    ``states`` (rows from t = 0 to T, the rotation sliding throughout): the linear flow
+    exp(A t) between the rotation's velocity reversals and, at each, the saltation of its
+    Coulomb force (the force jumps by 2 f2_0 when the reversal's time moves with the
+    start). Not ok where the rotation sticks at a sample or a reversal grazes."""
+    N = states.shape[0] - 1
+    h = T / N
+    lam, V = np.linalg.eig(A.astype(np.complex128))
+    Vi = np.linalg.inv(V)
+    M = np.eye(4, dtype=np.complex128)
+    t_prev = 0.0
+    if states[0, 1] == 0.0:
+        return False, np.eye(4)
+    for j in range(N):
+        v0, v1 = states[j, 1], states[j + 1, 1]
+        if v1 == 0.0 and j + 1 < N:
+            return False, np.eye(4)
+        if v0 * v1 >= 0.0:
+            continue
+        frac = v0 / (v0 - v1)
+        ts = (j + frac) * h
+        sign = 1.0 if v0 > 0.0 else -1.0
+        accel = -f2_0 * sign / b
+        for c in range(4):
+            accel += A[1, c] * (states[j, c] + frac * (states[j + 1, c] - states[j, c]))
+        if abs(accel) * h < 1e-9 * (abs(v0) + abs(v1)):
+            return False, np.eye(4)
+        flow = (V * np.exp(lam * (ts - t_prev))) @ Vi
+        M = flow @ M
+        jump = 2.0 * f2_0 * sign / b / accel
+        for c in range(4):
+            M[1, c] += jump * M[1, c]
+        t_prev = ts
+    M = ((V * np.exp(lam * (T - t_prev))) @ Vi) @ M
+    return True, M.real
 
 
 def _bearing_harmonics(period: np.ndarray, v: np.ndarray, c_B: float, k_B: float, K: int) -> np.ndarray:
