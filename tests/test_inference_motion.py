@@ -196,7 +196,7 @@ def test_the_newton_steps_find_the_periodic_drivetrain_that_plain_periods_approa
     periods.append(0)
     newton = bearing_force(data, x)
     with monkeypatch.context() as m:
-        m.setattr(motion, "_newton_step", lambda *args: None)
+        m.setattr(motion, "_newton_start", lambda *args: None)
         periods.append(0)
         plain = bearing_force(data, x)
         m.setattr(motion, "DRIVE_TOL", 0.0)

@@ -351,9 +351,9 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
     periods, last, newton = DRIVE_SETTLE, math.inf, True
     while True:
         if newton and periods + 2 <= DRIVE_MAX_PERIODS:
-            step = _newton_step(A, f2_0, b, states, T, start)
-            if step is not None and np.all(np.isfinite(step)):
-                start = start + step
+            jump = _newton_start(A, f2_0, b, c_B, k_B, states, T, start)
+            if jump is not None:
+                start = jump
                 _, states = run(u, x0=start, store=True)
                 periods += 1
         before, start = _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics), states[-1]
@@ -367,16 +367,23 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
         last = change
 
 
-def _newton_step(A, f2_0, b, states, T, start):
-    """The step from ``start`` to the drivetrain's periodic state that the monodromy of
-    the period ``states`` (simulated from ``start``) predicts, or None."""
+def _newton_start(A, f2_0, b, c_B, k_B, states, T, start):
+    """The drivetrain's periodic state as the monodromy of the period ``states``
+    (simulated from ``start``) predicts it, or None where it cannot be formed or where
+    the next period, started where this one ends, would miss it by less than
+    ``DRIVE_TOL`` in the bearing's force (c_B and k_B times the screw's velocity and the
+    bearing's deflection): a period with no Newton step then does."""
     ok, M = _monodromy(A, f2_0, b, states, T)
     if not ok:
         return None
     try:
-        return np.linalg.solve(np.eye(4) - M, states[-1] - start)
+        target = start + np.linalg.solve(np.eye(4) - M, states[-1] - start)
     except np.linalg.LinAlgError:
         return None
+    miss = target - states[-1]
+    if not np.all(np.isfinite(target)) or abs(c_B * miss[0]) + abs(k_B * miss[3]) <= DRIVE_TOL:
+        return None
+    return target
 
 
 @njit(cache=True)
