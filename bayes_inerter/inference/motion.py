@@ -352,7 +352,8 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
     while True:
         if newton and periods + 2 <= DRIVE_MAX_PERIODS:
             jump = _newton_start(A, f2_0, b, c_B, k_B, states, T, start)
-            if jump is not None:
+            newton = jump is not None  # where a plain period would do, plain periods do from here
+            if newton:
                 start = jump
                 _, states = run(u, x0=start, store=True)
                 periods += 1
@@ -372,18 +373,27 @@ def _newton_start(A, f2_0, b, c_B, k_B, states, T, start):
     (simulated from ``start``) predicts it, or None where it cannot be formed or where
     the next period, started where this one ends, would miss it by less than
     ``DRIVE_TOL`` in the bearing's force (c_B and k_B times the screw's velocity and the
-    bearing's deflection): a period with no Newton step then does."""
-    ok, M = _monodromy(A, f2_0, b, states, T)
-    if not ok:
-        return None
+    bearing's deflection): plain periods then do."""
     try:
-        target = start + np.linalg.solve(np.eye(4) - M, states[-1] - start)
+        ok, target = _newton_target(A, f2_0, b, c_B, k_B, states, T, start, DRIVE_TOL)
     except np.linalg.LinAlgError:
         return None
+    return target if ok else None
+
+
+@njit(cache=True)
+def _newton_target(A, f2_0, b, c_B, k_B, states, T, start, tol):
+    """(ok, the periodic state that :func:`_monodromy` predicts); not ok where the
+    monodromy cannot be formed, the prediction is not finite or it lies within ``tol`` (N
+    of bearing force) of the period's end."""
+    ok, M = _monodromy(A, f2_0, b, states, T)
+    if not ok:
+        return False, start
+    target = start + np.linalg.solve(np.eye(4) - M, states[-1] - start)
+    if not np.all(np.isfinite(target)):
+        return False, start
     miss = target - states[-1]
-    if not np.all(np.isfinite(target)) or abs(c_B * miss[0]) + abs(k_B * miss[3]) <= DRIVE_TOL:
-        return None
-    return target
+    return abs(c_B * miss[0]) + abs(k_B * miss[3]) > tol, target
 
 
 @njit(cache=True)
@@ -395,16 +405,15 @@ def _monodromy(A, f2_0, b, states, T):
     start). Not ok where the rotation sticks at a sample or a reversal grazes."""
     N = states.shape[0] - 1
     h = T / N
+    for j in range(N):
+        if states[j, 1] == 0.0:
+            return False, np.eye(4)
     lam, V = np.linalg.eig(A.astype(np.complex128))
     Vi = np.linalg.inv(V)
     M = np.eye(4, dtype=np.complex128)
     t_prev = 0.0
-    if states[0, 1] == 0.0:
-        return False, np.eye(4)
     for j in range(N):
         v0, v1 = states[j, 1], states[j + 1, 1]
-        if v1 == 0.0 and j + 1 < N:
-            return False, np.eye(4)
         if v0 * v1 >= 0.0:
             continue
         frac = v0 / (v0 - v1)
