@@ -24,10 +24,12 @@ f2_0). Where f2_0 > 0 the drivetrain behind the plate (the screw's translation a
 rotation, Coulomb friction on the rotation, set-valued) is therefore **simulated**, driven
 by the measured plate velocity on ``DRIVE_GRID`` points a period with the exact kernel
 (``simulate.exact_runner``), from the linear periodic state for ``DRIVE_SETTLE`` periods,
-then with a Newton step on the periodic state (the period map's monodromy: the linear
-flow between the rotation's reversals and each reversal's saltation) before each pair of
-periods, until two successive periods' bearing force agree (``DRIVE_TOL``, at most
-``DRIVE_MAX_PERIODS``); the bearing's force z_B (V - V_s) is taken from the last. The
+then with Newton steps on the periodic state (the period map's monodromy: the linear
+flow between the rotation's reversals and each reversal's saltation) until one finds a
+period's end within ``DRIVE_TOL / 2`` of it, the next period then taken; where the
+rotation sticks, a period at a time until two successive periods' bearing force agree
+(``DRIVE_TOL``, at most ``DRIVE_MAX_PERIODS`` in all). The bearing's force z_B (V - V_s)
+is taken from the last period. The
 Newton steps matter where the flywheel rings on the nut and the bearing, lightly damped:
 simulated period by period such a drivetrain approaches its periodic state by a factor of
 about 0.8 a period. This replaced
@@ -139,21 +141,21 @@ DRIVE_GRID = 2048
 #: Periods the drivetrain is simulated, from the linear periodic state, before its first
 #: Newton step (``bearing_force``).
 DRIVE_SETTLE = 1
-#: **Assumption**: the drivetrain is simulated, with Newton steps on its periodic state
-#: between periods, at most to ``DRIVE_MAX_PERIODS`` in all, until two successive periods'
-#: bearing force differs by at most ``DRIVE_TOL`` (N) at every harmonic. Without the
-#: Newton steps a lightly damped drivetrain converges slowly: on a heavy rotation with a
-#: large drag behind a soft nut (``tests/test_inference_motion.py``: b 18.5 t, c_f2
-#: 12.9 kN s/m, k_n 5.5e4 N/m, f2_0 3.0 kN, 1 Hz) one settling period left the bearing's
-#: force 3.8 N from its periodic value at a harmonic; on the posterior draws of a
-#: paper-like A3 record at 1 Hz, where the flywheel rings on the nut and the bearing at a
-#: damping ratio of 0.1 to 1 %, eight periods of plain simulation left it up to 90 N
-#: from a 300-period run (7.8 N at the 90th percentile), and with the Newton steps
-#: 0.006 N (``docs/inference.md``).
+#: **Assumption**: the drivetrain is simulated until its bearing force is periodic to
+#: ``DRIVE_TOL`` (N) at every harmonic, at most ``DRIVE_MAX_PERIODS`` periods in all:
+#: until a Newton step on the periodic state (``bearing_force``) finds a period's end
+#: within ``DRIVE_TOL / 2`` of it (the next period is then taken), or, where the rotation
+#: sticks within a period (the step's monodromy assumes it slides) or the steps stop
+#: converging, until two successive periods' bearing force differs by at most
+#: ``DRIVE_TOL``. Without the Newton steps a lightly damped drivetrain converges slowly:
+#: on a heavy rotation with a large drag behind a soft nut
+#: (``tests/test_inference_motion.py``: b 18.5 t, c_f2 12.9 kN s/m, k_n 5.5e4 N/m, f2_0
+#: 3.0 kN, 1 Hz) one settling period left the bearing's force 3.8 N from its periodic
+#: value at a harmonic; on the posterior draws of a paper-like A3 record at 1 Hz, where
+#: the flywheel rings on the nut and the bearing at a damping ratio of 0.1 to 1 %, eight
+#: plain periods left it up to 90 N from a 300-period run (7.8 N at the 90th
+#: percentile), the Newton steps 0.02 N at most (``docs/inference.md``).
 DRIVE_TOL = 0.005
-#: Newton steps are taken while the period-to-period change falls; where it grows, or the
-#: rotation sticks within a period (the monodromy below assumes it slides), the
-#: drivetrain is simulated on period by period.
 DRIVE_MAX_PERIODS = 8
 
 
@@ -350,50 +352,48 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
     _, states = run(u, x0=start, store=True)  # the period the first Newton step learns from
     periods, last, newton = DRIVE_SETTLE, math.inf, True
     while True:
-        if newton and periods + 2 <= DRIVE_MAX_PERIODS:
-            jump = _newton_start(A, f2_0, b, c_B, k_B, states, T, start)
-            newton = jump is not None  # where a plain period would do, plain periods do from here
+        if newton and periods < DRIVE_MAX_PERIODS:
+            ok, target, miss = _newton(A, f2_0, b, c_B, k_B, states, T, start)
+            if ok and miss <= DRIVE_TOL / 2:  # the next period is the periodic one, within DRIVE_TOL / 2
+                _, states = run(u, x0=states[-1], store=True)
+                return _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
+            newton = ok and miss < last and periods + 2 <= DRIVE_MAX_PERIODS
             if newton:
-                start = jump
+                start, last = target, miss
                 _, states = run(u, x0=start, store=True)
                 periods += 1
+                continue
         before, start = _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics), states[-1]
         _, states = run(u, x0=start, store=True)
         periods += 1
         got = _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
-        change = float(np.max(np.abs(got - before)))
-        if change <= DRIVE_TOL or periods >= DRIVE_MAX_PERIODS:
+        if float(np.max(np.abs(got - before))) <= DRIVE_TOL or periods >= DRIVE_MAX_PERIODS:
             return got
-        newton = newton and change < last
-        last = change
 
 
-def _newton_start(A, f2_0, b, c_B, k_B, states, T, start):
-    """The drivetrain's periodic state as the monodromy of the period ``states``
-    (simulated from ``start``) predicts it, or None where it cannot be formed or where
-    the next period, started where this one ends, would miss it by less than
-    ``DRIVE_TOL`` in the bearing's force (c_B and k_B times the screw's velocity and the
-    bearing's deflection): plain periods then do."""
+def _newton(A, f2_0, b, c_B, k_B, states, T, start):
+    """(ok, target, miss): the drivetrain's periodic state as the monodromy of the period
+    ``states`` (simulated from ``start``) predicts it, and by how much the period's end
+    misses it in the bearing's force (c_B and k_B times the screw's velocity and the
+    bearing's deflection, N); not ok where the monodromy cannot be formed (the rotation
+    sticks) or the prediction is not finite."""
     try:
-        ok, target = _newton_target(A, f2_0, b, c_B, k_B, states, T, start, DRIVE_TOL)
+        return _newton_target(A, f2_0, b, c_B, k_B, states, T, start)
     except np.linalg.LinAlgError:
-        return None
-    return target if ok else None
+        return False, start, math.inf
 
 
 @njit(cache=True)
-def _newton_target(A, f2_0, b, c_B, k_B, states, T, start, tol):
-    """(ok, the periodic state that :func:`_monodromy` predicts); not ok where the
-    monodromy cannot be formed, the prediction is not finite or it lies within ``tol`` (N
-    of bearing force) of the period's end."""
+def _newton_target(A, f2_0, b, c_B, k_B, states, T, start):
+    """:func:`_newton`, compiled."""
     ok, M = _monodromy(A, f2_0, b, states, T)
     if not ok:
-        return False, start
+        return False, start, math.inf
     target = start + np.linalg.solve(np.eye(4) - M, states[-1] - start)
     if not np.all(np.isfinite(target)):
-        return False, start
+        return False, start, math.inf
     miss = target - states[-1]
-    return abs(c_B * miss[0]) + abs(k_B * miss[3]) > tol, target
+    return True, target, abs(c_B * miss[0]) + abs(k_B * miss[3])
 
 
 @njit(cache=True)
