@@ -162,6 +162,26 @@ def test_the_drivetrain_is_simulated_until_it_settles(monkeypatch):
     assert np.max(np.abs(once - settled)) > 1.0
 
 
+def _count_periods(monkeypatch) -> list:
+    """A list whose last entry counts the drivetrain's simulated periods: append 0 before
+    each bearing_force call to count that call's."""
+    import bayes_inerter.inference.motion as motion
+
+    periods = []
+    runner = motion.exact_runner
+
+    def counted(*args, **kwargs):
+        run = runner(*args, **kwargs)
+
+        def counting(u, **kw):
+            periods[-1] += 1
+            return run(u, **kw)
+        return counting
+
+    monkeypatch.setattr(motion, "exact_runner", counted)
+    return periods
+
+
 def _ringing_drivetrain():
     """A posterior draw of a paper-like A3 record at 1 Hz: a stiff, barely damped nut
     (the flywheel rings on it at about 27 Hz, a damping ratio near 0.1 %) behind a
@@ -181,18 +201,7 @@ def test_the_newton_steps_find_the_periodic_drivetrain_that_plain_periods_approa
     import bayes_inerter.inference.motion as motion
 
     data, x = _ringing_drivetrain()
-    periods = []
-    runner = motion.exact_runner
-
-    def counted(*args, **kwargs):
-        run = runner(*args, **kwargs)
-
-        def counting(u, **kw):
-            periods[-1] += 1
-            return run(u, **kw)
-        return counting
-
-    monkeypatch.setattr(motion, "exact_runner", counted)
+    periods = _count_periods(monkeypatch)
     periods.append(0)
     newton = bearing_force(data, x)
     with monkeypatch.context() as m:
@@ -219,18 +228,7 @@ def test_a_drivetrain_the_monodromy_finds_settled_is_taken_after_two_periods(mon
     p = paper_parameters("A3")
     x = {**{n: getattr(p, n) for n in _rigid()}, "f2_0": 200.0}
     tol = motion.DRIVE_TOL
-    periods = []
-    runner = motion.exact_runner
-
-    def counted(*args, **kwargs):
-        run = runner(*args, **kwargs)
-
-        def counting(u, **kw):
-            periods[-1] += 1
-            return run(u, **kw)
-        return counting
-
-    monkeypatch.setattr(motion, "exact_runner", counted)
+    periods = _count_periods(monkeypatch)
     periods.append(0)
     got = bearing_force(data, x)
     monkeypatch.setattr(motion, "_newton", lambda *args: (False, None, math.inf))
