@@ -242,6 +242,35 @@ def test_a_drivetrain_the_monodromy_finds_settled_is_taken_after_two_periods(mon
     assert np.max(np.abs(got - periodic)) < tol
 
 
+def test_a_newton_step_that_does_not_help_is_undone(monkeypatch):
+    """A first Newton step that lands far from the periodic state (a wrong monodromy, as a
+    nearly defective A could give) is undone: the periods go on from before it, and the
+    bearing's force still comes within DRIVE_TOL of the periodic one."""
+    import bayes_inerter.inference.motion as motion
+
+    data, _ = _ringing_drivetrain()
+    p = paper_parameters("A3")
+    x = {**{n: getattr(p, n) for n in _rigid()}, "f2_0": 200.0}
+    tol = motion.DRIVE_TOL
+    real = motion._newton
+    calls = []
+
+    def wrong_first(A, f2_0, b, c_B, k_B, states, T, start):
+        calls.append(1)
+        if len(calls) == 1:  # a step to far away, said to miss by only 4 DRIVE_TOL
+            return True, start + np.array([0.05, 0.05, 1e-3, 1e-5]), 4 * tol
+        return real(A, f2_0, b, c_B, k_B, states, T, start)
+
+    monkeypatch.setattr(motion, "_newton", wrong_first)
+    got = bearing_force(data, x)
+    monkeypatch.setattr(motion, "_newton", real)
+    monkeypatch.setattr(motion, "DRIVE_TOL", 0.0)
+    monkeypatch.setattr(motion, "DRIVE_MAX_PERIODS", 200)
+    periodic = bearing_force(data, x)
+    assert len(calls) == 2
+    assert np.max(np.abs(got - periodic)) < tol
+
+
 def test_the_monodromy_is_the_period_maps_derivative():
     """The monodromy with the reversals' saltation against central differences of the
     simulated period map, on a drivetrain whose rotation slides through two reversals a
