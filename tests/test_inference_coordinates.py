@@ -148,6 +148,44 @@ def test_series_coordinates_round_trip_with_their_jacobian(two_port):
     assert np.all((c >= lo[1] - 1e-9) & (c <= hi[1] + 1e-9))
 
 
+def test_compliance_coordinates_round_trip_and_keep_volume(two_port):
+    """c_n, k_n and k_B walked as the pair's series compliance, the nut's phase and the
+    bearing's share: one to one (theta back from u to 1e-9), the log-Jacobian the
+    finite-difference determinant's (the three's map adds none: it keeps volume), and the
+    series impedance at the drive frequency is the first of the three."""
+    from bayes_inerter.inference.coordinates import SeriesCompliance
+
+    coords = default_coordinates(two_port, "compliance")
+    imp = default_coordinates(two_port, "impedance")
+    i, j, k = (two_port.names.index(n) for n in ("c_n", "k_n", "k_B"))
+    assert coords.kind == "compliance" and coords.compliance[:3] == (i, j, k)
+    assert not coords.logit[[i, j, k]].any() and "series compliance" in coords.describe()
+    rng = np.random.default_rng(7)
+    theta = _random_thetas(two_port, 300, rng)
+    u = coords.to_u(theta)
+    ok = np.all(np.isfinite(u), axis=1)
+    assert ok.mean() > 0.5 and np.array_equal(ok, np.all(np.isfinite(imp.to_u(theta)), axis=1))
+    assert np.max(np.abs(coords.to_theta(u[ok]) - theta[ok])) < 1e-9
+    assert _jacobians_checked(coords, u[ok][:40], eps=1e-7, tol=1e-4) >= 15
+    omega = coords.compliance[3]
+    c_n, k_n, k_B = np.exp(theta[ok][:, [i, j, k]]).T
+    z = 1.0 / np.abs(1.0 / (c_n + k_n / (1j * omega)) + 1j * omega / k_B)
+    assert np.allclose(u[ok][:, i], np.log(z))
+    # the whole of R^3 maps to finite logs and back
+    S, psi, rho = rng.normal(0.0, 6.0, (3, 2000))
+    back = SeriesCompliance(omega).from_logs(*SeriesCompliance(omega).to_logs(S, psi, rho))
+    assert np.allclose(np.array(back), [S, psi, rho], atol=1e-8)
+    # and the three's own Jacobian determinant is 1
+    for point in np.array([S, psi, rho]).T[:50] / 3.0:
+        jac = np.empty((3, 3))
+        for c in range(3):
+            e = np.zeros(3)
+            e[c] = 1e-6
+            jac[:, c] = (np.array(SeriesCompliance(omega).to_logs(*(point + e)))
+                         - np.array(SeriesCompliance(omega).to_logs(*(point - e)))) / 2e-6
+        assert np.linalg.det(jac) == pytest.approx(1.0, abs=1e-6)
+
+
 def test_physical_coordinates_are_theta_itself(two_port):
     coords = default_coordinates(two_port, "physical")
     theta = _random_thetas(two_port, 5, np.random.default_rng(3))
@@ -209,7 +247,7 @@ def _invariance_pvalues(model, jacobian, kind="impedance"):
     return [stats.kstest(theta[:, i], stats.norm(centre[i], sd[i]).cdf).pvalue for i in range(len(centre))]
 
 
-@pytest.mark.parametrize("kind", ["impedance", "series"])
+@pytest.mark.parametrize("kind", ["impedance", "series", "compliance"])
 def test_walks_in_u_keep_the_target_in_theta(two_port, kind):
     p = _invariance_pvalues(two_port, jacobian=True, kind=kind)
     assert min(p) > 1e-3, p

@@ -82,8 +82,9 @@ def _prior(prior) -> dict:
 def _coordinates(coords) -> dict:
     """The sampler coordinates as their kind and settings (their dataclass's fields)."""
     fields = {f.name: getattr(coords, f.name) for f in dataclasses.fields(coords)}
-    if fields.get("series") is None:  # checkpoints written before the series coordinates match
-        fields.pop("series", None)
+    for name in ("series", "compliance"):  # checkpoints written before these coordinates match
+        if fields.get(name) is None:
+            fields.pop(name, None)
     imp = fields.get("impedance")
     if imp is not None:
         fields["impedance"] = dataclasses.asdict(imp)
