@@ -45,6 +45,13 @@ halved k_n's and k_B's autocorrelation times on A3 at 1 Hz but the slowest param
 went to 0.83, 1.39 and 3.40 times the impedance coordinates' on A3 at 1 and 0.5 Hz and
 B1 at 1.5 Hz (the nut's damper c_n, and on B1 every parameter, slower).
 
+A fourth, **compliance** (``kind="compliance"``: the impedance coordinates and this),
+walks log c_n, log k_n and log k_B as the nut and bearing's series impedance at the
+drive frequency, the nut's phase and the bearing's share (:class:`SeriesCompliance`):
+the records fix that impedance, spring- or damper-like. Not the default: measured side
+by side on four records at 1 Hz and two laboratories, the slowest parameter's tau was
+0.67 to 1.55 times the impedance coordinates' (median 0.96; docs/inference.md).
+
 Measured on the full study's A3 1 Hz record (3,000 steps, 24 walkers, the same start,
 seed and moves): the largest integrated autocorrelation time (in theta) fell from 180
 steps in theta (with the nut-ridge move) to 108 with the impedance coordinates and 94
