@@ -281,10 +281,8 @@ def test_the_monodromy_is_the_period_maps_derivative():
     import bayes_inerter.inference.motion as motion
 
     data, x = _ringing_drivetrain()
-    b, m_s, c_n, k_n, c_B, k_B, f2_0, c_f2 = (x[n] for n in ("b", "m_s", "c_n", "k_n", "c_B", "k_B", "f2_0", "c_f2"))
-    A = np.array([[-(c_B + c_n) / m_s, c_n / m_s, -k_n / m_s, k_B / m_s], [c_n / b, -(c_n + c_f2) / b, k_n / b, 0.0],
-                  [1.0, -1.0, 0.0, 0.0], [-1.0, 0.0, 0.0, 0.0]])
-    B = np.array([[c_B / m_s], [0.0], [0.0], [1.0]])
+    b, f2_0 = x["b"], x["f2_0"]
+    A, B = motion._drivetrain(np.array([x[n] for n in motion.ORDER]))
     T = 1.0
     u = data.period_input
     run = motion.exact_runner(A, B, np.array([1]), np.array([f2_0]), np.array([b]), T / (u.shape[0] - 1))

@@ -331,18 +331,14 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
     (f2_0 = 0: the algebra is then exact). ``p`` as for :func:`predicted_force`;
     ``simulate.SimulationError`` where the rotation's contact chatters."""
     x = _vector(p)
-    b, m_s, c_n, k_n, c_B, k_B, f2_0, c_f2 = x[0], x[1], x[3], x[4], x[5], x[6], x[9], x[10]
+    b, c_B, k_B, f2_0 = x[0], x[5], x[6], x[9]
     if f2_0 <= 0.0:
         return None
     v = data.drive / gain
     N = v.shape[0]
     freq = data.omega[0] / (2.0 * math.pi)
     x0 = _periodic_state(x, float(gain), data.omega, data.velocity, data.sign)
-    A = np.array([[-(c_B + c_n) / m_s, c_n / m_s, -k_n / m_s, k_B / m_s],
-                  [c_n / b, -(c_n + c_f2) / b, k_n / b, 0.0],
-                  [1.0, -1.0, 0.0, 0.0],
-                  [-1.0, 0.0, 0.0, 0.0]])  # states v_s, v_th, x_s - x_th, x_B - x_s; input v_B
-    B = np.array([[c_B / m_s], [0.0], [0.0], [1.0]])
+    A, B = _drivetrain(x)
     u = data.period_input / gain
     T = 1.0 / freq
     run = exact_runner(A, B, _ROTATION, np.array([f2_0]), np.array([b]), T / N)
@@ -371,6 +367,18 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
         got = _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
         if float(np.max(np.abs(got - before))) <= DRIVE_TOL or periods >= DRIVE_MAX_PERIODS:
             return got
+
+
+def _drivetrain(x):
+    """(A, B) of the drivetrain behind the plate with the rotation sliding, its Coulomb
+    force apart: states v_s, v_th, x_s - x_th, x_B - x_s; input the plate's velocity v_B.
+    ``x`` the physical parameters in ``ORDER``."""
+    b, m_s, c_n, k_n, c_B, k_B, c_f2 = x[0], x[1], x[3], x[4], x[5], x[6], x[10]
+    A = np.array([[-(c_B + c_n) / m_s, c_n / m_s, -k_n / m_s, k_B / m_s],
+                  [c_n / b, -(c_n + c_f2) / b, k_n / b, 0.0],
+                  [1.0, -1.0, 0.0, 0.0],
+                  [-1.0, 0.0, 0.0, 0.0]])
+    return A, np.array([[c_B / m_s], [0.0], [0.0], [1.0]])
 
 
 def _newton(A, f2_0, b, c_B, k_B, states, T, start):
