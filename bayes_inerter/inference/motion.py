@@ -346,7 +346,7 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
     for _ in range(DRIVE_SETTLE - 1):
         start = run(u, x0=start, store=True)[1][-1]
     _, states = run(u, x0=start, store=True)  # the period the first Newton step learns from
-    periods, last, newton, before_step = DRIVE_SETTLE, math.inf, True, None
+    periods, last, newton, before_step, got = DRIVE_SETTLE, math.inf, True, None, None
     while True:
         if newton and periods < DRIVE_MAX_PERIODS:
             ok, target, miss = _newton(A, f2_0, b, c_B, k_B, states, T, start)
@@ -354,14 +354,16 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
                 _, states = run(u, x0=states[-1], store=True)
                 return _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
             if ok and miss < last and periods + 2 <= DRIVE_MAX_PERIODS:
-                before_step, start, last = states, target, miss
+                before_step, start, last, got = states, target, miss, None
                 _, states = run(u, x0=start, store=True)
                 periods += 1
                 continue
             newton = False
             if before_step is not None and ok and miss >= last:
                 states = before_step  # the last step did not bring the periodic state nearer: go on from before it
-        before, start = _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics), states[-1]
+        # the last period's harmonics: the last plain period's, else computed here
+        before = got if got is not None else _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
+        start = states[-1]
         _, states = run(u, x0=start, store=True)
         periods += 1
         got = _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
