@@ -10,6 +10,7 @@ import threadpoolctl
 from scipy import optimize, stats
 
 from bayes_inerter import paper_parameters
+from bayes_inerter.inference import friction_law
 from bayes_inerter.inference.motion import (bearing_force, motion_data, motion_loglik, motion_variance,
                                             predicted_force)
 from bayes_inerter.records import GeneratorSettings, generate_record
@@ -401,6 +402,25 @@ def test_the_laws_deviations_beyond_coulomb_and_viscous_leave_the_friction_unbia
     se = max(mimic.std(ddof=1), beyond.std(ddof=1)) / math.sqrt(len(mimic))
     assert mimic.mean() < -3 * se
     assert abs(beyond.mean()) < 3 * se
+
+
+def test_the_laws_deviations_may_keep_the_viscous_direction():
+    """``law_beyond_viscous=False`` takes only the Coulomb square wave out of the law's
+    deviations: they then reach the velocity's own harmonics (a friction that falls with
+    speed), which the default takes out with the Coulomb wave."""
+    rec = _record(lambda a: 3070.0 * a, noise_a=0.05, noise_f=2.0, seed=0)
+
+    def along(data, h):  # the share of h (K complex harmonics) the basis's columns can make
+        x = np.concatenate([h.real, h.imag])
+        law = data.basis[:, -len(friction_law.WIDTHS):]
+        fit = law @ np.linalg.lstsq(law, x, rcond=None)[0]
+        return float(np.linalg.norm(fit) / np.linalg.norm(x))
+
+    both = motion_data(rec, FREQ, cutoff=30.0)
+    coulomb = motion_data(rec, FREQ, cutoff=30.0, law_beyond_viscous=False)
+    assert along(both, both.sign) < 1e-9 and along(coulomb, coulomb.sign) < 1e-9
+    assert along(both, both.velocity) < 1e-9
+    assert along(coulomb, coulomb.velocity) > 0.1  # 0.42 here: four shapes, not a sine
 
 
 def test_the_deviations_prior_sd_is_taken_at_the_point_asked():

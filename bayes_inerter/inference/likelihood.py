@@ -102,6 +102,10 @@ class LikelihoodSettings:
         deviation cannot make the force that f1_0 and c_f1 make (default True). Left
         in, the deviations and the friction's parameters explain the same force, and on
         the model's own records the friction came out low and the viscous damping high.
+    law_beyond_viscous : with ``law_orthogonal``, take the plate's viscous harmonics out
+        as well as its Coulomb square wave (default True). False leaves the deviations
+        free to carry a force in phase with the velocity, which a friction that falls
+        with speed (Stribeck's) needs and the viscous term, never negative, cannot make.
     deviation_scale : motion-in likelihood only: whose Coulomb forces scale the
         marginalised deviations' prior sd (the reversals' and the law's).
         "reference" (default): the reference point's, the start search's optimum
@@ -130,6 +134,7 @@ class LikelihoodSettings:
     law: bool = True
     delay_sd: float | None = None
     law_orthogonal: bool = True
+    law_beyond_viscous: bool = True
     deviation_scale: str = "reference"
     reversal_scale: str = "total"
 

@@ -199,10 +199,11 @@ def _plate_motion(record: Record, freq: float, band: float, pool: int, settle: i
 
 def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, settle: int = 1,
                 sign_band: float = SIGN_BAND, law: bool = True, law_orthogonal: bool = True,
-                reversal_scale: str = "total") -> MotionData:
+                law_beyond_viscous: bool = True, reversal_scale: str = "total") -> MotionData:
     """:class:`MotionData` of ``record`` driven at ``freq`` Hz (see module docstring);
     ``law_orthogonal``: the law's deviations with the plate's own Coulomb and viscous
-    harmonics taken out (``friction_law.beyond``); ``reversal_scale``: the reversals'
+    harmonics taken out (``friction_law.beyond``), the viscous ones only where
+    ``law_beyond_viscous``; ``reversal_scale``: the reversals'
     deviations scaled by the plate's Coulomb force ("plate") or by the plate's and the
     rotation's ("total"; ``LikelihoodSettings.reversal_scale``)."""
     if reversal_scale not in REVERSAL_SCALES:
@@ -211,10 +212,12 @@ def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, se
     # identity hashes) would otherwise depend on how many threads its SVDs ran on, and a
     # fit made in a study's worker (its share of the cores) be refused by `report` after
     with threadpoolctl.threadpool_limits(limits=1, user_api="blas"):
-        return _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogonal, reversal_scale)
+        return _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogonal, law_beyond_viscous,
+                            reversal_scale)
 
 
-def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogonal, reversal_scale) -> MotionData:
+def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogonal, law_beyond_viscous,
+                 reversal_scale) -> MotionData:
     data = harmonic_data(record, freq, cutoff=cutoff, pool=pool, settle=settle)
     velocity, accel, sigma_v = _plate_motion(record, freq, max(sign_band, cutoff), pool, settle)
     v = velocity(SIGN_GRID)
@@ -227,7 +230,7 @@ def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogo
     if law:
         U = friction_law.law_basis(v, switched, K)
         if law_orthogonal:
-            U = friction_law.beyond(U, sign, V)
+            U = friction_law.beyond(U, sign, V) if law_beyond_viscous else friction_law.beyond(U, sign)
         parts.append((U, (friction_law.SD, friction_law.SD)))
     basis = np.hstack([U for U, _ in parts])
     scale = np.array([c for U, c in parts for _ in range(U.shape[1])], dtype=float).reshape(-1, 2)
