@@ -9,7 +9,11 @@ gain over the acceleration gain, times the total mass over b). A row is written 
 CSV after every fit, and a rerun skips the rows already there.
 
     python studies/law_viscous.py [--labs 11 12 13 14] [--cases A3@0.5 B1@0.5 ...]
-        [--steps 8000] [--out results/likelihood-candidates/law_viscous.csv]
+        [--steps 8000] [--force-delay 0] [--accel-delay 0]
+        [--out results/likelihood-candidates/law_viscous.csv]
+
+``--force-delay`` and ``--accel-delay`` (s) give the device's sensors those latencies
+(``PaperLike``), as the coverage study's "delays" family does.
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ import numpy as np
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.records.paper_like import laboratory, paper_like_record
+from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("A3@0.5", "B1@0.5", "A3@1", "A6@1", "B1@1.5", "A0@1.5")
@@ -33,11 +37,11 @@ VARIANTS = {"default": LikelihoodSettings(), "beyond-coulomb": LikelihoodSetting
 FIELDS = ("lab", "case", "variant", "steps", "b_median_pct", "b_sd_pct", "gains_pct", "beyond_gains_pct", "tau_max")
 
 
-def fit_one(lab: int, case: str, variant: str, steps: int) -> dict:
+def fit_one(lab: int, case: str, variant: str, steps: int, device: PaperLike | None = None) -> dict:
     setting, freq = case.split("@")
-    rec = paper_like_record(setting, float(freq), seed=lab)
+    rec = paper_like_record(setting, float(freq), seed=lab, device=device)
     p = paper_parameters(setting)
-    lab_settings = laboratory(lab)
+    lab_settings = laboratory(lab, device=device)
     gains = 100 * (lab_settings.force_gain / lab_settings.accel_gain - 1) * (p.b + p.m_s + p.m_B) / p.b
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(rec, Path(tmp), seed=lab, processes=1, plots=False, steps=steps,
@@ -70,14 +74,17 @@ def main() -> None:
     ap.add_argument("--labs", type=int, nargs="+", default=[11, 12, 13, 14])
     ap.add_argument("--cases", nargs="+", default=list(CASES))
     ap.add_argument("--steps", type=int, default=8000)
+    ap.add_argument("--force-delay", type=float, default=0.0, help="s")
+    ap.add_argument("--accel-delay", type=float, default=0.0, help="s")
     ap.add_argument("--out", default=str(ROOT / "results" / "likelihood-candidates" / "law_viscous.csv"))
     args = ap.parse_args()
     out = Path(args.out)
+    device = PaperLike(force_delay=args.force_delay, accel_delay=args.accel_delay)
     rows = list(csv.DictReader(out.open())) if out.exists() else []
     done = {(int(r["lab"]), r["case"], r["variant"]) for r in rows}
     jobs = [(lab, case, v) for lab in args.labs for case in args.cases for v in VARIANTS if (lab, case, v) not in done]
     for i, (lab, case, v) in enumerate(jobs, 1):
-        row = fit_one(lab, case, v, args.steps)
+        row = fit_one(lab, case, v, args.steps, device)
         rows.append(row)
         out.parent.mkdir(parents=True, exist_ok=True)
         with out.open("w", newline="") as f:
