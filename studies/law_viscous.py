@@ -4,8 +4,10 @@ Side by side on paper-like records of design laboratories (never the coverage se
 each record fitted twice with the same seed and a fixed number of steps, by the default
 likelihood (the law's deviations beyond the plate's Coulomb and viscous harmonics) and
 with ``LikelihoodSettings(law_beyond_viscous=False)`` (beyond the Coulomb wave alone).
-b's error is reported less what the laboratory's sensor gains make of it (the force
-gain over the acceleration gain, times the total mass over b). A row is written to the
+b's error is reported beside the part the laboratory's sensor gains explain, as
+``studies/paper_like_coverage.py`` reports it: a load cell reading g_F times the force
+and an accelerometer reading g_a times the acceleration make b come out b g_F / g_a, and
+``beyond_gains_pct`` is 100 (b_median / (b g_F / g_a) - 1). A row is written to the
 CSV after every fit, and a rerun skips the rows already there.
 
     python studies/law_viscous.py [--labs 11 12 13 14] [--cases A3@0.5 B1@0.5 ...]
@@ -42,15 +44,15 @@ def fit_one(lab: int, case: str, variant: str, steps: int, device: PaperLike | N
     rec = paper_like_record(setting, float(freq), seed=lab, device=device)
     p = paper_parameters(setting)
     lab_settings = laboratory(lab, device=device)
-    gains = 100 * (lab_settings.force_gain / lab_settings.accel_gain - 1) * (p.b + p.m_s + p.m_B) / p.b
+    gain = lab_settings.force_gain / lab_settings.accel_gain
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(rec, Path(tmp), seed=lab, processes=1, plots=False, steps=steps,
                          likelihood=VARIANTS[variant])
         b = np.asarray(res.idata.posterior["b"].values).ravel()
-    err = 100 * (np.median(b) / p.b - 1)
-    return {"lab": lab, "case": case, "variant": variant, "steps": steps, "b_median_pct": round(err, 2),
-            "b_sd_pct": round(100 * np.std(b) / p.b, 2), "gains_pct": round(gains, 2),
-            "beyond_gains_pct": round(err - gains, 2), "tau_max": round(float(np.nanmax(res.tau)), 1)}
+    return {"lab": lab, "case": case, "variant": variant, "steps": steps,
+            "b_median_pct": round(100 * (np.median(b) / p.b - 1), 2), "b_sd_pct": round(100 * np.std(b) / p.b, 2),
+            "gains_pct": round(100 * (gain - 1), 2), "beyond_gains_pct": round(100 * (np.median(b) / (p.b * gain) - 1), 2),
+            "tau_max": round(float(np.nanmax(res.tau)), 1)}
 
 
 def summary(rows: list[dict]) -> list[str]:
