@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.optimize import RESTART_GAIN, laplace_covariance, laplace_ensemble, local_optimum
+from bayes_inerter.inference.optimize import (RESTART_GAIN, laplace_covariance, laplace_ensemble, local_optimum,
+                                              mirrored_modes)
 
 
 class GaussianModel:
@@ -173,3 +174,40 @@ def test_the_rigid_guess_polished_rescues_a_start_in_another_basin(monkeypatch):
     monkeypatch.setattr(optimize, "POLISH_RIGID_GUESS", False)
     theta_wrong, lp_wrong = optimize.find_start(model, np.random.default_rng(1016))
     assert model.parameters(theta_wrong).b / b_true < 0.5 and lp > lp_wrong
+
+
+class TwoEnds:
+    """A stand-in for a record's posterior whose friction split has a mode near each end:
+    b normal about 1, f_share a mixture of narrow normals at 0.05 and at 0.9, the second
+    ``drop`` nats lower (``bimodal=False``: the first alone)."""
+
+    names = ["b", "f_share"]
+
+    def __init__(self, drop=3.0, bimodal=True):
+        self.drop, self.bimodal = drop, bimodal
+
+    def log_prob(self, theta):
+        b, share = theta
+        if not 0.0 <= share <= 1.0:
+            return -np.inf, np.nan
+        near = -0.5 * ((share - 0.05) / 0.03) ** 2
+        far = -0.5 * ((share - 0.9) / 0.03) ** 2 - self.drop if self.bimodal else -np.inf
+        return -0.5 * ((b - 1.0) / 0.1) ** 2 + float(np.logaddexp(near, far)), 0.0
+
+
+def test_the_mirrored_split_is_found_where_it_is_a_mode_of_its_own():
+    start = np.array([1.0, 0.05])
+    model = TwoEnds(drop=3.0)
+    lp = model.log_prob(start)[0]
+    (theta, got_lp), = mirrored_modes(model, start, lp)
+    assert abs(theta[1] - 0.9) < 1e-3 and abs(theta[0] - 1.0) < 1e-3
+    assert abs(got_lp - (lp - 3.0)) < 1e-3
+    # too far below, or no second mode at all: nothing
+    assert mirrored_modes(model, start, lp, nats=2.0) == []
+    assert mirrored_modes(TwoEnds(bimodal=False), start, lp) == []
+
+
+def test_a_model_without_the_split_has_no_mirror():
+    model = GaussianModel()
+    model.names = ["b", "f_0", "c_n"]
+    assert mirrored_modes(model, np.array([0.5, 0.2, 3.0]), 0.0) == []

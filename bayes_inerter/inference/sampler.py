@@ -43,7 +43,7 @@ from .coordinates import Coordinates, continue_at, default_coordinates, referenc
 from .identity import run_identity
 from .model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
-from .optimize import find_start, laplace_ensemble
+from .optimize import find_start, laplace_ensemble, mirrored_modes
 from .target import Target, objective_at
 
 __all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "SamplerStatus", "sample", "run_sampler",
@@ -225,6 +225,7 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     stored = None if fresh else (stored_identity(checkpoint) or {})  # read once: the file is opened each time
     if stored is not None:  # a checkpoint at a reference frequency within the records' resolution goes on in its own
         coords = continue_at(coords, stored.get("coordinates"), reference_tolerance(model))
+    searched = start is None  # the search's start: its mirrored modes get walkers too (_first_walkers)
     if getattr(model, "needs_reference", False):
         model, start = _with_reference(model, stored, start, seed, processes, coords)
         if coords.kind == "impedance":
@@ -238,7 +239,7 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     # Ctrl-C in the start search's compiled code: a KeyboardInterrupt, not numba's SystemError
     with make_executor(processes, state=target) as executor, interrupt_raised():
         try:
-            state, start_theta = (_first_walkers(target, nwalkers, seed, start, executor) if done == 0 else
+            state, start_theta = (_first_walkers(target, nwalkers, seed, start, executor, searched) if done == 0 else
                                   (backend.get_last_sample(), None))
             stepping = sample(target, backend, state, schedule=schedule, executor=executor,
                               iterations=max(0, (steps if steps is not None else conv.max_steps) - done))
@@ -370,12 +371,17 @@ def _reachable(model, coords: Coordinates, start, stored: dict | None) -> Coordi
     return coords
 
 
-def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Executor):
+def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Executor, searched: bool = False):
     """The first state of a new chain and the point its walkers were drawn around: the
-    optimiser's start (its search on ``executor``), or ``start``."""
+    optimiser's start (its search on ``executor``), or ``start``. Where the start is the
+    search's (``searched``, or ``start`` None) and its mirror ends in a mode of its own
+    (``optimize.mirrored_modes``), half the walkers are drawn around that mode: a chain
+    whose walkers all begin in one mode of the friction's split may never visit the
+    other, and neither tau nor R-hat can see a mode no walker visits."""
     model, coords = target.model, target.coords
     rng = np.random.default_rng(seed)
     if start is None:
+        searched = True
         start = find_start(model, rng, many=_many(executor))
     elif callable(start):
         start = start()
@@ -388,9 +394,17 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
         advice = ("use --coordinates unconstrained, which covers the whole prior"
                   if coords.kind == "impedance" else "check the record and the priors")
         raise ValueError(f"the start lies outside the {coords.kind} coordinates' domain; {advice}")
-    # a walker drawn outside the coordinates' domain is drawn again
-    walkers, _ = laplace_ensemble(model, start_theta, nwalkers, rng,
-                                  accept=lambda t: bool(np.all(np.isfinite(coords.to_u(t)))))
+
+    def inside(t):  # a walker drawn outside the coordinates' domain is drawn again
+        return bool(np.all(np.isfinite(coords.to_u(t))))
+
+    centres = [start_theta]
+    if searched:
+        lp = float(start[1]) if len(start) > 1 and start[1] is not None else model.log_prob(start_theta)[0]
+        centres += [theta for theta, _ in mirrored_modes(model, start_theta, lp) if inside(theta)]
+    counts = [nwalkers // len(centres) + (k < nwalkers % len(centres)) for k in range(len(centres))]
+    walkers = np.vstack([laplace_ensemble(model, centre, n, rng, accept=inside)[0]
+                         for centre, n in zip(centres, counts)])
     state = emcee.State(coords.to_u(walkers), random_state=np.random.RandomState(seed).get_state())
     return state, start_theta
 
