@@ -143,3 +143,40 @@ def test_a_chain_keeps_its_likelihoods_reference_point_when_continued(tmp_path):
 
     again = run_sampler(pm, path, nwalkers=2 * pm.ndim + 2, seed=1, steps=8, start=no_search, adaptation=None)
     assert again.iteration == 8 and again.model.reference == first.model.reference
+
+
+def test_a_searched_start_puts_half_the_walkers_in_the_splits_mirrored_mode(tmp_path, monkeypatch):
+    """Where the friction split's posterior has a mode at either end and the start
+    search ends at one, half the walkers begin at the other (``optimize.mirrored_modes``);
+    a start the caller gives is left as it is."""
+    from scipy import stats
+
+    import bayes_inerter.inference.sampler as sampler
+
+    pm = normal_posterior(duration=1.5, ramp=0.5)
+    centre = pm.test_start[0].copy()
+    i = pm.names.index("f_share")
+    lo, hi = pm.bounds().T
+    sd = np.minimum(hi - centre, centre - lo) / 6
+    rest = np.arange(len(centre)) != i
+
+    def two_ends(theta):
+        theta = np.asarray(theta, dtype=float)
+        if not 0.0 <= theta[i] <= 1.0:
+            return -np.inf, np.nan
+        ends = np.logaddexp(stats.norm.logpdf(theta[i], 0.1, 0.02), stats.norm.logpdf(theta[i], 0.9, 0.02))
+        return float(np.sum(stats.norm.logpdf(theta[rest], centre[rest], sd[rest])) + ends), 0.0
+
+    pm.log_prob = two_ends
+    start = centre.copy()
+    start[i] = 0.1
+    monkeypatch.setattr(sampler, "find_start", lambda model, rng, many=None: (start, two_ends(start)[0]))
+
+    def first_shares(path, given=None):
+        run = run_sampler(pm, path, nwalkers=24, seed=3, steps=1, start=given, adaptation=None)
+        return run.chain()[0][:, i]
+
+    searched = first_shares(tmp_path / "searched.h5")
+    assert 8 <= np.sum(searched > 0.5) <= 16 and np.sum(np.abs(searched - 0.9) < 0.1) >= 8
+    given = first_shares(tmp_path / "given.h5", given=(start, two_ends(start)[0]))
+    assert np.all(given < 0.5)
