@@ -509,3 +509,45 @@ def test_the_deviations_basis_is_the_same_on_any_number_of_blas_threads():
         with threadpoolctl.threadpool_limits(limits=threads):
             got.append(motion_data(rec, 1.0, cutoff=30.0).basis)
     assert got[0].tobytes() == got[1].tobytes()
+
+
+def test_the_motions_noise_through_a_sticking_rotation_is_counted_beyond_the_linear_term():
+    """``input_noise_variance``: where nothing sticks the model is linear in the measured
+    motion and the linear errors-in-variables term holds all of the motion's noise (the
+    extra is zero to rounding); behind a rotation that sticks and slips the noise comes
+    out larger, and the extra is positive. The same seed gives the same variance, and a
+    posterior model asked for it adds it to every harmonic's variance at its reference."""
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.motion import input_noise_variance
+
+    p = dataclasses.replace(paper_parameters("A3"), f1_0=100.0, f2_0=2000.0, c_n=2.0e5)
+    rec = generate_record(p, 0.5, settings=GeneratorSettings(accel_noise=0.05), rng=0, setting_name="A3")
+    data = motion_data(rec, 0.5, cutoff=30.0)
+    x = {n: getattr(p, n) for n in _rigid()}
+    linear = np.abs(predicted_force(data, x)[1]) ** 2 * data.fine_var[: data.harmonics]
+    sliding = input_noise_variance(data, {**x, "f2_0": 0.0})
+    assert np.all(sliding <= 1e-9 * linear.max())
+    sticking = input_noise_variance(data, x, draws=8)
+    assert np.all(np.isfinite(sticking)) and np.all(sticking >= 0) and sticking.max() > linear.max()
+    np.testing.assert_array_equal(sticking, input_noise_variance(data, x, draws=8))
+
+    pm = PosteriorModel(rec, likelihood=LikelihoodSettings(input_noise=8))
+    plain = PosteriorModel(rec)
+    theta = plain.to_theta(p, hyper={"tau": 1.0})
+    with_noise, without = pm.with_reference(theta), plain.with_reference(theta)
+    grown = with_noise.reference_noise - without.reference_noise
+    np.testing.assert_allclose(grown, input_noise_variance(without.motion, without.field_vector(theta), draws=8),
+                               rtol=1e-9, atol=1e-12)
+    assert grown.max() > 0
+
+
+def test_input_noise_needs_whole_draws_and_the_reference():
+    from bayes_inerter.inference.likelihood import LikelihoodSettings
+
+    with pytest.raises(ValueError, match="whole number"):
+        LikelihoodSettings(input_noise=-1)
+    with pytest.raises(ValueError, match="whole number"):
+        LikelihoodSettings(input_noise=2.5)
+    with pytest.raises(ValueError, match="reference"):
+        LikelihoodSettings(input_noise=4, normaliser="full", deviation_scale="parameters")

@@ -102,6 +102,13 @@ class LikelihoodSettings:
         deviation cannot make the force that f1_0 and c_f1 make (default True). Left
         in, the deviations and the friction's parameters explain the same force, and on
         the model's own records the friction came out low and the viscous damping high.
+    input_noise : motion-in likelihood only: draws of the measured motion's noise pushed
+        through the model at the reference point (``motion.input_noise_variance``); the
+        predicted force's variance they show beyond the linear errors-in-variables term is
+        added to every V_k. Default 0: none. The drivetrain's simulation passes the
+        motion's noise on nonlinearly (the rotation sticks and slips), and on the model's
+        own physics that made the posterior too narrow (docs/inference.md). Needs the
+        reference point (``normaliser`` or ``deviation_scale`` "reference").
     law_beyond_viscous : with ``law_orthogonal``, take the plate's viscous harmonics out
         as well as its Coulomb square wave (default True). False leaves the deviations
         free to carry a force in phase with the velocity, which a friction that falls
@@ -135,6 +142,7 @@ class LikelihoodSettings:
     delay_sd: float | None = None
     law_orthogonal: bool = True
     law_beyond_viscous: bool = True
+    input_noise: int = 0
     deviation_scale: str = "reference"
     reversal_scale: str = "total"
 
@@ -163,6 +171,10 @@ class LikelihoodSettings:
             raise ValueError(f"pool must be a whole number >= 0, got {self.pool!r}")
         if not (isinstance(self.settle, int) and self.settle >= 0):
             raise ValueError(f"settle must be a whole number >= 0, got {self.settle!r}")
+        if not (isinstance(self.input_noise, int) and not isinstance(self.input_noise, bool) and self.input_noise >= 0):
+            raise ValueError(f"input_noise must be a whole number of draws >= 0, got {self.input_noise!r}")
+        if self.input_noise and "reference" not in (self.normaliser, self.deviation_scale):
+            raise ValueError("input_noise needs the reference point: normaliser or deviation_scale 'reference'")
         if self.normaliser not in NORMALISERS:
             raise ValueError(f"normaliser must be one of {', '.join(NORMALISERS)}, got {self.normaliser!r}")
         if self.deviation_scale not in DEVIATION_SCALES:

@@ -104,6 +104,7 @@ each evaluation is the force's at the harmonics, 1 - |F - F^| / |F| over k = 1..
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -121,6 +122,7 @@ from . import friction_law
 from .reversals import SD, deviations_mean, switched_sign, reversal_correction, reversal_windows, window_basis
 
 __all__ = ["MotionData", "motion_data", "predicted_force", "bearing_force", "motion_variance", "motion_loglik",
+           "input_noise_variance", "with_input_noise", "INPUT_NOISE_SEED",
            "fundamental_misfit", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
            "DRIVE_MAX_PERIODS", "ORDER", "FUNDAMENTAL_MAX"]
 
@@ -157,6 +159,9 @@ DRIVE_SETTLE = 1
 #: percentile), the Newton steps 0.02 N at most (``docs/inference.md``).
 DRIVE_TOL = 0.005
 DRIVE_MAX_PERIODS = 8
+#: The seed of :func:`input_noise_variance`'s draws of the measured motion's noise
+#: (**assumption**: any fixed seed; the same record and reference give the same variance).
+INPUT_NOISE_SEED = 0
 
 
 @dataclass(frozen=True)
@@ -172,6 +177,10 @@ class MotionData:
     basis: np.ndarray  # (2K, m): the marginalised deviations, the reversals' then the law's
     scale: np.ndarray  # (m, 2): each deviation's prior sd is scale[j] . (f1_0, f2_0)
     windows: tuple = ()  # the reversals' windows, shares of the period (``reversals.reversal_windows``)
+    #: the plate motion's reconstruction: its harmonics (rad/s, the first K are ``omega``'s)
+    #: and the variance of each one's period mean, (m/s^2)^2 (:func:`input_noise_variance`)
+    fine_omega: np.ndarray | None = None
+    fine_var: np.ndarray | None = None
 
     @functools.cached_property
     def period_input(self) -> np.ndarray:
@@ -194,7 +203,7 @@ def _plate_motion(record: Record, freq: float, band: float, pool: int, settle: i
     def on_grid(X):
         return lambda n: at_times(X, fine.omega, np.arange(n) / (n * freq))
 
-    return on_grid(V), on_grid(fine.accel), sigma_v
+    return on_grid(V), on_grid(fine.accel), sigma_v, (fine.omega, fine.var_accel / fine.periods)
 
 
 def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, settle: int = 1,
@@ -219,7 +228,7 @@ def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, se
 def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogonal, law_beyond_viscous,
                  reversal_scale) -> MotionData:
     data = harmonic_data(record, freq, cutoff=cutoff, pool=pool, settle=settle)
-    velocity, accel, sigma_v = _plate_motion(record, freq, max(sign_band, cutoff), pool, settle)
+    velocity, accel, sigma_v, (fine_omega, fine_var) = _plate_motion(record, freq, max(sign_band, cutoff), pool, settle)
     v = velocity(SIGN_GRID)
     windows = tuple(reversal_windows(v, accel(SIGN_GRID), sigma_v, 1.0 / freq))
     switched = switched_sign(v, windows)
@@ -235,7 +244,7 @@ def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogo
     basis = np.hstack([U for U, _ in parts])
     scale = np.array([c for U, c in parts for _ in range(U.shape[1])], dtype=float).reshape(-1, 2)
     return MotionData(data, V, sign, data.omega, velocity(DRIVE_GRID),
-                      basis, scale, windows)
+                      basis, scale, windows, fine_omega, fine_var)
 
 
 #: The physical parameters in the order the compiled kernels unpack them: ``models.FIELDS``'s.
@@ -501,6 +510,50 @@ def motion_variance(data: MotionData, p, tau: float, alpha: float, gain: float =
     _, Y = _predicted(_vector(p), float(gain), data.omega, data.velocity, data.sign,
                       np.zeros(data.harmonics, dtype=np.complex128), False, float(delay))
     return _variance(Y, float(tau), float(alpha), h.var_force, h.var_accel, h.cov, float(h.periods)), Y
+
+
+def input_noise_variance(data: MotionData, p, gain: float = 1.0, delay: float = 0.0, *, draws: int = 16,
+                         seed: int = INPUT_NOISE_SEED) -> np.ndarray:
+    """(K,) N^2: the predicted force's variance from the measured motion's noise beyond
+    the linear errors-in-variables term |Y_k|^2 s2_A,k / P (``LikelihoodSettings.input_noise``).
+
+    The measured motion drives the model twice over: linearly through the plate's
+    inertia, damping and bearing (the transfer Y_k while everything slides), and through
+    the drivetrain's simulation, whose rotation sticks and slips behind the nut. The
+    second passes the motion's noise on as it is not linear. ``draws`` draws e of that
+    noise (complex normal at each harmonic of the plate motion's reconstruction, with
+    its period mean's variance, ``fine_var``; seeded by ``seed``) are added to the
+    plate's velocity harmonics and to the drivetrain's input, and the predicted force
+    computed again; with d = F^(v + e) - F^(v) - Y e the part the linear term leaves
+    out, the result is max(0, mean(|d|^2 + 2 Re(conj(Y e) d))), averaged over the
+    harmonics within two of each (``pool``'s default). The plate's sign wave is left as
+    measured (its switch times' noise is the reversal windows' to carry)."""
+    if data.fine_var is None:
+        raise ValueError("this motion data keeps no noise of its plate motion; make it again with motion_data")
+    x = _vector(p)
+    F0, Y = predicted_force(data, x, gain, delay)
+    K = data.harmonics
+    n_fine = data.fine_omega.shape[0]
+    t = np.arange(DRIVE_GRID) / (DRIVE_GRID * data.omega[0] / (2.0 * math.pi))
+    rng = np.random.default_rng(seed)
+    total = np.zeros(K)
+    for _ in range(draws):
+        e = np.sqrt(data.fine_var / 2.0) * (rng.standard_normal(n_fine) + 1j * rng.standard_normal(n_fine))
+        dv = e / (1j * data.fine_omega)  # the velocity's noise at each harmonic
+        moved = dataclasses.replace(data, velocity=data.velocity + dv[:K], drive=data.drive + at_times(dv, data.fine_omega, t))
+        linear = Y * e[:K]
+        d = predicted_force(moved, x, gain, delay)[0] - F0 - linear
+        total += np.abs(d) ** 2 + 2.0 * np.real(np.conj(linear) * d)
+    extra = np.maximum(total / draws, 0.0)
+    return np.array([extra[max(0, k - 2): k + 3].mean() for k in range(K)])
+
+
+def with_input_noise(data: MotionData, extra: np.ndarray) -> MotionData:
+    """``data`` with ``extra`` (K,) N^2 added to every harmonic's residual variance
+    (:func:`input_noise_variance`): the force channel's variance of one period grows by
+    P times it, so V_k grows by it."""
+    h = data.harmonic
+    return dataclasses.replace(data, harmonic=dataclasses.replace(h, var_force=h.var_force + h.periods * extra))
 
 
 def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0, *,
