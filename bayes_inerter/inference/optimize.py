@@ -228,24 +228,14 @@ def _initial_point(model: PosteriorModel) -> np.ndarray:
 
 
 def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
-    """x and its copies with the plate and rotation frictions exchanged: the two sit on a
-    ridge (MODEL.md section 7), and the optimiser often stops on the wrong side."""
+    """x and its copies with the plate and rotation frictions exchanged (:func:`_mirror`
+    of each share, and of both): the two sit on a ridge (MODEL.md section 7), and the
+    optimiser often stops on the wrong side."""
     out = [x]
-    names = model.names
-    if model.split:
-        for share in ("f_share", "c_share"):
-            i = names.index(share)
-            for y in list(out):
-                z = y.copy()
-                z[i] = 1.0 - y[i]
-                out.append(z)
-        return out
-    for a, b in (("f1_0", "f2_0"), ("c_f1", "c_f2")):
-        if a in names and b in names:
-            i, j = names.index(a), names.index(b)
-            for y in list(out):
-                z = y.copy()
-                z[i], z[j] = y[j], y[i]
+    for share in ("f_share", "c_share"):
+        for y in list(out):
+            z, _ = _mirror(model, y, share)
+            if z is not None:
                 out.append(z)
     return out
 
