@@ -9,8 +9,8 @@ import pytest
 from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
-                                                  coverage_rows, inspect_replicate, study_replicate,
-                                                  write_study_calibration)
+                                                  coverage_rows, inspect_replicate, replicate_device,
+                                                  study_replicate, write_study_calibration)
 
 NAMES = ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B"]
 #: The time-domain likelihood of the replicates below: c_B sampled, rho per frequency
@@ -77,6 +77,21 @@ def test_one_replicate_ranks_every_physical_parameter():
     assert json.loads(json.dumps(rep)) == rep
     lo, hi = np.exp(STUDY_SBC_PRIORS["b"].bounds)
     assert lo <= rep["truth"]["b"] <= hi
+
+
+def test_a_replicates_device_is_the_one_its_fit_ranks():
+    """``replicate_device`` gives the device ``study_replicate`` fits: the same truth, its
+    network's parameters behind it, the same records again for the same seed."""
+    cs = StudyCalibration(steps=40, draws=9, generator=GeneratorSettings(duration=3.0, ramp=1.0), likelihood=AR1)
+    device = replicate_device(cs, 0)
+    assert device.truth == study_replicate(cs, 0)["truth"]
+    assert device.params.b == pytest.approx(device.truth["b"])
+    assert device.params.f1_0 + device.params.f2_0 == pytest.approx(device.truth["f_0"])
+    again = replicate_device(cs, 0)
+    assert len(device.records) == len(cs.frequencies)
+    for a, b in zip(device.records, again.records):
+        np.testing.assert_array_equal(a.accel, b.accel)
+        np.testing.assert_array_equal(a.force, b.force)
 
 
 @pytest.mark.slow

@@ -62,7 +62,7 @@ from ..inference.priors import LogUniform, Uniform
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
-__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "study_replicate", "coverage_rows",
+__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "coverage_rows",
            "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
@@ -141,7 +141,25 @@ class StudyCalibration:
                 f"draws, seed {self.seed}")
 
 
-def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0):
+@dataclass(frozen=True)
+class ReplicateDevice:
+    """Replicate k's device as the study draws it: its network's parameters, the true
+    values of the ranked parameters (the sensors' gain among them), its records (the
+    acceleration channel scaled by the gain) and the prior draws the simulator refused."""
+
+    params: object
+    truth: dict
+    records: list
+    redraws: int
+
+
+def replicate_device(cs: StudyCalibration, k: int) -> ReplicateDevice:
+    """Replicate ``k``'s device and records, the same as :func:`study_replicate` fits
+    (to record the same device again, with other noise or none)."""
+    return _draw_device(cs, np.random.default_rng([cs.seed, k]), k)
+
+
+def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> ReplicateDevice:
     """A device from the prior and its records (a draw the simulator refuses is drawn
     again: the posterior gives it zero density too)."""
     template = generate_record(paper_parameters(cs.setting), cs.frequencies[0], settings=cs.generator,
@@ -160,7 +178,7 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0):
         truth = base.values(theta)
         gain = truth.get("gain", 1.0)
         records = [dataclasses.replace(r, accel=r.accel * gain) for r in records]
-        return {n: float(truth[n]) for n in ranked}, records, redraws
+        return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws)
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
 
@@ -169,7 +187,8 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     device's true values, its records, the redraws, the fit, every kept draw by name).
     The same ``k`` gives the same device, records, start and chain."""
     rng = np.random.default_rng([cs.seed, k])
-    truth, records, redraws = _draw_device(cs, rng, k)
+    device = _draw_device(cs, rng, k)
+    truth, records, redraws = device.truth, device.records, device.redraws
     convergence = dataclasses.replace(Convergence(), max_steps=cs.max_steps)
     if cs.single:
         res = fit_record(records[0], out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=STUDY_SBC_PRIORS,

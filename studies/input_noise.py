@@ -1,0 +1,120 @@
+"""Where does the truth sit in the posterior of the model's own physics, with and without
+the drivetrain's noise transfer counted (``LikelihoodSettings(input_noise=)``)?
+
+Devices of simulation-based calibration (``study.study_calibration``, the seed's
+replicates as ``results/coverage-sbc-v2`` draws them) recorded again at their replicate's
+frequency with other noise (seeds 1000 and up), with the study's noise on both channels
+or on one. On each record: the likelihood's reference at the truth, tau and the delay
+optimised there, then Nelder-Mead with restarts from the truth (``optimize.local_optimum``).
+A row per record: twice the log posterior's rise from the truth to that optimum (about
+the number of parameters where the posterior is calibrated, fewer where one sits on its
+bound), f_share there and b's error. A row is written after every record, and a rerun
+skips the rows already there. Design seeds only: coverage is measured on others.
+
+    python studies/input_noise.py [--seed 4] [--replicates 18 25 17 43 9] [--records 6]
+        [--variants default input_noise=16] [--noise both]
+        [--out results/likelihood-candidates/input_noise.csv]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import minimize
+
+from bayes_inerter.inference import PosteriorModel
+from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.optimize import NM_RESTARTS, local_optimum
+from bayes_inerter.records import GeneratorSettings, generate_record
+from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
+
+ROOT = Path(__file__).resolve().parents[1]
+SETTINGS = ROOT / "results" / "coverage-sbc-v2" / "settings.json"
+NOISES = {"both": {}, "force only": {"accel_noise": 0.0, "disp_noise": 0.0}, "acceleration only": {"force_noise": 0.0}}
+FIELDS = ("seed", "replicate", "freq_hz", "noise", "variant", "realisation", "twice_deficit", "f_share",
+          "f_share_true", "b_error_pct")
+
+
+def variant_settings(base: dict, variant: str) -> LikelihoodSettings:
+    """"default", or "name=value" changes of the study's likelihood settings."""
+    changes = {}
+    if variant != "default":
+        for part in variant.split(","):
+            name, value = part.split("=")
+            changes[name] = json.loads(value)
+    return LikelihoodSettings(**{**base, **changes})
+
+
+def one(cs: StudyCalibration, k: int, noise: str, variant: str, j: int, base: dict) -> dict:
+    device = replicate_device(cs, k)
+    freq = cs.frequencies[k % len(cs.frequencies)]
+    gain = device.truth.get("gain", 1.0)
+    settings = dataclasses.replace(cs.generator, **NOISES[noise])
+    record = generate_record(device.params, freq, settings=settings, rng=1000 + j, setting_name=cs.setting)
+    record = dataclasses.replace(record, accel=record.accel * gain)
+    model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=variant_settings(base, variant))
+    theta = model.to_theta(device.params)
+    if "gain" in model.names:
+        theta[model.names.index("gain")] = math.log(gain) if model.all_priors["gain"].log_scale else gain
+    model = model.with_reference(theta)
+    hyper = [i for i, n in enumerate(model.names) if n in ("tau", "alpha", "delay")]
+
+    def neg(x):
+        t = theta.copy()
+        t[hyper] = x
+        lp = model.log_prob(t)[0]
+        return -lp if math.isfinite(lp) else 1e10
+
+    found = minimize(neg, theta[hyper], method="Nelder-Mead")
+    theta[hyper] = found.x
+    best, lp_best = local_optimum(model, theta, restarts=NM_RESTARTS)
+    values = model.values(best)
+    return {"seed": cs.seed, "replicate": k, "freq_hz": freq, "noise": noise, "variant": variant, "realisation": j,
+            "twice_deficit": round(2 * (lp_best + found.fun), 1), "f_share": round(values["f_share"], 4),
+            "f_share_true": round(device.truth["f_share"], 4),
+            "b_error_pct": round(100 * (values["b"] / device.truth["b"] - 1), 3)}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seed", type=int, default=4)
+    ap.add_argument("--replicates", type=int, nargs="+", default=[18, 25, 17, 43, 9])
+    ap.add_argument("--records", type=int, default=6)
+    ap.add_argument("--variants", nargs="+", default=["default", "input_noise=16"])
+    ap.add_argument("--noise", choices=list(NOISES), default="both")
+    ap.add_argument("--out", type=Path, default=ROOT / "results" / "likelihood-candidates" / "input_noise.csv")
+    args = ap.parse_args(argv)
+    study = json.loads(SETTINGS.read_text())
+    cs = StudyCalibration(setting=study["setting"], frequencies=tuple(study["frequencies"]),
+                          generator=GeneratorSettings(**study["generator"]), steps=None, seed=args.seed, single=True,
+                          likelihood=LikelihoodSettings(**study["likelihood"]))
+    done = set()
+    if args.out.exists():
+        with open(args.out, newline="") as f:
+            done = {(int(r["seed"]), int(r["replicate"]), r["noise"], r["variant"], int(r["realisation"]))
+                    for r in csv.DictReader(f)}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    for k in args.replicates:
+        for variant in args.variants:
+            for j in range(args.records):
+                if (args.seed, k, args.noise, variant, j) in done:
+                    continue
+                row = one(cs, k, args.noise, variant, j, study["likelihood"])
+                new = not args.out.exists()
+                with open(args.out, "a", newline="") as f:
+                    w = csv.DictWriter(f, fieldnames=FIELDS)
+                    if new:
+                        w.writeheader()
+                    w.writerow(row)
+                print(", ".join(f"{key} {value}" for key, value in row.items()), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
