@@ -52,6 +52,30 @@ def write_rows(path, rows: list[dict]) -> Path:
     return path
 
 
+def read_rows(path) -> list[dict]:
+    """The rows of the CSV file ``path`` as dicts of strings ([] where it does not exist)."""
+    path = Path(path)
+    if not path.exists():
+        return []
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def append_row(path, row: dict, fields) -> None:
+    """Append ``row`` to the CSV file ``path`` (its folder and header made where it is
+    new, columns ``fields``) and print it as ``key value, ...``: a study that stops
+    keeps every row it finished."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    new = not path.exists()
+    with open(path, "a", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(fields))
+        if new:
+            writer.writeheader()
+        writer.writerow(row)
+    print(", ".join(f"{k} {v}" for k, v in row.items()), flush=True)
+
+
 def run_with_bar(run, total: int, desc: str, **bar):
     """``run(progress)`` with a progress bar of ``total`` steps on standard error
     (``progress(done, total)`` moves it; ``bar``: more tqdm options); a ValueError ends

@@ -19,7 +19,6 @@ skips the rows already there. Design seeds only: coverage is measured on others.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import json
 import math
@@ -33,6 +32,8 @@ from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.inference.optimize import NM_RESTARTS, local_optimum
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
+
+from _table import append_row, read_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 SETTINGS = ROOT / "results" / "coverage-sbc-v2" / "settings.json"
@@ -94,25 +95,13 @@ def main(argv=None) -> int:
     cs = StudyCalibration(setting=study["setting"], frequencies=tuple(study["frequencies"]),
                           generator=GeneratorSettings(**study["generator"]), steps=None, seed=args.seed, single=True,
                           likelihood=LikelihoodSettings(**study["likelihood"]))
-    done = set()
-    if args.out.exists():
-        with open(args.out, newline="") as f:
-            done = {(int(r["seed"]), int(r["replicate"]), r["noise"], r["variant"], int(r["realisation"]))
-                    for r in csv.DictReader(f)}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
+    done = {(int(r["seed"]), int(r["replicate"]), r["noise"], r["variant"], int(r["realisation"]))
+            for r in read_rows(args.out)}
     for k in args.replicates:
         for variant in args.variants:
             for j in range(args.records):
-                if (args.seed, k, args.noise, variant, j) in done:
-                    continue
-                row = one(cs, k, args.noise, variant, j, study["likelihood"])
-                new = not args.out.exists()
-                with open(args.out, "a", newline="") as f:
-                    w = csv.DictWriter(f, fieldnames=FIELDS)
-                    if new:
-                        w.writeheader()
-                    w.writerow(row)
-                print(", ".join(f"{key} {value}" for key, value in row.items()), flush=True)
+                if (args.seed, k, args.noise, variant, j) not in done:
+                    append_row(args.out, one(cs, k, args.noise, variant, j, study["likelihood"]), FIELDS)
     return 0
 
 

@@ -16,7 +16,6 @@ record, and a rerun skips the rows already there.
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import time
 from pathlib import Path
@@ -27,6 +26,8 @@ from bayes_inerter.inference import PosteriorModel, optimize
 from bayes_inerter.masses import resolve_masses
 from bayes_inerter.records.drive import resolve_drive, with_drive
 from bayes_inerter.records.paper_like import paper_like_record
+
+from _table import append_row, read_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = tuple(f"{s}@{f:g}" for s in ("A0", "A3", "B2") for f in (0.5, 1.0, 1.5)) + ("A6@0.5", "B1@1", "B1@1.5")
@@ -68,23 +69,11 @@ def main(argv=None) -> int:
     ap.add_argument("--cases", nargs="+", default=list(CASES))
     ap.add_argument("--out", type=Path, default=ROOT / "results" / "likelihood-candidates" / "mirror_modes.csv")
     args = ap.parse_args(argv)
-    done = set()
-    if args.out.exists():
-        with open(args.out, newline="") as f:
-            done = {(int(r["lab"]), r["case"]) for r in csv.DictReader(f)}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
+    done = {(int(r["lab"]), r["case"]) for r in read_rows(args.out)}
     for lab in args.labs:
         for case in args.cases:
-            if (lab, case) in done:
-                continue
-            row = one(lab, case)
-            new = not args.out.exists()
-            with open(args.out, "a", newline="") as f:
-                w = csv.DictWriter(f, fieldnames=FIELDS)
-                if new:
-                    w.writeheader()
-                w.writerow(row)
-            print(", ".join(f"{k} {v}" for k, v in row.items()), flush=True)
+            if (lab, case) not in done:
+                append_row(args.out, one(lab, case), FIELDS)
     return 0
 
 
