@@ -540,7 +540,8 @@ def input_noise_variance(data: MotionData, p, gain: float = 1.0, delay: float = 
     for _ in range(draws):
         e = np.sqrt(data.fine_var / 2.0) * (rng.standard_normal(n_fine) + 1j * rng.standard_normal(n_fine))
         dv = e / (1j * data.fine_omega)  # the velocity's noise at each harmonic
-        moved = dataclasses.replace(data, velocity=data.velocity + dv[:K], drive=data.drive + at_times(dv, data.fine_omega, t))
+        moved = dataclasses.replace(data, velocity=data.velocity + dv[:K],
+                                    drive=data.drive + at_times(dv, data.fine_omega, t))
         linear = Y * e[:K]
         d = predicted_force(moved, x, gain, delay)[0] - F0 - linear
         total += np.abs(d) ** 2 + 2.0 * np.real(np.conj(linear) * d)

@@ -62,8 +62,8 @@ from ..inference.priors import LogUniform, Uniform
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
-__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "coverage_rows",
-           "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate"]
+__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate",
+           "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
