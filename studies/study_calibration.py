@@ -10,6 +10,8 @@ already there. About a minute per replicate and process on a 2-core machine.
         [--seed 0] [--out FOLDER] [--single] [--residual motion] [--converge] [--freqs 0.5 1.5]
         [--input-noise 16]
 
+``--summarise`` writes coverage_so_far.csv from the replicates finished in ``--out``
+(counts over every chain and over the converged ones), for a run still in chunks.
 ``--single`` fits each replicate's one record alone (its frequency ``freqs[k % n]``),
 ``--residual`` chooses the likelihood, ``--input-noise N`` adds the drivetrain's
 input-noise variance from N draws (``LikelihoodSettings.input_noise``), ``--converge``
@@ -34,7 +36,8 @@ from pathlib import Path
 
 from _table import run_with_bar
 from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.study.study_calibration import StudyCalibration, inspect_replicate, run_study_calibration
+from bayes_inerter.study.study_calibration import (StudyCalibration, inspect_replicate, run_study_calibration,
+                                                  write_coverage_so_far)
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "study-calibration"
@@ -54,7 +57,20 @@ if __name__ == "__main__":
     ap.add_argument("--converge", action="store_true", help="each chain to the convergence rule")
     ap.add_argument("--max-steps", type=int, default=StudyCalibration.max_steps)
     ap.add_argument("--freqs", nargs="+", type=float, default=None)
+    ap.add_argument("--summarise", action="store_true",
+                    help="write --out's coverage_so_far.csv from the replicates finished there, run nothing")
     args = ap.parse_args()
+    if args.summarise:
+        rows = write_coverage_so_far(args.out)
+        if not rows:
+            print(f"error: {args.out} holds no finished replicate; run the study into it first", file=sys.stderr)
+            sys.exit(2)
+        for r in rows:
+            print(f"{r['chains']:>9} {r['parameter']:>14}: of {r['intervals']:4d} the 94 % held {r['held_94']:4d} "
+                  f"(expected {r['expected_94']}, se {r['se_94']}), the 50 % {r['held_50']:4d} "
+                  f"(expected {r['expected_50']}, se {r['se_50']})")
+        print(f"wrote {Path(args.out) / 'coverage_so_far.csv'}")
+        sys.exit(0)
     try:
         if args.replicates < 1:
             raise ValueError(f"--replicates must be at least 1, got {args.replicates}")

@@ -9,8 +9,9 @@ import pytest
 from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
-                                                  coverage_rows, inspect_replicate, replicate_device,
-                                                  study_replicate, write_study_calibration)
+                                                  coverage_rows, coverage_so_far, finished_replicates,
+                                                  inspect_replicate, replicate_device, study_replicate,
+                                                  write_coverage_so_far, write_study_calibration)
 
 NAMES = ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B"]
 #: The time-domain likelihood of the replicates below: c_B sampled, rho per frequency
@@ -47,6 +48,25 @@ def test_a_failed_replicate_counts_as_a_miss():
     assert b["replicates"] == 4 and b["failed"] == 1
     assert b["hdi_94"] == b["central_50"] == 0.5  # two of four: the failed one is not dropped
     assert b["se_94"] == pytest.approx(np.sqrt(0.94 * 0.06 / 4))
+
+
+def test_coverage_so_far_counts_every_chain_and_the_converged_apart(tmp_path):
+    results = [_fake(0, True), _fake(1, False), _fake(2, True), {"replicate": 3, "error": "RuntimeError: no"}]
+    results[0]["converged"], results[1]["converged"], results[2]["converged"] = True, True, False
+    rows = {(r["chains"], r["parameter"]): r for r in coverage_so_far(results)}
+    b = rows["all", "b"]
+    assert (b["replicates"], b["held_94"], b["held_50"]) == (4, 2, 2)  # the failed one a miss
+    assert b["expected_94"] == pytest.approx(0.94 * 4, abs=0.05)
+    pooled = rows["all", "all parameters"]
+    assert pooled["intervals"] == 4 * len(NAMES) and pooled["held_94"] == 2 * len(NAMES)
+    conv = rows["converged", "b"]
+    assert (conv["replicates"], conv["held_94"]) == (2, 1)
+    (tmp_path / "replicates").mkdir()
+    for r in reversed(results):  # written in any order, read in the replicates' order
+        (tmp_path / "replicates" / f"{r['replicate']:04d}.json").write_text(json.dumps(r))
+    assert [r["replicate"] for r in finished_replicates(tmp_path)] == [0, 1, 2, 3]
+    assert write_coverage_so_far(tmp_path) == coverage_so_far(results)
+    assert (tmp_path / "coverage_so_far.csv").read_text().count("\n") == 1 + len(rows)
 
 
 def test_chains_long_enough_counts_fifty_taus():

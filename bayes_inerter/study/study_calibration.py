@@ -63,7 +63,8 @@ from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate",
-           "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate"]
+           "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
+           "finished_replicates", "coverage_so_far", "write_coverage_so_far"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -265,6 +266,50 @@ def chains_long_enough(results: list[dict], factor: float = Convergence.n_tau) -
     autocorrelation time (the first part of the study's convergence rule,
     ``Convergence.n_tau``)."""
     return sum(1 for r in results if r.get("tau_max") and r["iterations"] >= factor * r["tau_max"])
+
+
+def finished_replicates(out) -> list[dict]:
+    """The replicates a run into ``out`` has finished so far (``out``/replicates, one
+    JSON each), in the order of their number: the state of a run that spans sessions."""
+    import json
+
+    return [json.loads(f.read_text()) for f in sorted((Path(out) / "replicates").glob("[0-9]*.json"))]
+
+
+def coverage_so_far(results: list[dict]) -> list[dict]:
+    """The coverage of the replicates finished so far, counted, over every chain and
+    again over the converged ones alone (``chains``: "all" or "converged"): per physical
+    parameter how many replicates' 94 % and 50 % highest-density intervals held the truth,
+    and a row ``all parameters`` pooling them, each beside the count nominal coverage
+    expects and its binomial standard error (parameters of one replicate are not
+    independent, so the pooled se is a lower bound). A failed replicate is a miss."""
+    rows = []
+    for chains, group in (("all", results), ("converged", [r for r in results if r.get("converged")])):
+        ok = [r for r in group if "ranks" in r]
+        if not ok:
+            continue
+        names = list(ok[0]["ranks"])
+        for name in [*names, "all parameters"]:
+            keys = names if name == "all parameters" else [name]
+            n = len(group) * len(keys)
+            row = {"chains": chains, "parameter": name, "replicates": len(group), "intervals": n}
+            for level in LEVELS:
+                q = f"{round(100 * level)}"
+                row[f"held_{q}"] = sum(bool(r["hdi"][q][k]) for r in ok for k in keys)
+                row[f"expected_{q}"] = round(level * n, 1)
+                row[f"se_{q}"] = round(math.sqrt(level * (1 - level) * n), 1)
+            rows.append(row)
+    return rows
+
+
+def write_coverage_so_far(out) -> list[dict]:
+    """``out``/coverage_so_far.csv from :func:`coverage_so_far` of the replicates
+    finished in ``out``, and the rows."""
+    from .analysis import write_csv
+
+    rows = coverage_so_far(finished_replicates(out))
+    write_csv(Path(out) / "coverage_so_far.csv", rows)
+    return rows
 
 
 def write_study_calibration(out, cs: StudyCalibration, results: list[dict], versions: dict) -> dict:
