@@ -1,12 +1,18 @@
-"""What the studies' scripts share: read a record named SETTING:FREQUENCY, run jobs on
-local processes, write rows of results to a CSV file and print them, and the adaptive
+"""What the studies' scripts share: read a record named SETTING:FREQUENCY, walk the
+paper's grid in the coverage studies' order, run jobs on local processes, write rows of
+results to a CSV file and print them, name the commit a run loaded, and the adaptive
 samplers they compare by name."""
 
 import csv
+import subprocess
 import sys
 from pathlib import Path
 
+from bayes_inerter import SETTINGS
 from bayes_inerter.executor import make_executor
+
+#: The paper's drive frequencies, Hz.
+FREQUENCIES = (0.5, 1.0, 1.5)
 
 #: The adaptive samplers compared side by side, by name: keyword arguments of
 #: ``sampler.Adaptation`` (``adaptive``: one t in the sampler's coordinates, the default
@@ -25,6 +31,21 @@ def record_arg(item: str) -> tuple[str, float]:
         return setting.upper(), float(freq)
     except ValueError:
         sys.exit(f"error: --record takes SETTING:FREQUENCY, got {item!r}")
+
+
+def grid_case(k: int) -> tuple[str, float]:
+    """The k-th record of the paper's grid in the coverage studies' order: setting
+    ``SETTINGS[k % 9]`` at ``FREQUENCIES[(k + k // 9) % 3]``, so that every 27 hold each
+    setting at each frequency once, the frequencies interleaved."""
+    names = list(SETTINGS)
+    return names[k % len(names)], FREQUENCIES[(k + k // len(names)) % len(FREQUENCIES)]
+
+
+def git_commit(folder) -> str:
+    """The short commit of the checkout ``folder`` lies in ("" outside a clone): read
+    once when a run starts, as HEAD may move while it runs."""
+    got = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=folder, capture_output=True, text=True)
+    return got.stdout.strip() if got.returncode == 0 else ""
 
 
 def map_rows(func, jobs: list, processes: int) -> list[dict]:

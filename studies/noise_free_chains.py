@@ -25,7 +25,6 @@ import argparse
 import dataclasses
 import json
 import math
-import subprocess
 import sys
 import tempfile
 import time
@@ -34,21 +33,15 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import write_rows
-from bayes_inerter import SETTINGS, paper_parameters
+from _table import git_commit, grid_case, write_rows
+from bayes_inerter import paper_parameters
 from bayes_inerter.executor import make_executor
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
 from bayes_inerter.records import GeneratorSettings, generate_record
 
 ROOT = Path(__file__).resolve().parents[1]
-FREQUENCIES = (0.5, 1.0, 1.5)
 NOISE_FREE = GeneratorSettings(force_noise=0.0, accel_noise=0.0, disp_noise=0.0)
-
-
-def case(k: int) -> tuple[str, float]:
-    names = list(SETTINGS)
-    return names[k % len(names)], FREQUENCIES[(k + k // len(names)) % len(FREQUENCIES)]
 
 
 def device(setting: str, zeta_b: float | None):
@@ -66,7 +59,7 @@ def one(job) -> dict:
         return json.loads(path.read_text())
     import arviz as az
 
-    setting, freq = case(k)
+    setting, freq = grid_case(k)
     p = device(setting, zeta_b)
     rec = generate_record(p, freq, settings=NOISE_FREE, setting_name=setting)
     t0 = time.perf_counter()
@@ -87,11 +80,6 @@ def one(job) -> dict:
     return row
 
 
-def _commit() -> str:
-    got = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
-    return got.stdout.strip() if got.returncode == 0 else ""
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--records", type=int, default=27)
@@ -109,14 +97,15 @@ def main(argv=None) -> int:
         print(f"error: --zeta-B is a damping ratio in (0, 1), got {args.zeta_b}", file=sys.stderr)
         return 2
     out = Path(args.out)
-    (out / "records").mkdir(parents=True, exist_ok=True)
+    if not args.summarise:
+        (out / "records").mkdir(parents=True, exist_ok=True)
     kept = {json.loads(p.read_text())["zeta_B"] for p in (out / "records").glob("*.json")}
     if kept - {args.zeta_b}:
         print(f"error: {out} holds records of zeta_B {sorted(kept, key=str)}, not {args.zeta_b}; choose another --out",
               file=sys.stderr)
         return 2
     if not args.summarise:
-        commit = _commit()  # the code this run loaded: HEAD may move while it runs
+        commit = git_commit(ROOT)  # the code this run loaded: HEAD may move while it runs
         jobs = [(k, out, args.zeta_b, args.max_steps, commit) for k in range(args.records)]
         with make_executor(max(1, args.processes)) as executor:
             for i, got in enumerate(executor.as_completed(one, jobs), 1):

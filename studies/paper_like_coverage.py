@@ -33,7 +33,6 @@ import csv
 import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -43,13 +42,13 @@ from pathlib import Path
 
 import numpy as np
 
-from bayes_inerter import SETTINGS, paper_parameters
+from _table import FREQUENCIES, git_commit, grid_case
+from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
 from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]
-FREQUENCIES = (0.5, 1.0, 1.5)
 LEVELS = (0.94, 0.5)
 #: Device families: the default paper-like device, and the held-out ones of issue 39 (item 5),
 #: each the default with one effect changed (none of them used to choose a setting).
@@ -62,15 +61,10 @@ FAMILIES = {
 }
 
 
-def case(k: int) -> tuple[str, float]:
-    names = list(SETTINGS)
-    return names[k % len(names)], FREQUENCIES[(k + k // len(names)) % len(FREQUENCIES)]
-
-
 def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "") -> dict:
     import arviz as az
 
-    setting, freq = case(k)
+    setting, freq = grid_case(k)
     seed = seed0 + k
     rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family])
     b_true = paper_parameters(setting).b
@@ -92,12 +86,6 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
         out[f"covered{key}"] = bool(lo <= b_true <= hi)
         out[f"width{key}_pct"] = 100.0 * (hi - lo) / b_true
     return out
-
-
-def _commit() -> str:
-    """The checkout's commit (``git rev-parse --short HEAD``; "" outside a clone)."""
-    got = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
-    return got.stdout.strip() if got.returncode == 0 else ""
 
 
 def _file(out: Path, k: int) -> Path:
@@ -182,7 +170,7 @@ def main(argv=None) -> int:
               f"choose another --out", file=sys.stderr)
         return 2
     if not args.summarise:
-        commit = _commit()  # the code this run loaded, read once: HEAD may move while it runs
+        commit = git_commit(ROOT)  # the code this run loaded, read once: HEAD may move while it runs
         todo = [k for k in range(args.replicates) if not _file(out, k).exists()]
         print(f"{args.replicates - len(todo)} of {args.replicates} replicates already there", flush=True)
         with ProcessPoolExecutor(max_workers=args.processes) as pool:
