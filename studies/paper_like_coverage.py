@@ -185,6 +185,9 @@ def main(argv=None) -> int:
                       f"(true {r['b_true']:.0f}), 94 % {'holds' if r['covered94'] else 'MISSES'}, "
                       f"{'identified' if r['identified'] else 'not identified'}, converged {r['converged']}, "
                       f"{r['seconds']} s", flush=True)
+    if not any((out / "replicates").glob("*.json")):
+        print(f"error: {out} holds no finished replicate; run without --summarise first", file=sys.stderr)
+        return 2
     for row in summarise(out):
         print(row)
     return 0
