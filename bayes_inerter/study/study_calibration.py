@@ -46,6 +46,7 @@ ones the study reports and the equal-tailed ones.
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import tempfile
 from dataclasses import dataclass, field
@@ -271,8 +272,6 @@ def chains_long_enough(results: list[dict], factor: float = Convergence.n_tau) -
 def finished_replicates(out) -> list[dict]:
     """The replicates a run into ``out`` has finished so far (``out``/replicates, one
     JSON each), in the order of their number: the state of a run that spans sessions."""
-    import json
-
     return [json.loads(f.read_text()) for f in sorted((Path(out) / "replicates").glob("[0-9]*.json"))]
 
 
