@@ -362,19 +362,26 @@ def run_study_calibration(cs: StudyCalibration, out, replicates: int, *, process
 def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     """Replicate ``k`` again with its fit kept in ``out``, to tell a wrong basin from a
     posterior that excludes the truth: the joint log posterior at the truth (the
-    likelihood's per-frequency parameters, rho or tau and alpha, at their posterior
-    medians, having no true value) and at the posterior medians, and every sampled
-    parameter's truth beside its median and 94 % equal-tailed interval. The same seed
+    likelihood's own parameters, having no true value, at their posterior medians) and
+    at the posterior medians, and every sampled parameter's truth beside its median and
+    94 % equal-tailed interval, under the likelihood the chain sampled (its reference
+    point, where it takes one, read from the checkpoint). The same seed
     gives the same device, records and start as :func:`study_replicate`."""
+    from ..inference.checkpoint import stored_identity
     from ..inference.joint import JointModel
 
     _, truth, records, _, res, kept = _fit_replicate(cs, k, Path(out))
     jm = JointModel(tuple(records), priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+    reference = (stored_identity(Path(out) / "chain.h5") or {}).get("reference")
+    if reference is not None:  # the likelihood the chain sampled, with its reference point
+        jm = jm.with_reference(reference)
     median = {n: float(np.median(x)) for n, x in kept.items()}
-    unknown = set(jm.per_frequency)
-    at_truth = {f"b_{cs.setting}": truth["b"], **{n: truth[n] for n in jm.shared},
-                **{n: truth[n] for n in jm.names if n == "gain"},  # drawn with the device
-                **{n: median[n] for n in jm.per_frequency}}
+    known = {f"b_{cs.setting}": truth["b"], **{n: truth[n] for n in jm.shared},
+             **{n: truth[n] for n in jm.names if n == "gain"}}  # drawn with the device
+    # the likelihood's own parameters (rho or tau and alpha, the channels' delay) have
+    # no true value: at the truth they sit at their posterior medians
+    unknown = {n for n in jm.names if n not in known}
+    at_truth = {**known, **{n: median[n] for n in unknown}}
 
     def log_post(values):
         theta = [math.log(values[n]) if jm.all_priors[n].log_scale else values[n] for n in jm.names]
