@@ -159,6 +159,27 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     assert fourth.timings["sampling_all_runs"] == fourth.timings["sampling"]
 
 
+def test_start_candidates_one_per_group_of_the_records_friction_split(records):
+    jm = JointModel(records, likelihood=AR1)
+    centres = []
+    for rec in records:
+        pm = PosteriorModel(rec, likelihood=AR1)
+        centres.append(pm.values(pm.to_theta(paper_parameters(rec.metadata["setting"]), 1.0, 0.3)))
+    i = jm.names.index("f_share")
+    close = [{**c, "f_share": s} for c, s in zip(centres, (0.30, 0.35, 0.38))]
+    assert len(jm.start_candidates(close)) == 1
+    np.testing.assert_array_equal(jm.start_candidates(close)[0], jm.start(close))
+    apart = [{**c, "f_share": s} for c, s in zip(centres, (0.62, 0.15, 0.2))]
+    first, low, high = jm.start_candidates(apart)
+    np.testing.assert_array_equal(first, jm.start(apart))
+    assert first[i] == pytest.approx(0.2)  # the median lies in the group of two
+    assert low[i] == pytest.approx(0.175) and high[i] == pytest.approx(0.62)  # each group's own
+    shared = [k for k, n in enumerate(jm.names) if n in jm.shared]
+    others = [k for k in range(jm.ndim) if k not in shared]
+    np.testing.assert_array_equal(low[others], first[others])  # b and rho as in the first
+    np.testing.assert_array_equal(high[others], first[others])
+
+
 @pytest.mark.slow
 def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_path, monkeypatch):
     from bayes_inerter.inference import optimize

@@ -238,7 +238,9 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
 
     ``centres``: one dict of single-record posterior centres (sampled values by name) per
     record; the run starts from the joint optimum that Nelder-Mead, restarted while it
-    gains (``optimize.local_optimum``), reaches from ``JointModel.start`` of them. Without
+    gains (``optimize.local_optimum``), reaches from ``JointModel.start`` of them (from
+    the best of one pass from each of ``JointModel.start_candidates`` where the records'
+    centres split the friction differently). Without
     them the centres are each record's own optimum found first (``optimize.find_start``,
     minutes a record). A continued chain needs no start and skips both searches. The
     medians of the records' centres are far from the joint optimum (about 1,000 nats
@@ -264,7 +266,11 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
                 given = [part.values(find_start(part, rng)[0]) for part in jm.parts]
             # Nelder-Mead takes one point at a time: its records are shared among the processes
             with pooled_log_prob(jm, processes) as log_prob:
-                return local_optimum(jm, jm.start(given), restarts=NM_RESTARTS, log_prob=log_prob)
+                candidates = jm.start_candidates(given)
+                if len(candidates) > 1:  # one pass from each, the best polished
+                    reached = [local_optimum(jm, c, log_prob=log_prob) for c in candidates]
+                    candidates = [max(reached, key=lambda r: r[1])[0]]
+                return local_optimum(jm, candidates[0], restarts=NM_RESTARTS, log_prob=log_prob)
 
         got = _sample_into(out, jm, nwalkers=walkers, steps=steps, seed=seed, processes=processes,
                            convergence=convergence, progress=progress, report=report, start=start,
