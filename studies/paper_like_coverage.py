@@ -20,10 +20,14 @@ miscalibrated sensors.
 
 ``--family`` makes the records of a device family the likelihood was not designed on
 (``FAMILIES``: a wider nut backlash, a larger break-away, noise coloured at 20 Hz, the two
-sensors' delays unequal); a folder keeps one family.
+sensors' delays unequal); a folder keeps one family. ``--likelihood name=value,...``
+fits with those of ``LikelihoodSettings`` changed (``input_noise=16``,
+``law_beyond_viscous=false``), a candidate beside the default on the same seeds; a
+folder keeps one likelihood. ``--freq F`` runs only the replicates driven at F Hz.
 
     python studies/paper_like_coverage.py --replicates 27 [--seed0 1000] [--out results/paper-like-coverage]
-        [--max-steps 20000] [--processes 2] [--family default] [--summarise]
+        [--max-steps 20000] [--processes 2] [--family default] [--likelihood input_noise=16]
+        [--freq 0.5] [--summarise]
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ from _table import FREQUENCIES, git_commit, grid_case
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
+from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -61,7 +66,22 @@ FAMILIES = {
 }
 
 
-def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "") -> dict:
+def likelihood_changes(text: str) -> dict:
+    """``name=value,...`` (values as JSON: 16, false, "plate") as a dict of changes of
+    ``LikelihoodSettings``; "" or "default": none. Raises ValueError on a name it lacks."""
+    changes = {}
+    if text and text != "default":
+        for part in text.split(","):
+            name, sep, value = part.partition("=")
+            if not sep:
+                raise ValueError(f"--likelihood takes name=value pairs, got {part!r}")
+            changes[name.strip()] = json.loads(value)
+    LikelihoodSettings(**changes)  # an unknown name or a bad value fails here, before any fit
+    return changes
+
+
+def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
+              likelihood: str = "default") -> dict:
     import arviz as az
 
     setting, freq = grid_case(k)
@@ -71,6 +91,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(rec, Path(tmp) / "fit", seed=seed, plots=False,
+                         likelihood=LikelihoodSettings(**likelihood_changes(likelihood)),
                          convergence=replace(Convergence(), max_steps=max_steps))
     b = np.asarray(res.idata.posterior["b"]).ravel()
     tau = np.asarray(list(res.tau.values()) if isinstance(res.tau, dict) else res.tau, dtype=float)
@@ -78,7 +99,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "b_median": float(np.median(b)), "converged": bool(res.converged), "steps": int(res.iterations),
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
-           "phi": res.b_interval.phi, "commit": commit, "family": family}
+           "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood}
     for level in LEVELS:
         lo, hi = az.hdi(b, hdi_prob=level)
         key = round(100 * level)
@@ -93,8 +114,8 @@ def _file(out: Path, k: int) -> Path:
 
 
 def _run(args) -> dict:
-    k, seed0, max_steps, out, family, commit = args
-    got = replicate(k, seed0, max_steps, family, commit)
+    k, seed0, max_steps, out, family, commit, likelihood = args
+    got = replicate(k, seed0, max_steps, family, commit, likelihood)
     _file(out, k).write_text(json.dumps(got, indent=1) + "\n")
     return got
 
@@ -160,21 +181,36 @@ def main(argv=None) -> int:
     ap.add_argument("--max-steps", type=int, default=20000)
     ap.add_argument("--processes", type=int, default=min(2, os.cpu_count() or 1))
     ap.add_argument("--family", default="default", choices=list(FAMILIES), help="the device family (FAMILIES)")
+    ap.add_argument("--likelihood", default="default", metavar="NAME=VALUE,...",
+                    help="LikelihoodSettings changed from the default (values as JSON)")
+    ap.add_argument("--freq", type=float, default=None, help="only the replicates driven at this frequency, Hz")
     ap.add_argument("--summarise", action="store_true", help="only write the tables from the replicates there")
     args = ap.parse_args(argv)
+    try:
+        likelihood_changes(args.likelihood)
+    except (ValueError, TypeError) as exc:
+        print(f"error: --likelihood {args.likelihood!r}: {exc}", file=sys.stderr)
+        return 2
+    if args.freq is not None and args.freq not in FREQUENCIES:
+        print(f"error: --freq must be one of {', '.join(f'{f:g}' for f in FREQUENCIES)} Hz", file=sys.stderr)
+        return 2
     out = Path(args.out)
     (out / "replicates").mkdir(parents=True, exist_ok=True)
-    kept = {json.loads(p.read_text()).get("family", "default") for p in (out / "replicates").glob("*.json")}
-    if not args.summarise and kept - {args.family}:
-        print(f"error: {out} holds replicates of family {', '.join(sorted(kept))}, not {args.family}; "
-              f"choose another --out", file=sys.stderr)
-        return 2
+    found = [json.loads(p.read_text()) for p in (out / "replicates").glob("*.json")]
+    for key, want in (("family", args.family), ("likelihood", args.likelihood)):
+        kept = {r.get(key, "default") for r in found}
+        if not args.summarise and kept - {want}:
+            print(f"error: {out} holds replicates of {key} {', '.join(sorted(kept))}, not {want}; "
+                  f"choose another --out", file=sys.stderr)
+            return 2
     if not args.summarise:
         commit = git_commit(ROOT)  # the code this run loaded, read once: HEAD may move while it runs
-        todo = [k for k in range(args.replicates) if not _file(out, k).exists()]
+        todo = [k for k in range(args.replicates) if not _file(out, k).exists()
+                and (args.freq is None or grid_case(k)[1] == args.freq)]
         print(f"{args.replicates - len(todo)} of {args.replicates} replicates already there", flush=True)
         with ProcessPoolExecutor(max_workers=args.processes) as pool:
-            futures = {pool.submit(_run, (k, args.seed0, args.max_steps, out, args.family, commit)): k for k in todo}
+            futures = {pool.submit(_run, (k, args.seed0, args.max_steps, out, args.family, commit, args.likelihood)): k
+                       for k in todo}
             for i, fut in enumerate(as_completed(futures), 1):
                 try:
                     r = fut.result()
