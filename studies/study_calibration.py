@@ -8,13 +8,13 @@ already there. About a minute per replicate and process on a 2-core machine.
 
     python studies/study_calibration.py [--replicates 200] [--steps 600] [--processes 2]
         [--seed 0] [--out FOLDER] [--single] [--residual motion] [--converge] [--freqs 0.5 1.5]
-        [--input-noise 16]
+        [--input-noise 0]
 
 ``--summarise`` writes coverage_so_far.csv from the replicates finished in ``--out``
 (counts over every chain and over the converged ones), for a run still in chunks.
 ``--single`` fits each replicate's one record alone (its frequency ``freqs[k % n]``),
-``--residual`` chooses the likelihood, ``--input-noise N`` adds the drivetrain's
-input-noise variance from N draws (``LikelihoodSettings.input_noise``), ``--converge``
+``--residual`` chooses the likelihood, ``--input-noise N`` takes N draws of the
+drivetrain's input noise (``LikelihoodSettings.input_noise``; 0 turns it off), ``--converge``
 runs every chain to the convergence rule (at most ``--max-steps``) instead of
 ``--steps``. A folder keeps one
 configuration (settings.json): its replicates are reused, so a run stopped by a
@@ -52,8 +52,9 @@ if __name__ == "__main__":
     ap.add_argument("--inspect", type=int, default=None, metavar="K", help="run replicate K again, its fit kept")
     ap.add_argument("--single", action="store_true", help="one record per replicate, fitted alone")
     ap.add_argument("--residual", default=None, help="the likelihood (LikelihoodSettings.residual)")
-    ap.add_argument("--input-noise", type=int, default=0, metavar="N",
-                    help="LikelihoodSettings.input_noise: N draws of the drivetrain's input noise (0: off)")
+    ap.add_argument("--input-noise", type=int, default=None, metavar="N",
+                    help="LikelihoodSettings.input_noise: N draws of the drivetrain's input noise "
+                         "(0: off; default: the library's)")
     ap.add_argument("--converge", action="store_true", help="each chain to the convergence rule")
     ap.add_argument("--max-steps", type=int, default=StudyCalibration.max_steps)
     ap.add_argument("--freqs", nargs="+", type=float, default=None)
@@ -75,9 +76,10 @@ if __name__ == "__main__":
         if args.replicates < 1:
             raise ValueError(f"--replicates must be at least 1, got {args.replicates}")
         extra = {}
-        if args.residual or args.input_noise:
-            extra["likelihood"] = LikelihoodSettings(**({"residual": args.residual} if args.residual else {}),
-                                                     input_noise=args.input_noise)
+        if args.residual or args.input_noise is not None:
+            extra["likelihood"] = LikelihoodSettings(
+                **({"residual": args.residual} if args.residual else {}),
+                **({"input_noise": args.input_noise} if args.input_noise is not None else {}))
         if args.freqs:
             extra["frequencies"] = tuple(args.freqs)
         cs = replace(StudyCalibration(), steps=None if args.converge else args.steps, seed=args.seed,

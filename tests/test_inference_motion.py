@@ -533,7 +533,7 @@ def test_the_motions_noise_through_a_sticking_rotation_is_counted_beyond_the_lin
     np.testing.assert_array_equal(sticking, input_noise_variance(data, x, draws=8))
 
     pm = PosteriorModel(rec, likelihood=LikelihoodSettings(input_noise=8))
-    plain = PosteriorModel(rec)
+    plain = PosteriorModel(rec, likelihood=LikelihoodSettings(input_noise=0))
     theta = plain.to_theta(p, hyper={"tau": 1.0})
     with_noise, without = pm.with_reference(theta), plain.with_reference(theta)
     grown = with_noise.reference_noise - without.reference_noise
@@ -543,7 +543,7 @@ def test_the_motions_noise_through_a_sticking_rotation_is_counted_beyond_the_lin
 
 
 def test_input_noise_needs_whole_draws_and_the_reference():
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.likelihood import INPUT_NOISE_DRAWS, LikelihoodSettings
 
     with pytest.raises(ValueError, match="whole number"):
         LikelihoodSettings(input_noise=-1)
@@ -551,3 +551,7 @@ def test_input_noise_needs_whole_draws_and_the_reference():
         LikelihoodSettings(input_noise=2.5)
     with pytest.raises(ValueError, match="reference"):
         LikelihoodSettings(input_noise=4, normaliser="full", deviation_scale="parameters")
+    with pytest.raises(ValueError, match="reference"):  # the default draws need it too
+        LikelihoodSettings(normaliser="full", deviation_scale="parameters")
+    assert LikelihoodSettings(input_noise=0, normaliser="full", deviation_scale="parameters").input_noise == 0
+    assert LikelihoodSettings().input_noise == INPUT_NOISE_DRAWS > 0

@@ -14,7 +14,7 @@ from ..records.conditioning import LOWPASS_HZ
 from ..records.sensitivity import SensorCalibration
 from ..simulate import SAMPLINGS
 
-__all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "DEVIATION_SCALES", "DELAY_SD", "ar1_pointwise",
+__all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "DEVIATION_SCALES", "DELAY_SD", "INPUT_NOISE_DRAWS", "ar1_pointwise",
            "ar1_marginal"]
 
 #: The likelihoods: the time-domain residual as a stationary AR(1) process or white, and
@@ -24,6 +24,10 @@ RESIDUALS = ("ar1", "iid", "harmonic", "motion")
 #: channel's, s, that the motion-in likelihood samples by default
 #: (``LikelihoodSettings.delay_sd``).
 DELAY_SD = 5e-4
+#: Draws of the measured motion's noise that the motion-in likelihood pushes through the
+#: model at its reference point by default (``LikelihoodSettings.input_noise``); the
+#: draws' seed is ``motion.INPUT_NOISE_SEED``.
+INPUT_NOISE_DRAWS = 16
 #: Where the motion-in likelihood's marginalised deviations take the Coulomb forces that
 #: scale their prior sd (``LikelihoodSettings.deviation_scale``).
 DEVIATION_SCALES = ("parameters", "reference")
@@ -105,10 +109,11 @@ class LikelihoodSettings:
     input_noise : motion-in likelihood only: draws of the measured motion's noise pushed
         through the model at the reference point (``motion.input_noise_variance``); the
         predicted force's variance they show beyond the linear errors-in-variables term is
-        added to every V_k. Default 0: none. The drivetrain's simulation passes the
-        motion's noise on nonlinearly (the rotation sticks and slips), and on the model's
-        own physics that made the posterior too narrow (docs/inference.md). Needs the
-        reference point (``normaliser`` or ``deviation_scale`` "reference").
+        added to every V_k. Default :data:`INPUT_NOISE_DRAWS` (16); 0: none. The
+        drivetrain's simulation passes the motion's noise on nonlinearly (the rotation
+        sticks and slips), and on the model's own physics without it the joint
+        posterior was too narrow (docs/inference.md). Needs the reference point
+        (``normaliser`` or ``deviation_scale`` "reference").
     law_beyond_viscous : with ``law_orthogonal``, take the plate's viscous harmonics out
         as well as its Coulomb square wave (default True). False leaves the deviations
         free to carry a force in phase with the velocity, which a friction that falls
@@ -142,7 +147,7 @@ class LikelihoodSettings:
     delay_sd: float | None = None
     law_orthogonal: bool = True
     law_beyond_viscous: bool = True
-    input_noise: int = 0
+    input_noise: int = INPUT_NOISE_DRAWS
     deviation_scale: str = "reference"
     reversal_scale: str = "total"
 
@@ -174,7 +179,8 @@ class LikelihoodSettings:
         if not (isinstance(self.input_noise, int) and not isinstance(self.input_noise, bool) and self.input_noise >= 0):
             raise ValueError(f"input_noise must be a whole number of draws >= 0, got {self.input_noise!r}")
         if self.input_noise and "reference" not in (self.normaliser, self.deviation_scale):
-            raise ValueError("input_noise needs the reference point: normaliser or deviation_scale 'reference'")
+            raise ValueError("input_noise needs the reference point: normaliser or deviation_scale 'reference' "
+                             "(or input_noise=0)")
         if self.normaliser not in NORMALISERS:
             raise ValueError(f"normaliser must be one of {', '.join(NORMALISERS)}, got {self.normaliser!r}")
         if self.deviation_scale not in DEVIATION_SCALES:
