@@ -11,8 +11,13 @@ the number of parameters where the posterior is calibrated, fewer where one sits
 bound), f_share there and b's error. A row is written after every record, and a rerun
 skips the rows already there. Design seeds only: coverage is measured on others.
 
+``--joint F1 F2 ...`` records each device at those frequencies and takes the truth's
+place in the joint model's posterior (``inference.joint.JointModel``: one device, its
+frictions and deformations shared, the likelihood's tau per frequency), as the joint
+calibration (results/coverage-sbc-joint) fits it; ``freq_hz`` then lists them.
+
     python studies/input_noise.py [--seed 4] [--replicates 18 25 17 43 9] [--records 6]
-        [--variants default input_noise=16] [--noise both]
+        [--variants default input_noise=16] [--noise both] [--joint 0.5 1.5]
         [--out results/likelihood-candidates/input_noise.csv]
 """
 
@@ -28,6 +33,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from bayes_inerter.inference import PosteriorModel
+from bayes_inerter.inference.joint import JointModel
 from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.inference.optimize import NM_RESTARTS, local_optimum
 from bayes_inerter.records import GeneratorSettings, generate_record
@@ -82,6 +88,39 @@ def one(cs: StudyCalibration, k: int, noise: str, variant: str, j: int, base: di
             "b_error_pct": round(100 * (values["b"] / device.truth["b"] - 1), 3)}
 
 
+def one_joint(cs: StudyCalibration, k: int, noise: str, variant: str, j: int, base: dict) -> dict:
+    """:func:`one` for the joint model of the device's records at ``cs.frequencies``."""
+    device = replicate_device(cs, k)
+    gain = device.truth.get("gain", 1.0)
+    settings = dataclasses.replace(cs.generator, **NOISES[noise])
+    rng = np.random.default_rng(1000 + j)
+    records = [generate_record(device.params, f, settings=settings, rng=rng, setting_name=cs.setting)
+               for f in cs.frequencies]
+    records = [dataclasses.replace(r, accel=r.accel * gain) for r in records]
+    model = JointModel(tuple(records), priors=STUDY_SBC_PRIORS, likelihood=variant_settings(base, variant))
+    truth = {f"b_{cs.setting}": device.truth["b"], **{n: device.truth[n] for n in model.shared}, "gain": gain}
+    hyper = [i for i, n in enumerate(model.names) if n not in truth]
+    theta = np.array([(math.log(truth[n]) if model.all_priors[n].log_scale else truth[n]) if n in truth
+                      else 0.0 if n == "delay" else float(np.mean(model.all_priors[n].bounds))
+                      for n in model.names])  # tau mid-prior, the delay 0: no truth of their own
+    model = model.with_reference(theta)
+
+    def neg(x):
+        t = theta.copy()
+        t[hyper] = x
+        lp = model.log_prob(t)[0]
+        return -lp if math.isfinite(lp) else 1e10
+
+    found = minimize(neg, theta[hyper], method="Nelder-Mead")
+    theta[hyper] = found.x
+    best, lp_best = local_optimum(model, theta, restarts=NM_RESTARTS)
+    values = dict(zip(model.names, model.to_values(best)))
+    return {"seed": cs.seed, "replicate": k, "freq_hz": "+".join(f"{f:g}" for f in cs.frequencies), "noise": noise,
+            "variant": variant, "realisation": j, "twice_deficit": round(2 * (lp_best + found.fun), 1),
+            "f_share": round(values["f_share"], 4), "f_share_true": round(device.truth["f_share"], 4),
+            "b_error_pct": round(100 * (values[f"b_{cs.setting}"] / device.truth["b"] - 1), 3)}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=4)
@@ -89,19 +128,24 @@ def main(argv=None) -> int:
     ap.add_argument("--records", type=int, default=6)
     ap.add_argument("--variants", nargs="+", default=["default", "input_noise=16"])
     ap.add_argument("--noise", choices=list(NOISES), default="both")
+    ap.add_argument("--joint", type=float, nargs="+", default=None, metavar="F",
+                    help="the joint model of each device's records at these frequencies, Hz")
     ap.add_argument("--out", type=Path, default=ROOT / "results" / "likelihood-candidates" / "input_noise.csv")
     args = ap.parse_args(argv)
     study = json.loads(SETTINGS.read_text())
-    cs = StudyCalibration(setting=study["setting"], frequencies=tuple(study["frequencies"]),
-                          generator=GeneratorSettings(**study["generator"]), steps=None, seed=args.seed, single=True,
-                          likelihood=LikelihoodSettings(**study["likelihood"]))
-    done = {(int(r["seed"]), int(r["replicate"]), r["noise"], r["variant"], int(r["realisation"]))
+    cs = StudyCalibration(setting=study["setting"], frequencies=tuple(args.joint or study["frequencies"]),
+                          generator=GeneratorSettings(**study["generator"]), steps=None, seed=args.seed,
+                          single=not args.joint, likelihood=LikelihoodSettings(**study["likelihood"]))
+    fit_one = one_joint if args.joint else one
+    done = {(int(r["seed"]), int(r["replicate"]), r["freq_hz"], r["noise"], r["variant"], int(r["realisation"]))
             for r in read_rows(args.out)}
     for k in args.replicates:
         for variant in args.variants:
             for j in range(args.records):
-                if (args.seed, k, args.noise, variant, j) not in done:
-                    append_row(args.out, one(cs, k, args.noise, variant, j, study["likelihood"]), FIELDS)
+                freq = ("+".join(f"{f:g}" for f in cs.frequencies) if args.joint
+                        else str(float(cs.frequencies[k % len(cs.frequencies)])))
+                if (args.seed, k, freq, args.noise, variant, j) not in done:
+                    append_row(args.out, fit_one(cs, k, args.noise, variant, j, study["likelihood"]), FIELDS)
     return 0
 
 
