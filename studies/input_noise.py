@@ -17,7 +17,7 @@ frictions and deformations shared, the likelihood's tau per frequency), as the j
 calibration (results/coverage-sbc-joint) fits it; ``freq_hz`` then lists them.
 
     python studies/input_noise.py [--seed 4] [--replicates 18 25 17 43 9] [--records 6]
-        [--variants default input_noise=16] [--noise both] [--joint 0.5 1.5]
+        [--variants input_noise=0 input_noise=16] [--noise both] [--joint 0.5 1.5]
         [--out results/likelihood-candidates/input_noise.csv]
 """
 
@@ -49,7 +49,8 @@ FIELDS = ("seed", "replicate", "freq_hz", "noise", "variant", "realisation", "tw
 
 
 def variant_settings(base: dict, variant: str) -> LikelihoodSettings:
-    """"default", or "name=value" changes of the study's likelihood settings."""
+    """"default" (the study's likelihood settings as its settings.json holds them, the
+    library's defaults for what it does not name), or "name=value" changes of them."""
     changes = {}
     if variant != "default":
         for part in variant.split(","):
@@ -126,7 +127,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=4)
     ap.add_argument("--replicates", type=int, nargs="+", default=[18, 25, 17, 43, 9])
     ap.add_argument("--records", type=int, default=6)
-    ap.add_argument("--variants", nargs="+", default=["default", "input_noise=16"])
+    ap.add_argument("--variants", nargs="+", default=["input_noise=0", "input_noise=16"])
     ap.add_argument("--noise", choices=list(NOISES), default="both")
     ap.add_argument("--joint", type=float, nargs="+", default=None, metavar="F",
                     help="the joint model of each device's records at these frequencies, Hz")
