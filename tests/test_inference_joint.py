@@ -205,6 +205,37 @@ def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_pat
     assert len(seen) == 1  # a continued chain does not look for a start again
 
 
+@pytest.mark.slow
+def test_fit_joint_polishes_the_best_of_one_pass_from_each_candidate(records, tmp_path, monkeypatch):
+    from bayes_inerter.inference import optimize
+
+    centres = []
+    for rec, share in zip(records, (0.7, 0.2, 0.25)):  # two groups of the friction split
+        pm = PosteriorModel(rec, likelihood=AR1)
+        centre = pm.values(pm.to_theta(paper_parameters(rec.metadata["setting"]), 1.0, 0.3))
+        centres.append({**centre, "f_share": share})
+    jm = JointModel(records, likelihood=AR1)
+    candidates = jm.start_candidates(centres)
+    assert len(candidates) == 3
+    seen = []
+    real = optimize.local_optimum
+
+    def spy(model, theta, **kwargs):
+        out = real(model, theta, **kwargs)
+        seen.append((np.array(theta, dtype=float), out, kwargs.get("restarts", 0)))
+        return out
+
+    monkeypatch.setattr(optimize, "local_optimum", spy)
+    fit_joint(records, tmp_path / "joint", likelihood=AR1, centres=centres, steps=3, plots=False)
+    assert len(seen) == 4
+    for (start, _, restarts), candidate in zip(seen[:3], candidates):
+        np.testing.assert_array_equal(start, candidate)
+        assert restarts == 0
+    best = max(seen[:3], key=lambda s: s[1][1])[1][0]
+    np.testing.assert_array_equal(seen[3][0], best)  # the best pass is polished
+    assert seen[3][2] == optimize.NM_RESTARTS
+
+
 def test_the_motion_likelihoods_reference_is_each_records_part_of_the_joint_one():
     """Under the motion-in likelihood (its normaliser's noise at a reference point) the
     joint model takes each record's reference at its own part of the joint theta: its
