@@ -23,7 +23,8 @@ miscalibrated sensors.
 sensors' delays unequal); a folder keeps one family. ``--likelihood name=value,...``
 fits with those of ``LikelihoodSettings`` changed (``input_noise=16``,
 ``law_beyond_viscous=false``), a candidate beside the default on the same seeds; a
-folder keeps one likelihood. ``--freq F`` runs only the replicates driven at F Hz.
+folder keeps one likelihood, its every setting recorded in each replicate (a change of
+the library's default starts a new folder). ``--freq F`` runs only the replicates driven at F Hz.
 
     python studies/paper_like_coverage.py --replicates 27 [--seed0 1000] [--out results/paper-like-coverage]
         [--max-steps 20000] [--processes 2] [--family default] [--likelihood input_noise=16]
@@ -34,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import json
 import math
 import os
@@ -80,6 +82,13 @@ def likelihood_changes(text: str) -> dict:
     return changes
 
 
+def likelihood_settings(text: str) -> dict:
+    """Every field of the ``LikelihoodSettings`` that ``--likelihood text`` fits with:
+    what a replicate records, so that a folder never mixes two likelihoods, not even
+    when the library's default changes between its chunks."""
+    return dataclasses.asdict(LikelihoodSettings(**likelihood_changes(text)))
+
+
 def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
               likelihood: str = "default") -> dict:
     import arviz as az
@@ -99,7 +108,8 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "b_median": float(np.median(b)), "converged": bool(res.converged), "steps": int(res.iterations),
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
-           "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood}
+           "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
+           "likelihood_settings": likelihood_settings(likelihood)}
     for level in LEVELS:
         lo, hi = az.hdi(b, hdi_prob=level)
         key = round(100 * level)
@@ -197,12 +207,17 @@ def main(argv=None) -> int:
     out = Path(args.out)
     (out / "replicates").mkdir(parents=True, exist_ok=True)
     found = [json.loads(p.read_text()) for p in (out / "replicates").glob("*.json")]
-    for key, want in (("family", args.family), ("likelihood", args.likelihood)):
-        kept = {r.get(key, "default") for r in found}
-        if not args.summarise and kept - {want}:
-            print(f"error: {out} holds replicates of {key} {', '.join(sorted(kept))}, not {want}; "
-                  f"choose another --out", file=sys.stderr)
-            return 2
+    kept = {r.get("family", "default") for r in found}
+    if not args.summarise and kept - {args.family}:
+        print(f"error: {out} holds replicates of family {', '.join(sorted(kept))}, not {args.family}; "
+              f"choose another --out", file=sys.stderr)
+        return 2
+    want = likelihood_settings(args.likelihood)
+    if not args.summarise and any(r.get("likelihood_settings") != want for r in found):
+        print(f"error: {out} holds replicates fitted with other likelihood settings than --likelihood "
+              f"{args.likelihood} gives today (or made before replicates recorded them); choose another --out",
+              file=sys.stderr)
+        return 2
     if not args.summarise:
         commit = git_commit(ROOT)  # the code this run loaded, read once: HEAD may move while it runs
         todo = [k for k in range(args.replicates) if not _file(out, k).exists()
