@@ -159,24 +159,52 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     assert fourth.timings["sampling_all_runs"] == fourth.timings["sampling"]
 
 
-def test_start_candidates_one_per_group_of_the_records_friction_split(records):
-    jm = JointModel(records, likelihood=AR1)
-    centres = []
-    for rec in records:
+def _centres(records, shares):
+    out = []
+    for rec, share in zip(records, shares):
         pm = PosteriorModel(rec, likelihood=AR1)
-        centres.append(pm.values(pm.to_theta(paper_parameters(rec.metadata["setting"]), 1.0, 0.3)))
+        centre = pm.values(pm.to_theta(paper_parameters(rec.metadata["setting"]), 1.0, 0.3))
+        out.append({**centre, "f_share": share})
+    return out
+
+
+def test_start_candidates_one_per_record_up_to_record_starts(records):
+    from bayes_inerter.inference import joint
+
+    assert len(records) <= joint.RECORD_STARTS
+    jm = JointModel(records, likelihood=AR1)
     i = jm.names.index("f_share")
-    close = [{**c, "f_share": s} for c, s in zip(centres, (0.30, 0.35, 0.38))]
+    close = _centres(records, (0.30, 0.35, 0.38))
+    first, *each = jm.start_candidates(close)
+    np.testing.assert_array_equal(first, jm.start(close))
+    # each record's own, but the median record's, which is the first (the records share
+    # every other shared parameter here)
+    assert [t[i] for t in each] == pytest.approx([0.30, 0.38])
+    shared = [k for k, n in enumerate(jm.names) if n in jm.shared]
+    others = [k for k in range(jm.ndim) if k not in shared]
+    for t in each:
+        np.testing.assert_array_equal(t[others], first[others])  # b and rho as in the first
+    same = _centres(records, (0.3, 0.3, 0.3))
+    assert len(jm.start_candidates(same)) == 1  # records alike give one start, not four copies
+
+
+def test_start_candidates_beyond_record_starts_one_per_group_of_the_friction_split(records, monkeypatch):
+    from bayes_inerter.inference import joint
+
+    monkeypatch.setattr(joint, "RECORD_STARTS", len(records) - 1)
+    jm = JointModel(records, likelihood=AR1)
+    i = jm.names.index("f_share")
+    close = _centres(records, (0.30, 0.35, 0.38))
     assert len(jm.start_candidates(close)) == 1
     np.testing.assert_array_equal(jm.start_candidates(close)[0], jm.start(close))
-    apart = [{**c, "f_share": s} for c, s in zip(centres, (0.62, 0.15, 0.2))]
+    apart = _centres(records, (0.62, 0.15, 0.2))
     first, low, high = jm.start_candidates(apart)
     np.testing.assert_array_equal(first, jm.start(apart))
     assert first[i] == pytest.approx(0.2)  # the median lies in the group of two
     assert low[i] == pytest.approx(0.175) and high[i] == pytest.approx(0.62)  # each group's own
     shared = [k for k, n in enumerate(jm.names) if n in jm.shared]
     others = [k for k in range(jm.ndim) if k not in shared]
-    np.testing.assert_array_equal(low[others], first[others])  # b and rho as in the first
+    np.testing.assert_array_equal(low[others], first[others])
     np.testing.assert_array_equal(high[others], first[others])
 
 
@@ -209,14 +237,10 @@ def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_pat
 def test_fit_joint_polishes_the_best_of_one_pass_from_each_candidate(records, tmp_path, monkeypatch):
     from bayes_inerter.inference import optimize
 
-    centres = []
-    for rec, share in zip(records, (0.7, 0.2, 0.25)):  # two groups of the friction split
-        pm = PosteriorModel(rec, likelihood=AR1)
-        centre = pm.values(pm.to_theta(paper_parameters(rec.metadata["setting"]), 1.0, 0.3))
-        centres.append({**centre, "f_share": share})
+    centres = _centres(records, (0.7, 0.2, 0.25))
     jm = JointModel(records, likelihood=AR1)
     candidates = jm.start_candidates(centres)
-    assert len(candidates) == 3
+    assert len(candidates) == 3  # the median (record 3's own) and records 1 and 2's own
     seen = []
     real = optimize.local_optimum
 

@@ -37,7 +37,7 @@ from ..executor import make_executor
 from .likelihood import ar1_marginal
 from .model import LikelihoodSettings, PosteriorModel
 
-__all__ = ["JointModel", "ar1_marginal", "pooled_log_prob", "PER_FREQUENCY", "SPLIT_GAP"]
+__all__ = ["JointModel", "ar1_marginal", "pooled_log_prob", "PER_FREQUENCY", "SPLIT_GAP", "RECORD_STARTS"]
 
 #: The likelihood's parameters shared by the records of one drive frequency (the
 #: residual's colour and the discrepancy are set by the signal's spectrum, which the
@@ -221,25 +221,31 @@ class JointModel:
 
     def start_candidates(self, medians: list[dict]) -> list[np.ndarray]:
         """Starting thetas for the joint search: :meth:`start` of every record's centre,
-        then, where the records' centres put ``f_share`` in groups more than
-        :data:`SPLIT_GAP` apart, one per group: the shared parameters the group's
-        medians, the rest as in the first. Each record's own optimum sits in the
-        friction split's mode its data favour; the median of two modes lies between them
-        and a local search from it reaches either (measured on the joint calibration's
-        replicates whose chains settled in a mode 40 and 420 nats below the one that
-        held the truth)."""
+        then one per group of records: the shared parameters the group's medians, the
+        rest as in the first. Up to :data:`RECORD_STARTS` records each record is a group;
+        beyond, the groups are those of the friction split, records whose centres put
+        ``f_share`` more than :data:`SPLIT_GAP` apart (none where all lie closer). Each
+        record's own optimum sits in the mode its data favour; the median of two modes
+        lies between them and a local search from it reaches either (measured on the
+        joint calibration's replicates whose chains settled in a mode 40 and 420 nats
+        below the one that held the truth, the second with its records' f_share 0.097
+        apart)."""
         first = self.start(medians)
-        if "f_share" not in self.names:
-            return [first]
-        order = sorted(range(len(medians)), key=lambda k: medians[k]["f_share"])
-        groups, group = [], [order[0]]
-        for a, b in zip(order, order[1:]):
-            if medians[b]["f_share"] - medians[a]["f_share"] > SPLIT_GAP:
-                groups.append(group)
-                group = []
-            group.append(b)
-        groups.append(group)
-        if len(groups) == 1:
+        n = len(medians)
+        if n <= RECORD_STARTS:
+            groups = [[k] for k in range(n)]
+        elif "f_share" in self.names:
+            order = sorted(range(n), key=lambda k: medians[k]["f_share"])
+            groups, group = [], [order[0]]
+            for a, b in zip(order, order[1:]):
+                if medians[b]["f_share"] - medians[a]["f_share"] > SPLIT_GAP:
+                    groups.append(group)
+                    group = []
+                group.append(b)
+            groups.append(group)
+        else:
+            groups = []
+        if len(groups) <= 1:
             return [first]
         out = [first]
         shared = [i for i, n in enumerate(self.names) if n in self.shared]
@@ -247,9 +253,10 @@ class JointModel:
         for group in groups:
             theta = first.copy()
             for i in shared:
-                n = self.names[i]
-                theta[i] = np.clip(self._median(n, [medians[k][n] for k in group]), lo[i], hi[i])
-            out.append(theta)
+                name = self.names[i]
+                theta[i] = np.clip(self._median(name, [medians[k][name] for k in group]), lo[i], hi[i])
+            if not any(np.array_equal(theta, t) for t in out):
+                out.append(theta)
         return out
 
     def _median(self, name: str, values) -> float:
@@ -260,8 +267,11 @@ class JointModel:
 
 #: Where the records' own optima put the friction's split (``f_share``) in groups further
 #: apart than this, the joint search starts from each group too
-#: (:meth:`JointModel.start_candidates`).
+#: (:meth:`JointModel.start_candidates`), where there are more than RECORD_STARTS records.
 SPLIT_GAP = 0.1
+#: Up to this many records the joint search starts from each record's own optimum too
+#: (:meth:`JointModel.start_candidates`): one Nelder-Mead pass each.
+RECORD_STARTS = 4
 
 
 def _terms(model: JointModel, args):
