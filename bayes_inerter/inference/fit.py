@@ -238,9 +238,9 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
 
     ``centres``: one dict of single-record posterior centres (sampled values by name) per
     record; the run starts from the joint optimum that Nelder-Mead, restarted while it
-    gains (``optimize.local_optimum``), reaches from ``JointModel.start`` of them (from
-    the best of one pass from each of ``JointModel.start_candidates`` where the records'
-    centres split the friction differently). Without
+    gains (``optimize.local_optimum``), reaches from the best of one pass from each of
+    ``JointModel.start_candidates`` (their median, and each record's own or, beyond
+    ``joint.RECORD_STARTS`` records, each group of the friction split). Without
     them the centres are each record's own optimum found first (``optimize.find_start``,
     minutes a record). A continued chain needs no start and skips both searches. The
     medians of the records' centres are far from the joint optimum (about 1,000 nats

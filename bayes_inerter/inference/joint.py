@@ -248,7 +248,7 @@ class JointModel:
         if len(groups) <= 1:
             return [first]
         out = [first]
-        shared = [i for i, n in enumerate(self.names) if n in self.shared]
+        shared = [i for i, name in enumerate(self.names) if name in self.shared]
         lo, hi = self.bounds().T
         for group in groups:
             theta = first.copy()
