@@ -4,6 +4,7 @@ results to a CSV file and print them, name the commit a run loaded, and the adap
 samplers they compare by name."""
 
 import csv
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -31,6 +32,22 @@ def record_arg(item: str) -> tuple[str, float]:
         return setting.upper(), float(freq)
     except ValueError:
         sys.exit(f"error: --record takes SETTING:FREQUENCY, got {item!r}")
+
+
+def likelihood_changes(text: str) -> dict:
+    """``name=value,...`` (values as JSON: 16, false, "plate") as a dict of changes of
+    ``LikelihoodSettings``; "" or "default": none. Raises ValueError on a name it lacks."""
+    from bayes_inerter.inference.likelihood import LikelihoodSettings
+
+    changes = {}
+    if text and text != "default":
+        for part in text.split(","):
+            name, sep, value = part.partition("=")
+            if not sep:
+                raise ValueError(f"--likelihood takes name=value pairs, got {part!r}")
+            changes[name.strip()] = json.loads(value)
+    LikelihoodSettings(**changes)  # an unknown name or a bad value fails here, before any fit
+    return changes
 
 
 def grid_case(k: int) -> tuple[str, float]:

@@ -39,7 +39,7 @@ from bayes_inerter.inference.optimize import NM_RESTARTS, local_optimum
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
 
-from _table import append_row, read_rows
+from _table import append_row, likelihood_changes, read_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 SETTINGS = ROOT / "results" / "coverage-sbc-v2" / "settings.json"
@@ -51,12 +51,25 @@ FIELDS = ("seed", "replicate", "freq_hz", "noise", "variant", "realisation", "tw
 def variant_settings(base: dict, variant: str) -> LikelihoodSettings:
     """"default" (the study's likelihood settings as its settings.json holds them, the
     library's defaults for what it does not name), or "name=value" changes of them."""
-    changes = {}
-    if variant != "default":
-        for part in variant.split(","):
-            name, value = part.split("=")
-            changes[name] = json.loads(value)
-    return LikelihoodSettings(**{**base, **changes})
+    return LikelihoodSettings(**{**base, **likelihood_changes(variant)})
+
+
+def _deficit(model, theta: np.ndarray, hyper: list) -> tuple[dict, float]:
+    """(the sampled values at the optimum, twice the log posterior's rise to it): from
+    ``theta`` (the truth) with the ``hyper`` parameters, which have no true value,
+    optimised there first, then Nelder-Mead with restarts from it."""
+    theta = np.array(theta, dtype=float)
+
+    def neg(x):
+        t = theta.copy()
+        t[hyper] = x
+        lp = model.log_prob(t)[0]
+        return -lp if math.isfinite(lp) else 1e10
+
+    found = minimize(neg, theta[hyper], method="Nelder-Mead")
+    theta[hyper] = found.x
+    best, lp_best = local_optimum(model, theta, restarts=NM_RESTARTS)
+    return dict(zip(model.names, model.to_values(best))), 2 * (lp_best + found.fun)
 
 
 def one(cs: StudyCalibration, k: int, noise: str, variant: str, j: int, base: dict) -> dict:
@@ -72,19 +85,9 @@ def one(cs: StudyCalibration, k: int, noise: str, variant: str, j: int, base: di
         theta[model.names.index("gain")] = math.log(gain) if model.all_priors["gain"].log_scale else gain
     model = model.with_reference(theta)
     hyper = [i for i, n in enumerate(model.names) if n in ("tau", "alpha", "delay")]
-
-    def neg(x):
-        t = theta.copy()
-        t[hyper] = x
-        lp = model.log_prob(t)[0]
-        return -lp if math.isfinite(lp) else 1e10
-
-    found = minimize(neg, theta[hyper], method="Nelder-Mead")
-    theta[hyper] = found.x
-    best, lp_best = local_optimum(model, theta, restarts=NM_RESTARTS)
-    values = model.values(best)
+    values, twice = _deficit(model, theta, hyper)
     return {"seed": cs.seed, "replicate": k, "freq_hz": freq, "noise": noise, "variant": variant, "realisation": j,
-            "twice_deficit": round(2 * (lp_best + found.fun), 1), "f_share": round(values["f_share"], 4),
+            "twice_deficit": round(twice, 1), "f_share": round(values["f_share"], 4),
             "f_share_true": round(device.truth["f_share"], 4),
             "b_error_pct": round(100 * (values["b"] / device.truth["b"] - 1), 3)}
 
@@ -105,19 +108,9 @@ def one_joint(cs: StudyCalibration, k: int, noise: str, variant: str, j: int, ba
                       else 0.0 if n == "delay" else float(np.mean(model.all_priors[n].bounds))
                       for n in model.names])  # tau mid-prior, the delay 0: no truth of their own
     model = model.with_reference(theta)
-
-    def neg(x):
-        t = theta.copy()
-        t[hyper] = x
-        lp = model.log_prob(t)[0]
-        return -lp if math.isfinite(lp) else 1e10
-
-    found = minimize(neg, theta[hyper], method="Nelder-Mead")
-    theta[hyper] = found.x
-    best, lp_best = local_optimum(model, theta, restarts=NM_RESTARTS)
-    values = dict(zip(model.names, model.to_values(best)))
+    values, twice = _deficit(model, theta, hyper)
     return {"seed": cs.seed, "replicate": k, "freq_hz": "+".join(f"{f:g}" for f in cs.frequencies), "noise": noise,
-            "variant": variant, "realisation": j, "twice_deficit": round(2 * (lp_best + found.fun), 1),
+            "variant": variant, "realisation": j, "twice_deficit": round(twice, 1),
             "f_share": round(values["f_share"], 4), "f_share_true": round(device.truth["f_share"], 4),
             "b_error_pct": round(100 * (values[f"b_{cs.setting}"] / device.truth["b"] - 1), 3)}
 

@@ -48,7 +48,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import FREQUENCIES, git_commit, grid_case
+from _table import FREQUENCIES, git_commit, grid_case, likelihood_changes
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
@@ -66,20 +66,6 @@ FAMILIES = {
     "corner20": PaperLike(noise_corner=20.0),  # Hz: noise coloured inside the drive's harmonics
     "delays": PaperLike(force_delay=2e-4, accel_delay=7e-4),  # s: the load cell's and accelerometer's latencies
 }
-
-
-def likelihood_changes(text: str) -> dict:
-    """``name=value,...`` (values as JSON: 16, false, "plate") as a dict of changes of
-    ``LikelihoodSettings``; "" or "default": none. Raises ValueError on a name it lacks."""
-    changes = {}
-    if text and text != "default":
-        for part in text.split(","):
-            name, sep, value = part.partition("=")
-            if not sep:
-                raise ValueError(f"--likelihood takes name=value pairs, got {part!r}")
-            changes[name.strip()] = json.loads(value)
-    LikelihoodSettings(**changes)  # an unknown name or a bad value fails here, before any fit
-    return changes
 
 
 def likelihood_settings(text: str) -> dict:
