@@ -11,7 +11,8 @@ already there. About a minute per replicate and process on a 2-core machine.
         [--input-noise 0]
 
 ``--summarise`` writes coverage_so_far.csv from the replicates finished in ``--out``
-(counts over every chain and over the converged ones), for a run still in chunks.
+(counts over every chain and over the converged ones), for a run still in chunks, and
+rank_correlations.csv: the parameters whose truths' ranks move together.
 ``--single`` fits each replicate's one record alone (its frequency ``freqs[k % n]``),
 ``--residual`` chooses the likelihood, ``--input-noise N`` takes N draws of the
 drivetrain's input noise (``LikelihoodSettings.input_noise``; 0 turns it off), ``--converge``
@@ -36,8 +37,8 @@ from pathlib import Path
 
 from _table import run_with_bar
 from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.study.study_calibration import (StudyCalibration, inspect_replicate, run_study_calibration,
-                                                  write_coverage_so_far)
+from bayes_inerter.study.study_calibration import (StudyCalibration, finished_replicates, inspect_replicate,
+                                                  rank_correlations, run_study_calibration, write_coverage_so_far)
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "study-calibration"
@@ -70,7 +71,10 @@ if __name__ == "__main__":
             print(f"{r['chains']:>9} {r['parameter']:>14}: of {r['intervals']:4d} the 94 % held {r['held_94']:4d} "
                   f"(expected {r['expected_94']}, se {r['se_94']}), the 50 % {r['held_50']:4d} "
                   f"(expected {r['expected_50']}, se {r['se_50']})")
-        print(f"wrote {Path(args.out) / 'coverage_so_far.csv'}")
+        for pair in rank_correlations(finished_replicates(args.out)):
+            print(f"ranks of {pair['parameter']} and {pair['with']} move together (r {pair['r']:+.2f}): "
+                  "their counts are not independent tests")
+        print(f"wrote {Path(args.out) / 'coverage_so_far.csv'} and rank_correlations.csv")
         sys.exit(0)
     try:
         if args.replicates < 1:

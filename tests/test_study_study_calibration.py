@@ -10,8 +10,8 @@ from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
                                                   coverage_rows, coverage_so_far, finished_replicates,
-                                                  inspect_replicate, replicate_device, study_replicate,
-                                                  write_coverage_so_far, write_study_calibration)
+                                                  inspect_replicate, rank_correlations, replicate_device,
+                                                  study_replicate, write_coverage_so_far, write_study_calibration)
 
 NAMES = ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B"]
 #: The time-domain likelihood of the replicates below: c_B sampled, rho per frequency
@@ -67,6 +67,30 @@ def test_coverage_so_far_counts_every_chain_and_the_converged_apart(tmp_path):
     assert [r["replicate"] for r in finished_replicates(tmp_path)] == [0, 1, 2, 3]
     assert write_coverage_so_far(tmp_path) == coverage_so_far(results)
     assert (tmp_path / "coverage_so_far.csv").read_text().count("\n") == 1 + len(rows)
+
+
+def test_rank_correlations_finds_parameters_whose_ranks_move_together(tmp_path):
+    rng = np.random.default_rng(1)
+    gain = rng.integers(0, 10, 40)
+    results = []
+    for k, g in enumerate(gain):
+        r = _fake(k, True)
+        r["ranks"] = {n: int(rng.integers(0, 10)) for n in NAMES}
+        r["ranks"]["b"] = int(g)  # b's rank follows another's, as b follows the gain's
+        r["ranks"]["k_B"] = int(g)
+        r["ranks"]["c_f"] = 9 - r["ranks"]["f_0"]  # and one trades against another
+        results.append(r)
+    pairs = rank_correlations(results)
+    found = {(p["parameter"], p["with"]): p["r"] for p in pairs}
+    assert found[("b", "k_B")] == 1.0 and found[("f_0", "c_f")] == -1.0
+    assert all(abs(r) >= 0.5 for r in found.values()) and len(found) < 6  # independent ranks stay out
+    assert rank_correlations(results[:2]) == [] and rank_correlations(results, threshold=1.01) == []
+    (tmp_path / "replicates").mkdir()
+    for r in results:
+        (tmp_path / "replicates" / f"{r['replicate']:04d}.json").write_text(json.dumps(r))
+    write_coverage_so_far(tmp_path)
+    lines = (tmp_path / "rank_correlations.csv").read_text().splitlines()
+    assert lines[0] == "parameter,with,r,replicates" and len(lines) == 1 + len(pairs)
 
 
 def test_chains_long_enough_counts_fifty_taus():

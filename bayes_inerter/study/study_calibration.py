@@ -65,7 +65,8 @@ from ..simulate import SimulationError
 
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
-           "finished_replicates", "coverage_so_far", "write_coverage_so_far"]
+           "finished_replicates", "coverage_so_far", "write_coverage_so_far", "rank_correlations",
+           "RANK_CORRELATION"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -301,13 +302,49 @@ def coverage_so_far(results: list[dict]) -> list[dict]:
     return rows
 
 
+#: Truths' ranks correlated at least this much (in absolute value) across replicates are
+#: listed by :func:`rank_correlations`: two such parameters' coverage counts are not
+#: independent tests.
+RANK_CORRELATION = 0.5
+
+
+def rank_correlations(results: list[dict], threshold: float = RANK_CORRELATION) -> list[dict]:
+    """The pairs of parameters whose truths' ranks correlate across the finished
+    replicates by at least ``threshold`` in absolute value (Pearson's r of the ranks),
+    strongest first: where the records identify a combination of two parameters (b over
+    the sensors' gain, say), the truth's rank of one follows the other's, and their
+    coverage counts rise and fall together. [] with fewer than 3 replicates."""
+    ok = [r for r in results if "ranks" in r]
+    if len(ok) < 3:
+        return []
+    names = list(ok[0]["ranks"])
+    ranks = np.array([[float(r["ranks"][n]) for n in names] for r in ok])
+    rows = []
+    for i, a in enumerate(names):
+        for j in range(i + 1, len(names)):
+            x, y = ranks[:, i], ranks[:, j]
+            if np.std(x) == 0 or np.std(y) == 0:
+                continue
+            r = float(np.corrcoef(x, y)[0, 1])
+            if abs(r) >= threshold:
+                rows.append({"parameter": a, "with": names[j], "r": round(r, 2), "replicates": len(ok)})
+    return sorted(rows, key=lambda row: -abs(row["r"]))
+
+
 def write_coverage_so_far(out) -> list[dict]:
     """``out``/coverage_so_far.csv from :func:`coverage_so_far` of the replicates
-    finished in ``out``, and the rows."""
+    finished in ``out``, and ``out``/rank_correlations.csv from
+    :func:`rank_correlations`; the coverage rows."""
     from .analysis import write_csv
 
-    rows = coverage_so_far(finished_replicates(out))
+    finished = finished_replicates(out)
+    rows = coverage_so_far(finished)
     write_csv(Path(out) / "coverage_so_far.csv", rows)
+    pairs = rank_correlations(finished)
+    if pairs:
+        write_csv(Path(out) / "rank_correlations.csv", pairs)
+    else:  # the header alone: no pair reached the threshold
+        (Path(out) / "rank_correlations.csv").write_text("parameter,with,r,replicates\n")
     return rows
 
 
