@@ -4,7 +4,8 @@ A displacement-controlled test prescribes the motion of terminal 1; the device a
 with a force. Over the record's whole steady drive periods (``harmonic.harmonic_data``)
 the measured acceleration's harmonics A_k give the plate's periodic motion,
 V_k = A_k / (i k omega), and the two-port model (MODEL.md section 2) then gives the force
-at terminal 1 **without a simulation**, harmonic by harmonic:
+at terminal 1 harmonic by harmonic, the plate's side by impedance algebra (the
+drivetrain's rotation, which sticks and slips, is simulated: below):
 
     z_B = c_B + k_B / (i w),  z_n = c_n + k_n / (i w),  y = i w b + c_f2
     Z_f = z_n y / (z_n + y),  g = z_n / (z_n + y)           (nut in series with the rotation)
@@ -67,8 +68,8 @@ on the generator's noise-free record of A2 at 1 Hz (load cell 2 kHz, acceleromet
 5 kHz, a 68 us difference of group delay) b's optimum was -0.30 % with the channels
 taken as simultaneous, -0.11 % with ideal sensors, and -0.002 % with the delay sampled.
 
-The plate's mode and its chatter, and every simulation, leave the likelihood; what the
-data cannot pin (the bearing) stays with its prior. The residual F_k - F^_k(theta) is
+The plate's mode and its chatter leave the likelihood (only the drivetrain behind the
+plate is simulated, driven by the measured motion); what the data cannot pin (the bearing) stays with its prior. The residual F_k - F^_k(theta) is
 complex normal with
 
     V_k = (s2_F,k + |Y_k / g|^2 s2_A,k - 2 Re(Y_k c_k / g)) / P  +  tau^2 k^(-2 alpha)
