@@ -22,7 +22,8 @@ configuration (settings.json): its replicates are reused, so a run stopped by a
 session's end continues where it stopped.
     python studies/study_calibration.py --inspect K [--steps N]
 
-``--inspect K`` runs replicate K again with its fit kept (runs/study-calibration/K_<steps>)
+``--inspect K`` runs replicate K again (joint, or ``--single``) with its fit kept
+(runs/study-calibration/<joint|single>_seed<S>_K_<steps>)
 and prints the joint log posterior at the truth and at the posterior medians, and each
 parameter's truth beside its interval: a chain far below the truth's log posterior is
 in a wrong basin, one above it has a posterior that excludes the truth.
@@ -92,7 +93,9 @@ if __name__ == "__main__":
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)
     if args.inspect is not None:
-        got = inspect_replicate(cs, args.inspect, ROOT / "runs" / "study-calibration" / f"{args.inspect}_{cs.steps}")
+        kind = "single" if cs.single else "joint"
+        got = inspect_replicate(cs, args.inspect, ROOT / "runs" / "study-calibration"
+                                / f"{kind}_seed{cs.seed}_{args.inspect}_{cs.steps}")
         print(json.dumps(got, indent=1))
         sys.exit(0)
     res = run_with_bar(lambda progress: run_study_calibration(cs, args.out, args.replicates, processes=args.processes, progress=progress),

@@ -145,3 +145,13 @@ def test_inspecting_a_replicate_remakes_its_device(tmp_path):
     rep = study_replicate(cs, 1)
     assert by["b_A3"]["truth"] == rep["truth"]["b"]  # the same seed, the same device
     assert all(r["q3"] <= r["median"] <= r["q97"] for r in got["parameters"])
+
+
+def test_inspecting_a_single_record_replicate_uses_its_one_record(tmp_path):
+    cs = StudyCalibration(steps=30, draws=9, generator=GeneratorSettings(duration=3.0, ramp=1.0), likelihood=AR1,
+                          single=True)
+    got = inspect_replicate(cs, 2, tmp_path / "fit")
+    by = {r["parameter"]: r for r in got["parameters"]}
+    assert list(by) == [*NAMES, "sigma", "rho"]  # one record: its own b, noise and AR(1) coefficient
+    assert by["rho"]["truth"] is None and by["b"]["truth"] == replicate_device(cs, 2).truth["b"]
+    assert np.isfinite(got["log_posterior_truth"]) and np.isfinite(got["log_posterior_median"])

@@ -403,18 +403,24 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     at the posterior medians, and every sampled parameter's truth beside its median and
     94 % equal-tailed interval, under the likelihood the chain sampled (its reference
     point, where it takes one, read from the checkpoint). The same seed
-    gives the same device, records and start as :func:`study_replicate`."""
+    gives the same device, records and start as :func:`study_replicate`; a single-record
+    calibration (``cs.single``) is inspected under its one record's model."""
     from ..inference.checkpoint import stored_identity
     from ..inference.joint import JointModel
 
     _, truth, records, _, res, kept = _fit_replicate(cs, k, Path(out))
-    jm = JointModel(tuple(records), priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+    if cs.single:
+        jm = PosteriorModel(records[0], priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+        kept = {("b" if n == f"b_{cs.setting}" else n): x for n, x in kept.items()}
+        known = {n: truth[n] for n in jm.names if n in truth}  # drawn with the device, gain included
+    else:
+        jm = JointModel(tuple(records), priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+        known = {f"b_{cs.setting}": truth["b"], **{n: truth[n] for n in jm.shared},
+                 **{n: truth[n] for n in jm.names if n == "gain"}}  # drawn with the device
     reference = (stored_identity(Path(out) / "chain.h5") or {}).get("reference")
     if reference is not None:  # the likelihood the chain sampled, with its reference point
         jm = jm.with_reference(reference)
-    median = {n: float(np.median(x)) for n, x in kept.items()}
-    known = {f"b_{cs.setting}": truth["b"], **{n: truth[n] for n in jm.shared},
-             **{n: truth[n] for n in jm.names if n == "gain"}}  # drawn with the device
+    median = {n: float(np.median(kept[n])) for n in jm.names}
     # the likelihood's own parameters (rho or tau and alpha, the channels' delay) have
     # no true value: at the truth they sit at their posterior medians
     unknown = {n for n in jm.names if n not in known}
