@@ -69,8 +69,8 @@ on the generator's noise-free record of A2 at 1 Hz (load cell 2 kHz, acceleromet
 taken as simultaneous, -0.11 % with ideal sensors, and -0.002 % with the delay sampled.
 
 The plate's mode and its chatter leave the likelihood (only the drivetrain behind the
-plate is simulated, driven by the measured motion); what the data cannot pin (the bearing) stays with its prior. The residual F_k - F^_k(theta) is
-complex normal with
+plate is simulated, driven by the measured motion); what the data cannot pin (the
+bearing) stays with its prior. The residual F_k - F^_k(theta) is complex normal with
 
     V_k = (s2_F,k + |Y_k / g|^2 s2_A,k - 2 Re(Y_k c_k / g)) / P  +  tau^2 k^(-2 alpha)
 

@@ -351,12 +351,14 @@ def contraction_table(fits: list[RecordFit]) -> list[dict]:
     return rows
 
 
-def write_csv(path: Path, rows: list[dict]) -> None:
+def write_csv(path: Path, rows: list[dict], fields=None) -> None:
+    """``rows`` as CSV, floats to 6 significant digits; with no rows the header of
+    ``fields`` alone (an empty file where none are given)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as f:
-        if not rows:
+        if not rows and not fields:
             return
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else list(fields))
         w.writeheader()
         for row in rows:
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in row.items()})

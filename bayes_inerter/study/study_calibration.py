@@ -306,6 +306,7 @@ def coverage_so_far(results: list[dict]) -> list[dict]:
 #: listed by :func:`rank_correlations`: two such parameters' coverage counts are not
 #: independent tests.
 RANK_CORRELATION = 0.5
+_RANK_FIELDS = ("parameter", "with", "r", "replicates")
 
 
 def rank_correlations(results: list[dict], threshold: float = RANK_CORRELATION) -> list[dict]:
@@ -327,7 +328,7 @@ def rank_correlations(results: list[dict], threshold: float = RANK_CORRELATION) 
                 continue
             r = float(np.corrcoef(x, y)[0, 1])
             if abs(r) >= threshold:
-                rows.append({"parameter": a, "with": names[j], "r": round(r, 2), "replicates": len(ok)})
+                rows.append(dict(zip(_RANK_FIELDS, (a, names[j], round(r, 2), len(ok)))))
     return sorted(rows, key=lambda row: -abs(row["r"]))
 
 
@@ -340,11 +341,7 @@ def write_coverage_so_far(out) -> list[dict]:
     finished = finished_replicates(out)
     rows = coverage_so_far(finished)
     write_csv(Path(out) / "coverage_so_far.csv", rows)
-    pairs = rank_correlations(finished)
-    if pairs:
-        write_csv(Path(out) / "rank_correlations.csv", pairs)
-    else:  # the header alone: no pair reached the threshold
-        (Path(out) / "rank_correlations.csv").write_text("parameter,with,r,replicates\n")
+    write_csv(Path(out) / "rank_correlations.csv", rank_correlations(finished), fields=_RANK_FIELDS)
     return rows
 
 
