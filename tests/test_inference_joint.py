@@ -298,6 +298,22 @@ def test_the_motion_likelihoods_reference_is_each_records_part_of_the_joint_one(
 
 
 @pytest.mark.slow
+def test_the_joint_fit_takes_the_input_noises_draws_by_default_and_one_record_none():
+    """``LikelihoodSettings.input_noise`` None: each record of a joint fit takes the
+    joint default's draws, a record fitted alone none; a number given holds for both."""
+    from bayes_inerter.inference.likelihood import INPUT_NOISE_DRAWS
+
+    settings = GeneratorSettings(duration=5.5, ramp=0.5)
+    recs = [generate_record(paper_parameters(s), f, settings=settings, rng=seed, setting_name=s)
+            for s, f, seed in [("A0", 1.0, 5), ("A2", 1.5, 6)]]
+    jm = JointModel(tuple(recs))
+    assert jm.likelihood.input_noise is None
+    assert [p.likelihood.input_noise for p in jm.parts] == [INPUT_NOISE_DRAWS] * 2
+    assert PosteriorModel(recs[0]).likelihood.input_noise_draws(joint=False) == 0
+    fixed = JointModel(tuple(recs), likelihood=LikelihoodSettings(input_noise=3))
+    assert [p.likelihood.input_noise for p in fixed.parts] == [3, 3]
+
+
 def test_fit_joint_under_the_motion_likelihood_keeps_its_reference_and_continues(tmp_path):
     from bayes_inerter.inference.checkpoint import stored_identity
 

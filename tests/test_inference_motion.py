@@ -551,7 +551,20 @@ def test_input_noise_needs_whole_draws_and_the_reference():
         LikelihoodSettings(input_noise=2.5)
     with pytest.raises(ValueError, match="reference"):
         LikelihoodSettings(input_noise=4, normaliser="full", deviation_scale="parameters")
-    with pytest.raises(ValueError, match="reference"):  # the default draws need it too
-        LikelihoodSettings(normaliser="full", deviation_scale="parameters")
     assert LikelihoodSettings(input_noise=0, normaliser="full", deviation_scale="parameters").input_noise == 0
-    assert LikelihoodSettings().input_noise == INPUT_NOISE_DRAWS > 0
+
+
+def test_input_noise_default_is_the_joint_fits_draws_and_none_for_one_record():
+    from bayes_inerter.inference.likelihood import INPUT_NOISE_DRAWS, LikelihoodSettings
+
+    default = LikelihoodSettings()
+    assert default.input_noise is None
+    assert default.input_noise_draws(joint=True) == INPUT_NOISE_DRAWS > 0
+    assert default.input_noise_draws(joint=False) == 0
+    # a number given is taken in both
+    assert LikelihoodSettings(input_noise=5).input_noise_draws(joint=False) == 5
+    assert LikelihoodSettings(input_noise=0).input_noise_draws(joint=True) == 0
+    # without a reference point the default takes none, and asks for none
+    free = LikelihoodSettings(normaliser="full", deviation_scale="parameters")
+    assert free.input_noise_draws(joint=True) == 0
+    assert LikelihoodSettings(residual="harmonic").input_noise_draws(joint=True) == 0

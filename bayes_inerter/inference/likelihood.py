@@ -25,8 +25,9 @@ RESIDUALS = ("ar1", "iid", "harmonic", "motion")
 #: (``LikelihoodSettings.delay_sd``).
 DELAY_SD = 5e-4
 #: Draws of the measured motion's noise that the motion-in likelihood pushes through the
-#: model at its reference point by default (``LikelihoodSettings.input_noise``); the
-#: draws' seed is ``motion.INPUT_NOISE_SEED``.
+#: model at its reference point by default in a joint fit of several records
+#: (``LikelihoodSettings.input_noise`` None; a single record's default is none, see
+#: there); the draws' seed is ``motion.INPUT_NOISE_SEED``.
 INPUT_NOISE_DRAWS = 16
 #: Where the motion-in likelihood's marginalised deviations take the Coulomb forces that
 #: scale their prior sd (``LikelihoodSettings.deviation_scale``).
@@ -109,11 +110,15 @@ class LikelihoodSettings:
     input_noise : motion-in likelihood only: draws of the measured motion's noise pushed
         through the model at the reference point (``motion.input_noise_variance``); the
         predicted force's variance they show beyond the linear errors-in-variables term is
-        added to every V_k. Default :data:`INPUT_NOISE_DRAWS` (16); 0: none. The
-        drivetrain's simulation passes the motion's noise on nonlinearly (the rotation
-        sticks and slips), and on the model's own physics without it the joint
-        posterior was too narrow (docs/inference.md). Needs the reference point
-        (``normaliser`` or ``deviation_scale`` "reference").
+        added to every V_k; 0: none. Default None (**assumption**, chosen on design
+        seeds, docs/inference.md): :data:`INPUT_NOISE_DRAWS` (16) in a joint fit of
+        several records, none in a single record's fit
+        (:meth:`input_noise_draws`). The drivetrain's simulation passes the motion's
+        noise on nonlinearly (the rotation sticks and slips); on the model's own physics
+        the joint posterior was too narrow without the draws, and a single record's
+        posterior too wide with them (its sampled discrepancy already carries that
+        noise). Needs the reference point (``normaliser`` or ``deviation_scale``
+        "reference"); None takes none where there is no reference point.
     law_beyond_viscous : with ``law_orthogonal``, take the plate's viscous harmonics out
         as well as its Coulomb square wave (default True). False leaves the deviations
         free to carry a force in phase with the velocity, which a friction that falls
@@ -147,7 +152,7 @@ class LikelihoodSettings:
     delay_sd: float | None = None
     law_orthogonal: bool = True
     law_beyond_viscous: bool = True
-    input_noise: int = INPUT_NOISE_DRAWS
+    input_noise: int | None = None
     deviation_scale: str = "reference"
     reversal_scale: str = "total"
 
@@ -157,6 +162,15 @@ class LikelihoodSettings:
         if self.residual != "motion":
             return 0.0
         return DELAY_SD if self.delay_sd is None else float(self.delay_sd)
+
+    def input_noise_draws(self, joint: bool) -> int:
+        """The draws of the measured motion's noise a fit takes (``input_noise``; None: 16
+        in a ``joint`` fit of several records under the motion-in likelihood with a
+        reference point, else 0)."""
+        if self.input_noise is not None:
+            return self.input_noise
+        has_reference = "reference" in (self.normaliser, self.deviation_scale)
+        return INPUT_NOISE_DRAWS if joint and self.residual == "motion" and has_reference else 0
 
     @property
     def hyper_names(self) -> tuple[str, ...]:
@@ -176,8 +190,9 @@ class LikelihoodSettings:
             raise ValueError(f"pool must be a whole number >= 0, got {self.pool!r}")
         if not (isinstance(self.settle, int) and self.settle >= 0):
             raise ValueError(f"settle must be a whole number >= 0, got {self.settle!r}")
-        if not (isinstance(self.input_noise, int) and not isinstance(self.input_noise, bool) and self.input_noise >= 0):
-            raise ValueError(f"input_noise must be a whole number of draws >= 0, got {self.input_noise!r}")
+        if self.input_noise is not None and not (isinstance(self.input_noise, int)
+                                                 and not isinstance(self.input_noise, bool) and self.input_noise >= 0):
+            raise ValueError(f"input_noise must be a whole number of draws >= 0 (or None), got {self.input_noise!r}")
         if self.input_noise and "reference" not in (self.normaliser, self.deviation_scale):
             raise ValueError("input_noise needs the reference point: normaliser or deviation_scale 'reference' "
                              "(or input_noise=0)")

@@ -176,8 +176,9 @@ class PosteriorModel:
             if len(theta) != self.ndim:
                 raise ValueError(f"the reference has {len(theta)} parameters; the model samples {self.ndim}")
             h, x = self.hyper(theta), self.field_vector(theta)
-            if self.likelihood.input_noise and self.motion is not None:
-                extra = input_noise_variance(self.motion, x, h["gain"], h["delay"], draws=self.likelihood.input_noise)
+            draws = self.likelihood.input_noise_draws(joint=False)
+            if draws and self.motion is not None:
+                extra = input_noise_variance(self.motion, x, h["gain"], h["delay"], draws=draws)
                 self.motion = with_input_noise(self.motion, extra)
                 self.harmonic = self.motion.harmonic
             if self.likelihood.normaliser == "reference":
