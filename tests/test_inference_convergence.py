@@ -1,6 +1,7 @@
 """Tests of the convergence rule (bayes_inerter.inference.convergence)."""
 
 import numpy as np
+import pytest
 
 from bayes_inerter.inference.convergence import Convergence, check_chain, is_converged, transient
 
@@ -57,3 +58,36 @@ def test_a_falling_tau_counts_as_settled_but_a_growing_one_does_not():
     # R-hat and ESS still decide
     assert not is_converged(5000, np.array([91.7]), np.array([95.2]), rhat=np.array([1.06]),
                              ess=np.array([2000.0]), conv=conv)
+
+
+@pytest.mark.parametrize("steps", [7, 300, 1000])
+def test_integrated_time_is_emcees(steps):
+    """The batched estimate gives emcee's tau on AR(1) chains of several colours, and NaN
+    where a walker never moved, as emcee does."""
+    import emcee
+
+    from bayes_inerter.inference.convergence import integrated_time
+
+    rng = np.random.default_rng(steps)
+    noise = rng.standard_normal((steps, 8, 3))
+    chain = np.empty_like(noise)
+    rho = np.array([0.0, 0.7, 0.98])
+    chain[0] = noise[0]
+    for t in range(1, steps):
+        chain[t] = rho * chain[t - 1] + noise[t]
+    expected = emcee.autocorr.integrated_time(chain, tol=0)
+    np.testing.assert_allclose(integrated_time(chain), expected, rtol=1e-12)
+    assert integrated_time(chain)[2] > integrated_time(chain)[0]  # the slow AR(1) is slower
+    chain[:, 3, 1] = 0.5  # a walker that never moved in one parameter
+    with np.errstate(invalid="ignore", divide="ignore"):
+        stuck = emcee.autocorr.integrated_time(chain, tol=0)
+    got = integrated_time(chain)
+    assert np.isnan(got[1]) and np.isnan(stuck[1])
+    np.testing.assert_allclose(got[[0, 2]], stuck[[0, 2]], rtol=1e-12)
+
+
+def test_integrated_time_refuses_a_chain_without_walkers():
+    from bayes_inerter.inference.convergence import integrated_time
+
+    with pytest.raises(ValueError, match="steps, walkers, ndim"):
+        integrated_time(np.zeros((10, 3)))
