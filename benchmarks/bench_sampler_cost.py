@@ -10,7 +10,9 @@ phases from its own callbacks:
 - **sampling**: the remaining steps, wall time, and in it
   - the evaluations: every ``PosteriorModel.log_prob`` call, counted and timed in the run;
   - the adaptation: ``Adaptation.fit``, the fitted moves' refits;
-  - the rest: emcee, the moves' proposals, the checkpoint, the callbacks;
+  - the rest: emcee, the moves' proposals, the checkpoint, the callbacks and the
+    convergence checks, these also on their own line (``Monitor.check``: tau every 250
+    steps, and R-hat and ESS where tau says they could decide; the CSV's ``checks_s``);
 - **outputs**: the posterior draws and files after sampling (no figures).
 
 Then the same evaluations at the log-probability's own speed: every 50th point the
@@ -40,6 +42,7 @@ import numpy as np
 from _timing import record_row
 
 from bayes_inerter.inference import Adaptation, PosteriorModel, fit_record
+from bayes_inerter.inference.convergence import Monitor
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 
 TARGET_RATIO = 1.25
@@ -47,18 +50,20 @@ KEEP_EVERY = 50
 
 
 class _Clock:
-    """Wraps PosteriorModel.log_prob and Adaptation.fit for one run: counts and times them
-    while ``on`` is set, and keeps every KEEP_EVERY-th point evaluated."""
+    """Wraps PosteriorModel.log_prob, Adaptation.fit and Monitor.check for one run: counts
+    and times them while ``on`` is set, and keeps every KEEP_EVERY-th point evaluated."""
 
     def __init__(self):
         self.on = False
         self.calls = 0
         self.eval_s = 0.0
         self.adapt_s = 0.0
+        self.check_s = 0.0
         self.kept = []
         self.model = None
         self._log_prob = PosteriorModel.log_prob
         self._fit = Adaptation.fit
+        self._check = Monitor.check
 
     def __enter__(self):
         clock = self
@@ -82,13 +87,22 @@ class _Clock:
                 clock.adapt_s += time.perf_counter() - t0
             return got
 
+        def check(monitor, chain, log_prob_values):
+            t0 = time.perf_counter()
+            got = clock._check(monitor, chain, log_prob_values)
+            if clock.on:
+                clock.check_s += time.perf_counter() - t0
+            return got
+
         PosteriorModel.log_prob = log_prob
         Adaptation.fit = fit
+        Monitor.check = check
         return self
 
     def __exit__(self, *exc):
         PosteriorModel.log_prob = self._log_prob
         Adaptation.fit = self._fit
+        Monitor.check = self._check
 
 
 def _alone(model, thetas, passes: int = 5) -> float:
@@ -146,7 +160,8 @@ def main():
     print(f"  sampling          {sampling_s:8.1f} s  ({clock.calls} evaluations)")
     print(f"    evaluations     {clock.eval_s:8.1f} s  (in the run: {1e3 * clock.eval_s / clock.calls:.3f} ms each)")
     print(f"    adaptation      {clock.adapt_s:8.1f} s  ({clock.adapt_s / total:.1%} of the run)")
-    print(f"    the rest        {rest_s:8.1f} s  (emcee, moves, checkpoint, callbacks)")
+    print(f"    the rest        {rest_s:8.1f} s  (emcee, moves, checkpoint, callbacks, checks)")
+    print(f"      of which checks {clock.check_s:6.1f} s  ({clock.check_s / total:.1%} of the run)")
     print(f"  outputs           {outputs_s:8.1f} s")
     print(f"  alone: {1e3 * alone:.3f} ms per evaluation ({len(clock.kept)} of the run's points, median of 5 "
           f"passes); the evaluations at that speed {at_own_speed:.1f} s")
@@ -160,7 +175,7 @@ def main():
         "outputs_s": round(outputs_s, 2), "ms_per_eval_alone": round(1e3 * alone, 4),
         "ratio": round(ratio, 3), "ratio_in_run": round(sampling_s / clock.eval_s, 3),
         "start_share": round(start_s / total, 3), "met": ratio <= TARGET_RATIO,
-        "converged": bool(res.converged) if not args.steps else ""})
+        "converged": bool(res.converged) if not args.steps else "", "checks_s": round(clock.check_s, 2)})
     print(f"wrote a row to {path}")
 
 
