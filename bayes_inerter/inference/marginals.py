@@ -91,30 +91,42 @@ class NormalScores:
     def ndim(self) -> int:
         return self.x_knots.shape[1]
 
+    def _derived(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(slopes between the knots (knots - 1, ndim), the tails' slopes below and above
+        (ndim,) each): formed once, kept on the map."""
+        got = self.__dict__.get("_derived_arrays")
+        if got is None:
+            xk, zk = self.x_knots, self.z_knots
+            j = max(1, len(zk) // 10)
+            got = (np.diff(zk)[:, None] / np.diff(xk, axis=0),
+                   (zk[j] - zk[0]) / (xk[j] - xk[0]), (zk[-1] - zk[-1 - j]) / (xk[-1] - xk[-1 - j]))
+            object.__setattr__(self, "_derived_arrays", got)
+        return got
+
     def _tails(self) -> tuple[np.ndarray, np.ndarray]:
         """Slopes dz/dx of the straight continuations below and above the knots."""
-        xk, zk = self.x_knots, self.z_knots
-        j = max(1, len(zk) // 10)
-        return (zk[j] - zk[0]) / (xk[j] - xk[0]), (zk[-1] - zk[-1 - j]) / (xk[-1] - xk[-1 - j])
+        return self._derived()[1:]
 
     def forward(self, x) -> tuple[np.ndarray, np.ndarray]:
         """z = T(x) for the rows of ``x`` (n, ndim), and log prod_i T_i'(x_i) (n,)."""
         x = np.atleast_2d(np.asarray(x, dtype=float))
         xk, zk = self.x_knots, self.z_knots
-        lo, hi = self._tails()
-        z = np.empty_like(x)
-        log_jac = np.zeros(len(x))
-        for i in range(self.ndim):
-            slopes = np.diff(zk) / np.diff(xk[:, i])
-            j = np.clip(np.searchsorted(xk[:, i], x[:, i], side="right") - 1, 0, len(zk) - 2)
-            s = slopes[j]
-            zi = zk[j] + s * (x[:, i] - xk[j, i])
-            below, above = x[:, i] < xk[0, i], x[:, i] > xk[-1, i]
-            zi = np.where(below, zk[0] + lo[i] * (x[:, i] - xk[0, i]), zi)
-            zi = np.where(above, zk[-1] + hi[i] * (x[:, i] - xk[-1, i]), zi)
-            s = np.where(below, lo[i], np.where(above, hi[i], s))
-            z[:, i] = zi
-            log_jac += np.log(s)
+        slopes, lo, hi = self._derived()
+        n, d = x.shape
+        j = np.empty((n, d), dtype=np.intp)
+        for i in range(d):  # a knot's column at a time; the arithmetic below on all at once
+            j[:, i] = np.searchsorted(xk[:, i], x[:, i], side="right")
+        j = np.clip(j - 1, 0, len(zk) - 2)
+        cols = np.arange(d)
+        s = slopes[j, cols]
+        z = zk[j] + s * (x - xk[j, cols])
+        below, above = x < xk[0], x > xk[-1]
+        z = np.where(below, zk[0] + lo * (x - xk[0]), z)
+        z = np.where(above, zk[-1] + hi * (x - xk[-1]), z)
+        logs = np.log(np.where(below, lo, np.where(above, hi, s)))
+        log_jac = np.zeros(n)
+        for i in range(d):  # summed in the coordinates' order
+            log_jac += logs[:, i]
         return z, log_jac
 
     def inverse(self, z) -> np.ndarray:
