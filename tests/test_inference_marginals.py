@@ -121,3 +121,27 @@ def test_the_map_is_the_column_by_column_map_bit_for_bit():
         got, expected = scores.forward(x), _forward_column_by_column(scores, x)
         assert np.array_equal(got[0], expected[0], equal_nan=True)
         assert np.array_equal(got[1], expected[1], equal_nan=True)
+
+
+def test_the_inverse_is_np_interps_column_by_column_bit_for_bit():
+    """The inverse on all coordinates at once gives what ``np.interp`` a coordinate at a
+    time gives, between, on and beyond the knots, on the last knot and on NaN."""
+    rng = np.random.default_rng(4)
+    for trial in range(40):
+        d = int(rng.integers(1, 14))
+        draws = rng.standard_normal((int(rng.integers(40, 2000)), d)) * rng.gamma(1.0, 3.0, size=d)
+        scores = NormalScores.fit(draws, int(rng.integers(4, 220)))
+        xk, zk = scores.x_knots, scores.z_knots
+        z = rng.standard_normal((13, d)) * (0.5, 3.0)[trial % 2]
+        z[0] = zk[rng.integers(0, len(zk), d)]
+        z[1] = zk[-1]
+        z[2, 0] = np.nan
+        j0 = max(1, len(zk) // 10)
+        lo = (zk[j0] - zk[0]) / (xk[j0] - xk[0])
+        hi = (zk[-1] - zk[-1 - j0]) / (xk[-1] - xk[-1 - j0])
+        expected = np.empty_like(z)
+        for i in range(d):
+            xi = np.interp(z[:, i], zk, xk[:, i])
+            xi = np.where(z[:, i] < zk[0], xk[0, i] + (z[:, i] - zk[0]) / lo[i], xi)
+            expected[:, i] = np.where(z[:, i] > zk[-1], xk[-1, i] + (z[:, i] - zk[-1]) / hi[i], xi)
+        assert np.array_equal(scores.inverse(z), expected, equal_nan=True)
