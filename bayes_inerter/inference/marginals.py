@@ -31,6 +31,7 @@ many proposals).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.special import ndtri
@@ -91,27 +92,20 @@ class NormalScores:
     def ndim(self) -> int:
         return self.x_knots.shape[1]
 
+    @cached_property
     def _derived(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(slopes between the knots (knots - 1, ndim), the tails' slopes below and above
-        (ndim,) each): formed once, kept on the map."""
-        got = self.__dict__.get("_derived_arrays")
-        if got is None:
-            xk, zk = self.x_knots, self.z_knots
-            j = max(1, len(zk) // 10)
-            got = (np.diff(zk)[:, None] / np.diff(xk, axis=0),
-                   (zk[j] - zk[0]) / (xk[j] - xk[0]), (zk[-1] - zk[-1 - j]) / (xk[-1] - xk[-1 - j]))
-            object.__setattr__(self, "_derived_arrays", got)
-        return got
-
-    def _tails(self) -> tuple[np.ndarray, np.ndarray]:
-        """Slopes dz/dx of the straight continuations below and above the knots."""
-        return self._derived()[1:]
+        """(slopes between the knots (knots - 1, ndim), the slopes dz/dx of the straight
+        continuations below and above the knots (ndim,) each): formed once, kept."""
+        xk, zk = self.x_knots, self.z_knots
+        j = max(1, len(zk) // 10)
+        return (np.diff(zk)[:, None] / np.diff(xk, axis=0),
+                (zk[j] - zk[0]) / (xk[j] - xk[0]), (zk[-1] - zk[-1 - j]) / (xk[-1] - xk[-1 - j]))
 
     def forward(self, x) -> tuple[np.ndarray, np.ndarray]:
         """z = T(x) for the rows of ``x`` (n, ndim), and log prod_i T_i'(x_i) (n,)."""
         x = np.atleast_2d(np.asarray(x, dtype=float))
         xk, zk = self.x_knots, self.z_knots
-        slopes, lo, hi = self._derived()
+        slopes, lo, hi = self._derived
         n, d = x.shape
         j = np.empty((n, d), dtype=np.intp)
         for i in range(d):  # a knot's column at a time; the arithmetic below on all at once
@@ -134,7 +128,7 @@ class NormalScores:
         the arithmetic of ``np.interp`` between the knots (the same digits)."""
         z = np.atleast_2d(np.asarray(z, dtype=float))
         xk, zk = self.x_knots, self.z_knots
-        _, lo, hi = self._derived()
+        _, lo, hi = self._derived
         last = len(zk) - 1
         j = np.clip(np.searchsorted(zk, z, side="right") - 1, 0, last - 1)
         cols = np.arange(z.shape[1])
