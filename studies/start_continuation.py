@@ -87,9 +87,8 @@ def main(argv=None) -> int:
                 key = (which, label, str(float(freq)), str(seed), variant)
                 if key in done:
                     continue
-                optimize.TAU_CONTINUATION = factors
                 t0 = time.perf_counter()
-                theta, lp = optimize.find_start(model, np.random.default_rng(seed))
+                theta, lp = optimize.find_start(model, np.random.default_rng(seed), continuation=factors)
                 values = dict(zip(model.names, model.to_values(theta)))
                 append_row(args.out, {"set": which, "record": label, "freq_hz": float(freq), "seed": seed,
                                       "variant": variant, "log_post": round(float(lp), 2),

@@ -266,7 +266,7 @@ def test_tau_continuation_needs_a_tau_and_factors():
 
 
 @pytest.mark.slow  # a 10 s generated record and two full start searches
-def test_the_tau_continuation_rescues_a_noise_free_start_in_another_basin(monkeypatch):
+def test_the_tau_continuation_rescues_a_noise_free_start_in_another_basin():
     """On the generator's noise-free A3 record at 0.5 Hz the start search without the
     continuation ends with the gain 1.5 % low and b 1.5 % low, hundreds of nats below
     the continued start, which puts b within 0.1 %."""
@@ -279,9 +279,7 @@ def test_the_tau_continuation_rescues_a_noise_free_start_in_another_basin(monkey
     rec = generate_record(p, 0.5, settings=GeneratorSettings(force_noise=0.0, accel_noise=0.0, disp_noise=0.0),
                           setting_name="A3")
     model = PosteriorModel(rec)
-    monkeypatch.setattr(optimize, "TAU_CONTINUATION", ())
-    theta_plain, lp_plain = optimize.find_start(model, np.random.default_rng(0))
-    monkeypatch.setattr(optimize, "TAU_CONTINUATION", (1000.0, 100.0, 10.0))
-    theta, lp = optimize.find_start(model, np.random.default_rng(0))
+    theta_plain, lp_plain = optimize.find_start(model, np.random.default_rng(0), continuation=())
+    theta, lp = optimize.find_start(model, np.random.default_rng(0), continuation=(1000.0, 100.0, 10.0))
     assert lp > lp_plain + 100.0
     assert abs(model.parameters(theta).b / p.b - 1.0) < 1e-3 < abs(model.parameters(theta_plain).b / p.b - 1.0)

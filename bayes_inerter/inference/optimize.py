@@ -254,7 +254,7 @@ def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
 
 
 def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_POPSIZE, maxiter=None,
-               objectives=None, many=None):
+               objectives=None, many=None, continuation=None):
     """Return (theta, log posterior) of a quick optimum (see module docstring).
 
     ``objectives``: names of :data:`OBJECTIVES` evolved in stage 1, each in turn with the
@@ -262,7 +262,9 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     evolution (None: :data:`DE_MAXITER` as it is when called). ``many``: optional
     callable(name, list of physical parameter vectors) giving the objective ``name`` at
     each (for example on a process pool): differential evolution then evaluates each
-    generation through it. The result does not depend on it.
+    generation through it. The result does not depend on it. ``continuation``: the
+    factors of :func:`tau_continued` (None: :data:`TAU_CONTINUATION` as it is when
+    called; (): none).
     """
     maxiter = DE_MAXITER if maxiter is None else maxiter
     objectives = default_objectives(model) if objectives is None else tuple(objectives)
@@ -279,7 +281,7 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
         theta, lp = local_optimum(model, _with_noise_estimate(model, _initial_point(model)), restarts=NM_RESTARTS)
         if lp > best[1]:
             best = (theta, lp)
-    continued = tau_continued(model, best[0])
+    continued = tau_continued(model, best[0], continuation)
     if continued is not None and continued[1] > best[1]:
         best = continued
     for theta, lp in mirrored_modes(model, best[0], best[1], nats=math.inf):
