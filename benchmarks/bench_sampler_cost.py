@@ -80,24 +80,23 @@ class _Clock:
             clock.calls += 1
             return got
 
-        def fit(adaptation, chain, log_prob_values):
-            t0 = time.perf_counter()
-            got = clock._fit(adaptation, chain, log_prob_values)
-            if clock.on:
-                clock.adapt_s += time.perf_counter() - t0
-            return got
-
-        def check(monitor, chain, log_prob_values):
-            t0 = time.perf_counter()
-            got = clock._check(monitor, chain, log_prob_values)
-            if clock.on:
-                clock.check_s += time.perf_counter() - t0
-            return got
-
         PosteriorModel.log_prob = log_prob
-        Adaptation.fit = fit
-        Monitor.check = check
+        Adaptation.fit = self._timed(self._fit, "adapt_s")
+        Monitor.check = self._timed(self._check, "check_s")
         return self
+
+    def _timed(self, method, seconds: str):
+        """``method`` wrapped to add its seconds to the attribute ``seconds`` while ``on``."""
+        clock = self
+
+        def timed(obj, *args):
+            t0 = time.perf_counter()
+            got = method(obj, *args)
+            if clock.on:
+                setattr(clock, seconds, getattr(clock, seconds) + time.perf_counter() - t0)
+            return got
+
+        return timed
 
     def __exit__(self, *exc):
         PosteriorModel.log_prob = self._log_prob
