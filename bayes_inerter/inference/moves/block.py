@@ -50,21 +50,7 @@ class BlockMove(MHMove):
         np.linalg.cholesky(cov)  # LinAlgError if not positive definite
         self.precision = np.linalg.inv(cov)
         self.scale, self.wide, self.wide_scale = float(scale), float(wide), float(wide_scale)
-        self._blocks = {}  # a block's coordinates -> its rest, conditional covariance, cross precision, factor
         super().__init__(self._propose)
-
-    def _conditional(self, block: np.ndarray):
-        """The block's rest, conditional covariance, precision against the rest, and the
-        covariance's Cholesky factor times ``scale``: each block's are formed once (12
-        coordinates in blocks of 1 to 3 make 298 blocks), and are the same arrays each time."""
-        key = block.tobytes()
-        got = self._blocks.get(key)
-        if got is None:
-            rest = np.setdiff1d(np.arange(len(self.mean)), block)
-            cov_b = np.linalg.inv(self.precision[np.ix_(block, block)])
-            got = (rest, cov_b, self.precision[np.ix_(block, rest)], np.linalg.cholesky(cov_b) * self.scale)
-            self._blocks[key] = got
-        return got
 
     @classmethod
     def fit(cls, draws, *, knots: int | None = None, scores: NormalScores | None = None,
@@ -85,11 +71,11 @@ class BlockMove(MHMove):
         except (ValueError, np.linalg.LinAlgError):
             return None
 
-    def _log_q(self, w) -> np.ndarray:
+    def _log_q(self, w, m) -> np.ndarray:
         """Log density of the block's proposal (the defensive pair of normals, up to a
-        constant) at the rows of ``w`` (n, m), whitened by its conditional law."""
+        constant) at the rows of ``w`` (n, k), whitened by its conditional law and zero
+        beyond each row's block size ``m`` (n,)."""
         r2 = np.sum(w ** 2, axis=1)
-        m = w.shape[1]
         narrow = -0.5 * r2
         if self.wide == 0.0:
             return narrow
@@ -97,24 +83,39 @@ class BlockMove(MHMove):
         return np.logaddexp(np.log1p(-self.wide) + narrow, np.log(self.wide) + wide)
 
     def _propose(self, coords, random):
+        """Every walker's proposal at once. A walker's block is the first of its sizes'
+        coordinates in a random order; blocks are padded to the largest size with
+        coordinates that the conditional law leaves where they are (unit precision, no
+        coupling), so one batched inverse and Cholesky factor serve all walkers."""
         x = np.array(coords, dtype=float)
         n, d = x.shape
         z, jac_old = self.scores.forward(x)
-        znew = z.copy()
-        moved = np.zeros((n, d), dtype=bool)
-        log_q = np.zeros(n)  # log q(old block) - log q(new block), in whitened block coordinates
+        k = max(self.sizes)
         sizes = np.asarray(self.sizes)[random.randint(len(self.sizes), size=n)]
-        for i in range(n):
-            block = np.sort(random.choice(d, size=sizes[i], replace=False))
-            # the block's conditional normal given the rest, from the precision matrix
-            rest, cov_b, cross, chol = self._conditional(block)
-            mean_b = self.mean[block] - cov_b @ (cross @ (z[i, rest] - self.mean[rest]))
-            width = self.wide_scale if random.rand() < self.wide else 1.0
-            w_new = width * random.randn(len(block))
-            znew[i, block] = mean_b + chol @ w_new
-            w_old = np.linalg.solve(chol, z[i, block] - mean_b)
-            log_q[i] = self._log_q(w_old[None])[0] - self._log_q(w_new[None])[0]
-            moved[i, block] = True
+        order = np.argsort(random.rand(n, d), axis=1)[:, :k]
+        active = np.arange(k) < sizes[:, None]  # (n, k): the slots that are the block
+        idx = np.where(active, order, 0)
+        both = active[:, :, None] & active[:, None, :]
+        # the block's precision, the padding's the identity: its conditional covariance
+        # and factor come out block-diagonal, the padding's part the identity
+        prec_b = np.where(both, self.precision[idx[:, :, None], idx[:, None, :]], np.eye(k))
+        cov_b = np.linalg.inv(prec_b)
+        chol = np.linalg.cholesky(cov_b) * self.scale
+        # the block's conditional mean given the rest: z_B - cov_B (precision (z - mean))_B
+        rows = np.arange(n)[:, None]
+        grad = np.where(active, ((z - self.mean) @ self.precision)[rows, idx], 0.0)
+        z_b = z[rows, idx]
+        mean_b = z_b - np.einsum("nij,nj->ni", cov_b, grad)
+        width = np.where(random.rand(n) < self.wide, self.wide_scale, 1.0)
+        w_new = np.where(active, width[:, None] * random.randn(n, k), 0.0)
+        new_b = mean_b + np.einsum("nij,nj->ni", chol, w_new)
+        w_old = np.linalg.solve(chol, (z_b - mean_b)[:, :, None])[:, :, 0]
+        log_q = self._log_q(w_old, sizes) - self._log_q(w_new, sizes)
+        i, j = np.nonzero(active)
+        znew = z.copy()
+        znew[i, idx[i, j]] = new_b[i, j]
+        moved = np.zeros((n, d), dtype=bool)
+        moved[i, idx[i, j]] = True
         q = np.where(moved, self.scores.inverse(znew), x)  # the rest kept exactly
         _, jac_new = self.scores.forward(q)  # the rest's slopes are the same in both
         return q, log_q + jac_old - jac_new
