@@ -6,20 +6,21 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bayes_inerter.inference.harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
+from bayes_inerter.inference.harmonic import (harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer,
+                                             whole_sample_periods)
 from bayes_inerter.network.compile import chain_state_space
 from bayes_inerter.records.record import Record
 
 FS, FREQ = 1000.0, 1.0
 
 
-def _periodic_record(amps_a, amps_f, *, noise_a=0.0, noise_f=0.0, seconds=10.0, ramp=2.0, seed=0):
+def _periodic_record(amps_a, amps_f, *, noise_a=0.0, noise_f=0.0, seconds=10.0, ramp=2.0, seed=0, freq=FREQ):
     """A record whose channels are sums of the drive's harmonics (complex amplitudes
     X_k: x = Re sum X_k exp(i k w t)) with a ramp-in and white noise."""
     rng = np.random.default_rng(seed)
     t = np.arange(int(seconds * FS) + 1) / FS
     env = np.clip(t / ramp, 0, 1)
-    w = 2 * math.pi * FREQ
+    w = 2 * math.pi * freq
 
     def signal(amps):
         return env * sum(np.real(a * np.exp(1j * (k + 1) * w * t)) for k, a in enumerate(amps))
@@ -27,7 +28,7 @@ def _periodic_record(amps_a, amps_f, *, noise_a=0.0, noise_f=0.0, seconds=10.0, 
     accel = signal(amps_a) + noise_a * rng.standard_normal(len(t))
     force = signal(amps_f) + noise_f * rng.standard_normal(len(t))
     disp = -signal(amps_a[:1]) / w**2
-    return Record(t, force, accel, disp=disp, metadata={"drive_frequency_hz": FREQ})
+    return Record(t, force, accel, disp=disp, metadata={"drive_frequency_hz": freq})
 
 
 def test_amplitudes_of_a_periodic_record_are_recovered():
@@ -39,6 +40,35 @@ def test_amplitudes_of_a_periodic_record_are_recovered():
     np.testing.assert_allclose(data.accel[:5], amps_a, atol=1e-9)
     np.testing.assert_allclose(data.force[:5], amps_f, atol=1e-6)
     assert np.all(data.var_accel < 1e-18)
+
+
+def test_whole_sample_periods_are_the_fewest_periods_of_whole_samples():
+    assert whole_sample_periods(1000.0, 1.0) == 1
+    assert whole_sample_periods(1000.0, 1.5) == 3  # 666.67 samples a period, 2,000 in three
+    assert whole_sample_periods(1024.0, 1.5) == 3
+    assert whole_sample_periods(1000.0, 0.7) == 7
+    assert whole_sample_periods(1000.0, 0.7, max_periods=6) is None
+    assert whole_sample_periods(1000.0, math.pi) is None
+
+
+def test_means_over_a_whole_sample_span_do_not_leak_what_lies_above_the_basis():
+    """At 1.5 Hz and 1 kHz a period is 666.67 samples. Harmonics far above the cut-off's
+    basis (a square wave's, up to 300 Hz) leak into a period's window that is not a whole
+    period; over three periods, 2,000 samples, they are the span's DFT bins and do not."""
+    freq = 1.5
+    amps_a = [0.4 - 0.1j] + [0.0] * 199
+    for k in range(1, 200, 2):  # odd harmonics 1/k, to 300 Hz
+        amps_a[k - 1] += 0.05 / k
+    rec = _periodic_record(amps_a, [1500.0], freq=freq)
+    data = harmonic_data(rec, freq, cutoff=30.0)
+    first, n, m = data.span
+    assert n == 2000 * m // 3 and m % 3 == 0 and m == data.periods
+    np.testing.assert_allclose(data.accel, amps_a[:20], atol=1e-12)
+    # the same harmonics from each period's own window, averaged: the leak the span removes
+    per_period = data.amplitudes(rec.accel).mean(axis=0)
+    assert np.max(np.abs(per_period - amps_a[:20])) > 1e-5
+    # a record whose periods are whole numbers of samples keeps its periods' means
+    assert harmonic_data(_periodic_record(amps_a[:30], [1500.0]), FREQ, cutoff=30.0).span is None
 
 
 def test_period_scatter_measures_white_noise():
