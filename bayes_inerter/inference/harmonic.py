@@ -183,25 +183,32 @@ def harmonic_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, 
     omega = w * np.arange(1, K + 1)
     rotation = np.exp(-1j * np.outer(record.time[index[:, 0]], omega))
     data = HarmonicData(index, projector, rotation, omega, np.zeros(K, complex), np.zeros(K, complex),
-                        np.zeros(K), np.zeros(K), np.zeros(K, complex))
+                        np.zeros(K), np.zeros(K), np.zeros(K, complex),
+                        _whole_sample_span(first[0], count, fs, freq, len(record.time)))
     A = data.amplitudes(record.accel)
     F = data.amplitudes(record.force)
     dA, dF = A - A.mean(axis=0), F - F.mean(axis=0)
     dof = count - 1
+    whole = data.span is None  # each period's window is whole: its means are the span's
+    return dataclasses.replace(data, accel=A.mean(axis=0) if whole else data.mean_amplitudes(record.accel),
+                               force=F.mean(axis=0) if whole else data.mean_amplitudes(record.force),
+                               var_accel=_pooled((np.abs(dA) ** 2).sum(axis=0) / dof, pool),
+                               var_force=_pooled((np.abs(dF) ** 2).sum(axis=0) / dof, pool),
+                               cov=_pooled((dA * np.conj(dF)).sum(axis=0) / dof, pool))
+
+
+def _whole_sample_span(first: int, count: int, fs: float, freq: float, length: int) -> tuple | None:
+    """(first sample, samples, periods) of the longest span of whole periods from sample
+    ``first`` that is a whole number of samples and ends inside the record's ``length``
+    samples (:data:`HarmonicData.span`); None where each period is already a whole number
+    of samples, or no span of at most :data:`MAX_SPAN_PERIODS` periods fits."""
     q = whole_sample_periods(fs, freq, MAX_SPAN_PERIODS)  # read at each call: 1 restores the periods' means
-    span = None
-    if q is not None and 1 < q <= count:  # q == 1: each period's window is already whole
-        m = (count // q) * q
-        while m > 0 and first[0] + round(m * fs / freq) > len(record.time):
-            m -= q
-        if m > 0:
-            span = (int(first[0]), int(round(m * fs / freq)), m)
-            data = dataclasses.replace(data, span=span)
-    return HarmonicData(index, projector, rotation, omega, data.mean_amplitudes(record.accel),
-                        data.mean_amplitudes(record.force),
-                        _pooled((np.abs(dA) ** 2).sum(axis=0) / dof, pool),
-                        _pooled((np.abs(dF) ** 2).sum(axis=0) / dof, pool),
-                        _pooled((dA * np.conj(dF)).sum(axis=0) / dof, pool), span)
+    if q is None or q == 1:
+        return None
+    m = (count // q) * q
+    while m > 0 and first + round(m * fs / freq) > length:
+        m -= q
+    return (int(first), int(round(m * fs / freq)), m) if m > 0 else None
 
 
 def at_times(X: np.ndarray, omega: np.ndarray, t: np.ndarray) -> np.ndarray:
