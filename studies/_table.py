@@ -58,6 +58,22 @@ def grid_case(k: int) -> tuple[str, float]:
     return names[k % len(names)], FREQUENCIES[(k + k // len(names)) % len(FREQUENCIES)]
 
 
+def sbc_design_records(seed: int, replicates):
+    """(replicate k, its frequency, its one record, b's truth) for each k of
+    ``replicates``: the single-record calibration's devices of design seed ``seed``
+    (``study_calibration.replicate_device``, the motion-in likelihood), replicate k at
+    ``FREQUENCIES[k % 3]`` as the calibration fits it. (Imported here: the other
+    scripts that share this module need not load the study, about 0.5 s.)"""
+    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.study.study_calibration import StudyCalibration, replicate_device
+
+    cs = StudyCalibration(seed=seed, single=True, frequencies=FREQUENCIES, steps=None,
+                          likelihood=LikelihoodSettings(residual="motion"))
+    for k in replicates:
+        dev = replicate_device(cs, k)
+        yield k, cs.frequencies[k % len(cs.frequencies)], dev.records[0], dev.truth["b"]
+
+
 def git_commit(folder) -> str:
     """The short commit of the checkout ``folder`` lies in ("" outside a clone): read
     once when a run starts, as HEAD may move while it runs."""

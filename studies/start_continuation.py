@@ -31,14 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import append_row, grid_case, read_rows
+from _table import append_row, grid_case, read_rows, sbc_design_records
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
 from bayes_inerter.inference import optimize
-from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.paper_like import paper_like_record
-from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
+from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The paper-like design records: (setting, frequency in Hz, laboratory).
@@ -52,12 +51,8 @@ FIELDS = ("set", "record", "freq_hz", "seed", "variant", "log_post", "b_error_pc
 def records(which: str, args):
     """(record label, frequency, seed, model, true b) of each record of the set ``which``."""
     if which == "sbc":
-        cs = StudyCalibration(seed=args.sbc_seed, single=True, frequencies=(0.5, 1.0, 1.5), steps=None,
-                              likelihood=LikelihoodSettings(residual="motion"))
-        for k in range(args.sbc_replicates):
-            dev = replicate_device(cs, k)
-            yield str(k), cs.frequencies[k % 3], args.sbc_seed, PosteriorModel(dev.records[0], priors=STUDY_SBC_PRIORS), \
-                dev.truth["b"]
+        for k, freq, record, b_true in sbc_design_records(args.sbc_seed, range(args.sbc_replicates)):
+            yield str(k), freq, args.sbc_seed, PosteriorModel(record, priors=STUDY_SBC_PRIORS), b_true
     elif which == "paper-like":
         for setting, freq, lab in PAPER_LIKE:
             yield setting, freq, lab, PosteriorModel(paper_like_record(setting, freq, seed=lab)), \

@@ -35,13 +35,12 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import append_row, read_rows
+from _table import append_row, read_rows, sbc_design_records
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel, harmonic, optimize
-from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.paper_like import paper_like_record
-from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
+from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS
 
 ROOT = Path(__file__).resolve().parents[1]
 SETTINGS = ("A0", "A1", "A2", "A3", "A4", "A5", "A6", "B1", "B2")
@@ -53,12 +52,8 @@ FIELDS = ("set", "record", "seed", "variant", "log_post", "b_error_pct", "b_sd_l
 def records(which: str, args):
     """(record label, seed, a function making the model, true b) of each record of ``which``."""
     if which == "sbc":
-        cs = StudyCalibration(seed=args.sbc_seed, single=True, frequencies=(0.5, 1.0, FREQ), steps=None,
-                              likelihood=LikelihoodSettings(residual="motion"))
-        for k in range(2, args.sbc_replicates, 3):  # replicate k's record is at frequencies[k % 3]
-            dev = replicate_device(cs, k)
-            yield str(k), args.sbc_seed, (lambda r=dev.records[0]: PosteriorModel(r, priors=STUDY_SBC_PRIORS)), \
-                dev.truth["b"]
+        for k, _, record, b_true in sbc_design_records(args.sbc_seed, range(2, args.sbc_replicates, 3)):  # at 1.5 Hz
+            yield str(k), args.sbc_seed, (lambda r=record: PosteriorModel(r, priors=STUDY_SBC_PRIORS)), b_true
     elif which == "paper-like":
         for setting in SETTINGS:
             rec = paper_like_record(setting, FREQ, seed=args.lab)
