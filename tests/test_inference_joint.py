@@ -298,9 +298,9 @@ def test_the_motion_likelihoods_reference_is_each_records_part_of_the_joint_one(
 
 
 @pytest.mark.slow
-def test_the_joint_fit_takes_the_input_noises_draws_by_default_and_one_record_none():
+def test_the_joint_fit_takes_the_input_noises_draws_by_default():
     """``LikelihoodSettings.input_noise`` None: each record of a joint fit takes the
-    joint default's draws, a record fitted alone none; a number given holds for both."""
+    default's draws, as a record fitted alone does; a number given holds for both."""
     from bayes_inerter.inference.likelihood import INPUT_NOISE_DRAWS
 
     settings = GeneratorSettings(duration=5.5, ramp=0.5)
@@ -309,7 +309,7 @@ def test_the_joint_fit_takes_the_input_noises_draws_by_default_and_one_record_no
     jm = JointModel(tuple(recs))
     assert jm.likelihood.input_noise is None
     assert [p.likelihood.input_noise for p in jm.parts] == [INPUT_NOISE_DRAWS] * 2
-    assert PosteriorModel(recs[0]).likelihood.input_noise_draws(joint=False) == 0
+    assert PosteriorModel(recs[0]).likelihood.input_noise_draws() == INPUT_NOISE_DRAWS
     fixed = JointModel(tuple(recs), likelihood=LikelihoodSettings(input_noise=3))
     assert [p.likelihood.input_noise for p in fixed.parts] == [3, 3]
 

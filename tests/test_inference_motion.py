@@ -532,7 +532,7 @@ def test_the_motions_noise_through_a_sticking_rotation_is_counted_beyond_the_lin
     assert np.all(np.isfinite(sticking)) and np.all(sticking >= 0) and sticking.max() > linear.max()
     np.testing.assert_array_equal(sticking, input_noise_variance(data, x, draws=8))
 
-    pm = PosteriorModel(rec, likelihood=LikelihoodSettings(input_noise=8))
+    pm = PosteriorModel(rec, likelihood=LikelihoodSettings(input_noise=8, input_noise_form="variance"))
     plain = PosteriorModel(rec, likelihood=LikelihoodSettings(input_noise=0))
     theta = plain.to_theta(p, hyper={"tau": 1.0})
     with_noise, without = pm.with_reference(theta), plain.with_reference(theta)
@@ -554,17 +554,55 @@ def test_input_noise_needs_whole_draws_and_the_reference():
     assert LikelihoodSettings(input_noise=0, normaliser="full", deviation_scale="parameters").input_noise == 0
 
 
-def test_input_noise_default_is_the_joint_fits_draws_and_none_for_one_record():
+def test_input_noise_default_is_sixteen_draws_kept_as_shapes():
     from bayes_inerter.inference.likelihood import INPUT_NOISE_DRAWS, LikelihoodSettings
 
     default = LikelihoodSettings()
-    assert default.input_noise is None
-    assert default.input_noise_draws(joint=True) == INPUT_NOISE_DRAWS > 0
-    assert default.input_noise_draws(joint=False) == 0
-    # a number given is taken in both
-    assert LikelihoodSettings(input_noise=5).input_noise_draws(joint=False) == 5
-    assert LikelihoodSettings(input_noise=0).input_noise_draws(joint=True) == 0
+    assert default.input_noise is None and default.input_noise_form == "shapes"
+    assert default.input_noise_draws() == INPUT_NOISE_DRAWS > 0
+    # a number given is taken
+    assert LikelihoodSettings(input_noise=5).input_noise_draws() == 5
+    assert LikelihoodSettings(input_noise=0).input_noise_draws() == 0
+    with pytest.raises(ValueError, match="input_noise_form"):
+        LikelihoodSettings(input_noise_form="diagonal")
     # without a reference point the default takes none, and asks for none
     free = LikelihoodSettings(normaliser="full", deviation_scale="parameters")
-    assert free.input_noise_draws(joint=True) == 0
-    assert LikelihoodSettings(residual="harmonic").input_noise_draws(joint=True) == 0
+    assert free.input_noise_draws() == 0
+    assert LikelihoodSettings(residual="harmonic").input_noise_draws() == 0
+
+
+def test_the_motions_noise_kept_as_shapes_marginalises_its_draws_across_the_harmonics():
+    """``input_noise_shapes``: where nothing sticks there are none (the linear term holds
+    the noise: the draws' changes beyond it are zero to rounding); behind a sticking rotation each column is one draw's
+    change beyond the linear term over sqrt(draws), so the rows' sums of squares are the
+    draws' mean |d|^2, which ``input_noise_variance`` pools with the cross term. A
+    posterior model asked for shapes appends them to its deviations with a prior sd of
+    1 N, leaves each harmonic's variance as it was, and its log-likelihood changes."""
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.motion import input_noise_shapes, input_noise_variance
+
+    p = dataclasses.replace(paper_parameters("A3"), f1_0=100.0, f2_0=2000.0, c_n=2.0e5)
+    rec = generate_record(p, 0.5, settings=GeneratorSettings(accel_noise=0.05), rng=0, setting_name="A3")
+    data = motion_data(rec, 0.5, cutoff=30.0)
+    x = {n: getattr(p, n) for n in _rigid()}
+    K = data.harmonics
+    linear = np.abs(predicted_force(data, x)[1]) ** 2 * data.fine_var[:K]
+    assert input_noise_shapes(data, {**x, "f2_0": 0.0}, draws=4).shape == (2 * K, 0)
+    sliding = input_noise_variance(data, {**x, "f2_0": 0.0}, draws=4)
+    assert np.all(sliding <= 1e-9 * linear.max())
+    U = input_noise_shapes(data, x, draws=8)
+    np.testing.assert_array_equal(U, input_noise_shapes(data, x, draws=8))
+    power = (U[:K] ** 2 + U[K:] ** 2).sum(axis=1)  # mean |d_k|^2 over the draws
+    assert power.max() > linear.max()
+
+    shaped = PosteriorModel(rec, likelihood=LikelihoodSettings(input_noise=8))
+    plain = PosteriorModel(rec, likelihood=LikelihoodSettings(input_noise=0))
+    theta = plain.to_theta(p, hyper={"tau": 1.0})
+    a, b = shaped.with_reference(theta), plain.with_reference(theta)
+    assert a.motion.basis.shape[1] == b.motion.basis.shape[1] + 8
+    np.testing.assert_array_equal(a.motion.basis[:, -8:], input_noise_shapes(b.motion, b.field_vector(theta), draws=8))
+    np.testing.assert_array_equal(a.motion.scale[-8:], np.tile([0.0, 0.0, 1.0], (8, 1)))
+    np.testing.assert_array_equal(a.reference_noise, b.reference_noise)
+    la, lb = a.motion_terms(theta)[0].sum(), b.motion_terms(theta)[0].sum()
+    assert np.isfinite(la) and np.isfinite(lb) and la != lb

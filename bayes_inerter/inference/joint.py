@@ -78,7 +78,7 @@ class JointModel:
         if not self.model.startswith("two-port"):
             raise ValueError(f"the joint model shares the two-port model's parameters; got model {self.model!r}")
         # each record's settings with the joint fit's draws of the input noise made explicit
-        part_likelihood = dataclasses.replace(self.likelihood, input_noise=self.likelihood.input_noise_draws(joint=True))
+        part_likelihood = dataclasses.replace(self.likelihood, input_noise=self.likelihood.input_noise_draws())
         parts = [PosteriorModel(rec, self.model, priors=self.priors, likelihood=part_likelihood)
                  for rec in self.records]
         self.parts = parts

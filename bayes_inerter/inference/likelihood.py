@@ -14,7 +14,7 @@ from ..records.conditioning import LOWPASS_HZ
 from ..records.sensitivity import SensorCalibration
 from ..simulate import SAMPLINGS
 
-__all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "DEVIATION_SCALES", "DELAY_SD", "INPUT_NOISE_DRAWS", "ar1_pointwise",
+__all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "DEVIATION_SCALES", "DELAY_SD", "INPUT_NOISE_DRAWS", "INPUT_NOISE_FORMS", "ar1_pointwise",
            "ar1_marginal"]
 
 #: The likelihoods: the time-domain residual as a stationary AR(1) process or white, and
@@ -25,9 +25,8 @@ RESIDUALS = ("ar1", "iid", "harmonic", "motion")
 #: (``LikelihoodSettings.delay_sd``).
 DELAY_SD = 5e-4
 #: Draws of the measured motion's noise that the motion-in likelihood pushes through the
-#: model at its reference point by default in a joint fit of several records
-#: (``LikelihoodSettings.input_noise`` None; a single record's default is none, see
-#: there); the draws' seed is ``motion.INPUT_NOISE_SEED``.
+#: model at its reference point by default (``LikelihoodSettings.input_noise`` None); the
+#: draws' seed is ``motion.INPUT_NOISE_SEED``.
 INPUT_NOISE_DRAWS = 16
 #: Where the motion-in likelihood's marginalised deviations take the Coulomb forces that
 #: scale their prior sd (``LikelihoodSettings.deviation_scale``).
@@ -38,6 +37,10 @@ DEVIATION_SCALES = ("parameters", "reference")
 REVERSAL_SCALES = ("plate", "total")
 #: The motion-in likelihood's normalisers (``LikelihoodSettings.normaliser``).
 NORMALISERS = ("reference", "full")
+
+#: The forms of the drivetrain's input noise in the motion-in likelihood
+#: (``LikelihoodSettings.input_noise_form``).
+INPUT_NOISE_FORMS = ("variance", "shapes")
 
 
 @dataclass(frozen=True)
@@ -108,17 +111,23 @@ class LikelihoodSettings:
         in, the deviations and the friction's parameters explain the same force, and on
         the model's own records the friction came out low and the viscous damping high.
     input_noise : motion-in likelihood only: draws of the measured motion's noise pushed
-        through the model at the reference point (``motion.input_noise_variance``); the
-        predicted force's variance they show beyond the linear errors-in-variables term is
-        added to every V_k; 0: none. Default None (**assumption**, chosen on design
-        seeds, docs/inference.md): :data:`INPUT_NOISE_DRAWS` (16) in a joint fit of
-        several records, none in a single record's fit
-        (:meth:`input_noise_draws`). The drivetrain's simulation passes the motion's
-        noise on nonlinearly (the rotation sticks and slips); on the model's own physics
-        the joint posterior was too narrow without the draws, and a single record's
-        posterior too wide with them (its sampled discrepancy already carries that
-        noise). Needs the reference point (``normaliser`` or ``deviation_scale``
-        "reference"); None takes none where there is no reference point.
+        through the model at the reference point (``input_noise_form`` says how they
+        enter); 0: none. Default None (**assumption**, chosen on design seeds,
+        docs/inference.md): :data:`INPUT_NOISE_DRAWS` (16) wherever there is a reference
+        point (:meth:`input_noise_draws`). The drivetrain's simulation passes the
+        motion's noise on nonlinearly (the rotation sticks and slips, a lightly damped
+        bearing rings): on records whose friction is large against the inertia the truth
+        sat tens to hundreds of nats below the optimum without the draws. Needs the
+        reference point (``normaliser`` or ``deviation_scale`` "reference"); None takes
+        none where there is no reference point.
+    input_noise_form : how the draws of ``input_noise`` enter. "shapes" (default,
+        **assumption**, chosen on design seeds, docs/inference.md): the draws themselves
+        among the marginalised deviations, so that their covariance across the
+        harmonics is kept (``motion.input_noise_shapes``): a rotation that slips a
+        little earlier or later moves every harmonic at once. "variance": their variance
+        beyond the linear term added to each V_k (``motion.input_noise_variance``), the
+        earlier form, which overstated the noise at the low harmonics and understated
+        it where the drivetrain rings.
     law_beyond_viscous : with ``law_orthogonal``, take the plate's viscous harmonics out
         as well as its Coulomb square wave (default True). False leaves the deviations
         free to carry a force in phase with the velocity, which a friction that falls
@@ -153,6 +162,7 @@ class LikelihoodSettings:
     law_orthogonal: bool = True
     law_beyond_viscous: bool = True
     input_noise: int | None = None
+    input_noise_form: str = "shapes"
     deviation_scale: str = "reference"
     reversal_scale: str = "total"
 
@@ -163,14 +173,13 @@ class LikelihoodSettings:
             return 0.0
         return DELAY_SD if self.delay_sd is None else float(self.delay_sd)
 
-    def input_noise_draws(self, joint: bool) -> int:
+    def input_noise_draws(self) -> int:
         """The draws of the measured motion's noise a fit takes (``input_noise``; None: 16
-        in a ``joint`` fit of several records under the motion-in likelihood with a
-        reference point, else 0)."""
+        under the motion-in likelihood with a reference point, else 0)."""
         if self.input_noise is not None:
             return self.input_noise
         has_reference = "reference" in (self.normaliser, self.deviation_scale)
-        return INPUT_NOISE_DRAWS if joint and self.residual == "motion" and has_reference else 0
+        return INPUT_NOISE_DRAWS if self.residual == "motion" and has_reference else 0
 
     @property
     def hyper_names(self) -> tuple[str, ...]:
@@ -196,6 +205,9 @@ class LikelihoodSettings:
         if self.input_noise and "reference" not in (self.normaliser, self.deviation_scale):
             raise ValueError("input_noise needs the reference point: normaliser or deviation_scale 'reference' "
                              "(or input_noise=0)")
+        if self.input_noise_form not in INPUT_NOISE_FORMS:
+            raise ValueError(f"input_noise_form must be one of {', '.join(INPUT_NOISE_FORMS)}, "
+                             f"got {self.input_noise_form!r}")
         if self.normaliser not in NORMALISERS:
             raise ValueError(f"normaliser must be one of {', '.join(NORMALISERS)}, got {self.normaliser!r}")
         if self.deviation_scale not in DEVIATION_SCALES:

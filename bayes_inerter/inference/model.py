@@ -36,8 +36,8 @@ from ..simulate import Drive, SimulationError, check_record, contacts, run_exact
 from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
 from .harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
 from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise
-from .motion import (fundamental_misfit, input_noise_variance, motion_data, motion_loglik, motion_variance,
-                     with_input_noise)
+from .motion import (fundamental_misfit, input_noise_shapes, input_noise_variance, motion_data, motion_loglik,
+                     motion_variance, with_input_noise, with_input_shapes)
 from .parameters import FRICTION_PAIRS, ParameterMap
 from .priors import (DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, MOTION_DISCREPANCY_PRIORS, NOISE_PRIORS,
                      SPLIT_PRIORS, delay_prior, gain_prior)
@@ -176,8 +176,11 @@ class PosteriorModel:
             if len(theta) != self.ndim:
                 raise ValueError(f"the reference has {len(theta)} parameters; the model samples {self.ndim}")
             h, x = self.hyper(theta), self.field_vector(theta)
-            draws = self.likelihood.input_noise_draws(joint=False)
-            if draws and self.motion is not None:
+            draws = self.likelihood.input_noise_draws()
+            if draws and self.motion is not None and self.likelihood.input_noise_form == "shapes":
+                self.motion = with_input_shapes(self.motion,
+                                                input_noise_shapes(self.motion, x, h["gain"], h["delay"], draws=draws))
+            elif draws and self.motion is not None:
                 extra = input_noise_variance(self.motion, x, h["gain"], h["delay"], draws=draws)
                 self.motion = with_input_noise(self.motion, extra)
                 self.harmonic = self.motion.harmonic

@@ -123,7 +123,7 @@ from . import friction_law
 from .reversals import SD, deviations_mean, switched_sign, reversal_correction, reversal_windows, window_basis
 
 __all__ = ["MotionData", "motion_data", "predicted_force", "bearing_force", "motion_variance", "motion_loglik",
-           "input_noise_variance", "with_input_noise", "INPUT_NOISE_SEED",
+           "input_noise_variance", "input_noise_shapes", "with_input_noise", "with_input_shapes", "INPUT_NOISE_SEED",
            "fundamental_misfit", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
            "DRIVE_MAX_PERIODS", "ORDER", "FUNDAMENTAL_MAX"]
 
@@ -176,7 +176,7 @@ class MotionData:
     omega: np.ndarray  # (K,) rad/s
     drive: np.ndarray  # (DRIVE_GRID,) m/s: the plate's velocity over one period from t = 0
     basis: np.ndarray  # (2K, m): the marginalised deviations, the reversals' then the law's
-    scale: np.ndarray  # (m, 2): each deviation's prior sd is scale[j] . (f1_0, f2_0)
+    scale: np.ndarray  # (m, 3): each deviation's prior sd is scale[j] . (f1_0, f2_0, 1), N
     windows: tuple = ()  # the reversals' windows, shares of the period (``reversals.reversal_windows``)
     #: the plate motion's reconstruction: its harmonics (rad/s, the first K are ``omega``'s)
     #: and the variance of each one's period mean, (m/s^2)^2 (:func:`input_noise_variance`)
@@ -236,14 +236,14 @@ def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogo
     sign = (np.fft.rfft(switched) / SIGN_GRID * 2.0)[1: data.harmonics + 1]
     K = data.harmonics
     V = data.accel / (1j * data.omega)  # the plate's velocity at the harmonics
-    parts = [(window_basis(windows, K), (SD, SD if reversal_scale == "total" else 0.0))]
+    parts = [(window_basis(windows, K), (SD, SD if reversal_scale == "total" else 0.0, 0.0))]
     if law:
         U = friction_law.law_basis(v, switched, K)
         if law_orthogonal:
             U = friction_law.beyond(U, sign, V) if law_beyond_viscous else friction_law.beyond(U, sign)
-        parts.append((U, (friction_law.SD, friction_law.SD)))
+        parts.append((U, (friction_law.SD, friction_law.SD, 0.0)))
     basis = np.hstack([U for U, _ in parts])
-    scale = np.array([c for U, c in parts for _ in range(U.shape[1])], dtype=float).reshape(-1, 2)
+    scale = np.array([c for U, c in parts for _ in range(U.shape[1])], dtype=float).reshape(-1, 3)
     return MotionData(data, V, sign, data.omega, velocity(DRIVE_GRID),
                       basis, scale, windows, fine_omega, fine_var)
 
@@ -301,8 +301,8 @@ def _variance(Y, tau, alpha, var_force, var_accel, cov, periods):
 
 @njit(cache=True)
 def _deviation_sd(scale, x):
-    """Each marginalised deviation's prior sd, N: ``scale[j] . (f1_0, f2_0)``."""
-    return scale[:, 0] * x[7] + scale[:, 1] * x[9]
+    """Each marginalised deviation's prior sd, N: ``scale[j] . (f1_0, f2_0, 1)``."""
+    return scale[:, 0] * x[7] + scale[:, 1] * x[9] + scale[:, 2]
 
 
 @njit(cache=True)
@@ -513,10 +513,31 @@ def motion_variance(data: MotionData, p, tau: float, alpha: float, gain: float =
     return _variance(Y, float(tau), float(alpha), h.var_force, h.var_accel, h.cov, float(h.periods)), Y
 
 
+def _input_noise_draws(data: MotionData, x: np.ndarray, gain: float, delay: float, draws: int, seed: int):
+    """(d, Y e) of each of ``draws`` draws e of the measured motion's noise (see
+    :func:`input_noise_variance`): the predicted force's change beyond the linear term,
+    and the linear term, each (K,) complex."""
+    if data.fine_var is None:
+        raise ValueError("this motion data keeps no noise of its plate motion; make it again with motion_data")
+    F0, Y = predicted_force(data, x, gain, delay)
+    K = data.harmonics
+    n_fine = data.fine_omega.shape[0]
+    t = np.arange(DRIVE_GRID) / (DRIVE_GRID * data.omega[0] / (2.0 * math.pi))
+    rng = np.random.default_rng(seed)
+    for _ in range(draws):
+        e = np.sqrt(data.fine_var / 2.0) * (rng.standard_normal(n_fine) + 1j * rng.standard_normal(n_fine))
+        dv = e / (1j * data.fine_omega)  # the velocity's noise at each harmonic
+        moved = dataclasses.replace(data, velocity=data.velocity + dv[:K],
+                                    drive=data.drive + at_times(dv, data.fine_omega, t))
+        linear = Y * e[:K]
+        yield predicted_force(moved, x, gain, delay)[0] - F0 - linear, linear
+
+
 def input_noise_variance(data: MotionData, p, gain: float = 1.0, delay: float = 0.0, *, draws: int = 16,
                          seed: int = INPUT_NOISE_SEED) -> np.ndarray:
     """(K,) N^2: the predicted force's variance from the measured motion's noise beyond
-    the linear errors-in-variables term |Y_k|^2 s2_A,k / P (``LikelihoodSettings.input_noise``).
+    the linear errors-in-variables term |Y_k|^2 s2_A,k / P (``LikelihoodSettings.input_noise``
+    with ``input_noise_form="variance"``).
 
     The measured motion drives the model twice over: linearly through the plate's
     inertia, damping and bearing (the transfer Y_k while everything slides), and through
@@ -529,25 +550,29 @@ def input_noise_variance(data: MotionData, p, gain: float = 1.0, delay: float = 
     out, the result is max(0, mean(|d|^2 + 2 Re(conj(Y e) d))), averaged over the
     harmonics within two of each (``pool``'s default). The plate's sign wave is left as
     measured (its switch times' noise is the reversal windows' to carry)."""
-    if data.fine_var is None:
-        raise ValueError("this motion data keeps no noise of its plate motion; make it again with motion_data")
-    x = _vector(p)
-    F0, Y = predicted_force(data, x, gain, delay)
     K = data.harmonics
-    n_fine = data.fine_omega.shape[0]
-    t = np.arange(DRIVE_GRID) / (DRIVE_GRID * data.omega[0] / (2.0 * math.pi))
-    rng = np.random.default_rng(seed)
     total = np.zeros(K)
-    for _ in range(draws):
-        e = np.sqrt(data.fine_var / 2.0) * (rng.standard_normal(n_fine) + 1j * rng.standard_normal(n_fine))
-        dv = e / (1j * data.fine_omega)  # the velocity's noise at each harmonic
-        moved = dataclasses.replace(data, velocity=data.velocity + dv[:K],
-                                    drive=data.drive + at_times(dv, data.fine_omega, t))
-        linear = Y * e[:K]
-        d = predicted_force(moved, x, gain, delay)[0] - F0 - linear
+    for d, linear in _input_noise_draws(data, _vector(p), gain, delay, draws, seed):
         total += np.abs(d) ** 2 + 2.0 * np.real(np.conj(linear) * d)
     extra = np.maximum(total / draws, 0.0)
     return np.array([extra[max(0, k - 2): k + 3].mean() for k in range(K)])
+
+
+def input_noise_shapes(data: MotionData, p, gain: float = 1.0, delay: float = 0.0, *, draws: int = 16,
+                       seed: int = INPUT_NOISE_SEED) -> np.ndarray:
+    """(2K, draws) N: the draws d_j of :func:`input_noise_variance` (the predicted force's
+    change beyond the linear term, real parts then imaginary parts), each over sqrt(draws),
+    so that U U' is their sample covariance across the harmonics
+    (``input_noise_form="shapes"``). A stuck rotation that slips a little earlier or later
+    moves every harmonic at once; these shapes keep that coherence, which one variance
+    per harmonic loses (docs/inference.md). None, (2K, 0), where the rotation has no
+    Coulomb force (f2_0 = 0): the model is then linear in the motion, the linear term
+    holds all of its noise."""
+    x = _vector(p)
+    if x[9] <= 0.0:  # no Coulomb force on the rotation: the model is linear in the motion, the shapes zero
+        return np.zeros((2 * data.harmonics, 0))
+    cols = [np.concatenate([d.real, d.imag]) for d, _ in _input_noise_draws(data, x, gain, delay, draws, seed)]
+    return np.array(cols).T / math.sqrt(draws) if cols else np.zeros((2 * data.harmonics, 0))
 
 
 def with_input_noise(data: MotionData, extra: np.ndarray) -> MotionData:
@@ -556,6 +581,14 @@ def with_input_noise(data: MotionData, extra: np.ndarray) -> MotionData:
     P times it, so V_k grows by it."""
     h = data.harmonic
     return dataclasses.replace(data, harmonic=dataclasses.replace(h, var_force=h.var_force + h.periods * extra))
+
+
+def with_input_shapes(data: MotionData, shapes: np.ndarray) -> MotionData:
+    """``data`` with the columns of ``shapes`` (:func:`input_noise_shapes`) among its
+    marginalised deviations, each with a prior sd of 1 (their scale is in the columns)."""
+    m = shapes.shape[1]
+    scale = np.vstack([data.scale, np.column_stack([np.zeros(m), np.zeros(m), np.ones(m)])])
+    return dataclasses.replace(data, basis=np.hstack([data.basis, shapes]), scale=scale)
 
 
 def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0, *,
