@@ -98,6 +98,14 @@ device whose motion's noise is most of the variance (``tests/test_inference_moti
 with the reference. The joint model takes each record's at its part of the joint
 start (``JointModel.with_reference``).
 
+The measured motion's noise also drives the simulated drivetrain, whose rotation sticks
+and slips and whose bearing may ring, and comes out of it beyond the linear term. At the
+reference point 16 seeded draws of that noise are pushed through the model
+(:func:`input_noise_shapes`) and each draw's force error is a further marginalised
+deviation, so that the errors' covariance across the harmonics is kept
+(``LikelihoodSettings.input_noise_form``; :func:`input_noise_variance`, one variance per
+harmonic, is the earlier form).
+
 The fit accuracy reported with
 each evaluation is the force's at the harmonics, 1 - |F - F^| / |F| over k = 1..K
 (Parseval's: the periodic part's phi, not the paper's phi of the acceleration).
@@ -175,7 +183,7 @@ class MotionData:
     sign: np.ndarray  # (K,) complex: harmonics of sgn(v_B(t))
     omega: np.ndarray  # (K,) rad/s
     drive: np.ndarray  # (DRIVE_GRID,) m/s: the plate's velocity over one period from t = 0
-    basis: np.ndarray  # (2K, m): the marginalised deviations, the reversals' then the law's
+    basis: np.ndarray  # (2K, m): the marginalised deviations, the reversals', the law's, the input noise's
     scale: np.ndarray  # (m, 3): each deviation's prior sd is scale[j] . (f1_0, f2_0, 1), N
     windows: tuple = ()  # the reversals' windows, shares of the period (``reversals.reversal_windows``)
     #: the plate motion's reconstruction: its harmonics (rad/s, the first K are ``omega``'s)
@@ -617,7 +625,7 @@ def fundamental_misfit(data: MotionData, p, gain: float = 1.0, tau: float | None
     """The fit's residual at the drive's fundamental in phase with the model's inertial
     force there, as a share of that force: |Re(r_1 / (Y_1 A_1 / g))| (see
     :data:`FUNDAMENTAL_MAX`). With ``tau`` (the discrepancy, N) the marginalised
-    deviations' posterior mean (the reversals' and the law's,
+    deviations' posterior mean (the reversals', the law's and the input noise's shapes,
     ``reversals.deviations_mean``) is taken from the residual first: what they explain
     the posterior has accounted for; None: the residual of the mean prediction alone.
     ``deviation_at`` as for :func:`motion_loglik`."""
