@@ -531,12 +531,12 @@ def _input_noise_draws(data: MotionData, x: np.ndarray, gain: float, delay: floa
     K = data.harmonics
     n_fine = data.fine_omega.shape[0]
     t = np.arange(DRIVE_GRID) / (DRIVE_GRID * data.omega[0] / (2.0 * math.pi))
+    on_grid = np.exp(1j * np.outer(t, data.fine_omega))  # harmonics to the drive's grid (``at_times``), once
     rng = np.random.default_rng(seed)
     for _ in range(draws):
         e = np.sqrt(data.fine_var / 2.0) * (rng.standard_normal(n_fine) + 1j * rng.standard_normal(n_fine))
         dv = e / (1j * data.fine_omega)  # the velocity's noise at each harmonic
-        moved = dataclasses.replace(data, velocity=data.velocity + dv[:K],
-                                    drive=data.drive + at_times(dv, data.fine_omega, t))
+        moved = dataclasses.replace(data, velocity=data.velocity + dv[:K], drive=data.drive + np.real(on_grid @ dv))
         linear = Y * e[:K]
         yield predicted_force(moved, x, gain, delay)[0] - F0 - linear, linear
 
