@@ -126,8 +126,8 @@ class LikelihoodSettings:
         harmonics is kept (``motion.input_noise_shapes``): a rotation that slips a
         little earlier or later moves every harmonic at once. "variance": their variance
         beyond the linear term added to each V_k (``motion.input_noise_variance``), the
-        earlier form, which overstated the noise at the low harmonics and understated
-        it where the drivetrain rings.
+        earlier form, which on the record examined overstated the noise at the low
+        harmonics and understated it where the drivetrain rang.
     law_beyond_viscous : with ``law_orthogonal``, take the plate's viscous harmonics out
         as well as its Coulomb square wave (default True). False leaves the deviations
         free to carry a force in phase with the velocity, which a friction that falls
