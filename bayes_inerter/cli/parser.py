@@ -36,7 +36,7 @@ _non_negative_int = _number_type(int, lambda v: v >= 0, "0 or more", "whole numb
 CHECKPOINT_SECONDS = 0.5
 #: ``inference.coordinates.COORDINATES``, written out so that the parser does not import
 #: the inference package (emcee, arviz) before it is needed; a test keeps the two equal.
-FIT_COORDINATES = ("impedance", "unconstrained", "physical", "series", "compliance", "resistance")
+FIT_COORDINATES = ("impedance", "unconstrained", "physical", "series", "compliance")
 #: ``inference.likelihood.RESIDUALS`` and its default, written out likewise.
 FIT_RESIDUALS = ("ar1", "iid", "harmonic", "motion")
 DEFAULT_RESIDUAL = "motion"

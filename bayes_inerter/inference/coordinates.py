@@ -71,11 +71,11 @@ import numpy as np
 from .impedance import EDGE_WARNING, MAX_SENSITIVITY_CHANGE, ImpedanceMap, driving_point
 
 __all__ = ["Coordinates", "ImpedanceMap", "SeriesStiffness", "SeriesCompliance", "driving_point", "default_coordinates", "COORDINATES",
-           "drive_omega", "reference_tolerance", "continue_at", "resistance_kappa",
+           "drive_omega", "reference_tolerance", "continue_at",
            "MAX_SENSITIVITY_CHANGE", "EDGE_WARNING"]
 
 #: The coordinate systems a fit can use (``--coordinates``).
-COORDINATES = ("impedance", "unconstrained", "physical", "series", "compliance", "resistance")
+COORDINATES = ("impedance", "unconstrained", "physical", "series", "compliance")
 
 
 @dataclass(frozen=True)
@@ -93,9 +93,6 @@ class Coordinates:
     compliance : the indices in theta of log c_n, log k_n and log k_B and the angular
         frequency where they are walked as the nut and bearing's series compliance there,
         the nut's phase and the bearing's share (:class:`SeriesCompliance`), or None.
-    resistance : (the index of C, the index of log f_0, kappa) where the resistive part
-        is walked with the Coulomb force's describing function added,
-        log(C + kappa f_0) with kappa = 4 / (pi V) (:func:`resistance_kappa`), or None.
     """
 
     kind: str
@@ -105,7 +102,6 @@ class Coordinates:
     impedance: ImpedanceMap | None = None
     series: tuple | None = None
     compliance: tuple | None = None
-    resistance: tuple | None = None
 
     def _pair(self):
         i, j = self.series
@@ -138,13 +134,6 @@ class Coordinates:
         v, logj = self._unbox(u)
         if self.impedance is None:
             return v, logj
-        if self.resistance is not None:
-            i_c, i_f, kappa = self.resistance
-            with np.errstate(all="ignore"):
-                log_r = np.array(v[..., i_c])  # a copy: v[..., i] of one point is a view
-                log_c = log_r + np.log1p(-kappa * np.exp(v[..., i_f] - log_r))  # NaN where C <= 0
-            v[..., i_c] = log_c
-            logj = logj + log_r - log_c
         theta = self.impedance.inverse(v)
         return theta, logj + self.impedance.log_jacobian(theta)
 
@@ -152,10 +141,6 @@ class Coordinates:
         """u from theta (strictly inside the prior box where walked as logits)."""
         theta = np.asarray(theta, dtype=float)
         u = theta.copy() if self.impedance is None else self.impedance.forward(theta)
-        if self.resistance is not None:
-            i_c, i_f, kappa = self.resistance
-            with np.errstate(invalid="ignore"):  # NaN rows stay NaN
-                u[..., i_c] = np.logaddexp(u[..., i_c], math.log(kappa) + theta[..., i_f])
         if self.logit.any():
             u[..., self.logit] = _to_logit(theta[..., self.logit], self.lo[self.logit], self.hi[self.logit])
         if self.series is not None:
@@ -188,8 +173,6 @@ class Coordinates:
             walked += "; k_n, k_B as series stiffness and ratio"
         if self.compliance is not None:
             walked += "; c_n, k_n, k_B as series compliance, nut phase and bearing share"
-        if self.resistance is not None:
-            walked = walked.replace("C", f"C + {self.resistance[2]:.4g} f_0", 1)
         return f"{self.kind} ({walked} at {imp.omega / (2 * math.pi):.6g} Hz; logit elsewhere)"
 
 
@@ -388,7 +371,7 @@ def default_coordinates(model, kind: str = "impedance") -> Coordinates:
     ndim = len(lo)
     if kind == "physical":
         return Coordinates("physical", lo, hi, np.zeros(ndim, dtype=bool))
-    imp = _impedance_map(model) if kind in ("impedance", "series", "compliance", "resistance") else None
+    imp = _impedance_map(model) if kind in ("impedance", "series", "compliance") else None
     if getattr(model, "motion", None) is not None and getattr(model, "model", "") == "linear":
         # measured: on the quick study's A3 record at 1 Hz the linear model's motion-in
         # optimum lay outside the map's domain, so its walkers could not start there
@@ -404,39 +387,9 @@ def default_coordinates(model, kind: str = "impedance") -> Coordinates:
     compliance = _compliance_triple(model, imp) if kind == "compliance" and imp is not None else None
     if compliance is not None:
         logit[list(compliance[:3])] = False
-    resistance = _resistance(model, imp) if kind == "resistance" and imp is not None else None
     name = ("unconstrained" if imp is None else "series" if series is not None
-            else "compliance" if compliance is not None else "resistance" if resistance is not None
-            else "impedance")
-    return Coordinates(name, lo, hi, logit, imp, series, compliance, resistance)
-
-
-def resistance_kappa(model) -> float | None:
-    """4 / (pi V), s/m: the Coulomb force's describing function at the drive, V (m/s) the
-    velocity amplitude of terminal 1 at the drive's fundamental, from the low-passed
-    measured acceleration's fundamental over the likelihood's window (A / omega).
-    A Coulomb force f_0 on a body sliding at V cos(omega t) has the fundamental
-    (4 / pi) f_0 in phase with the velocity: a damper of 4 f_0 / (pi V). None where the
-    record has no fundamental to speak of."""
-    omega = drive_omega(model.record)
-    w = model.window
-    t = model.record.time[w]
-    a = model.measured_lp[w]
-    basis = np.column_stack([np.cos(omega * t), np.sin(omega * t), np.ones_like(t)])
-    coef = np.linalg.lstsq(basis, a, rcond=None)[0]
-    v = math.hypot(coef[0], coef[1]) / omega
-    return 4.0 / (math.pi * v) if v > 0 and math.isfinite(v) else None
-
-
-def _resistance(model, imp: ImpedanceMap) -> tuple | None:
-    """(index of C, index of log f_0, kappa) for one record's model that walks C and
-    samples the Coulomb force as f_0 in log scale, else None."""
-    names = list(model.names)
-    if not imp.damping or getattr(model, "parts", None) or "f_0" not in names \
-            or not model.all_priors["f_0"].log_scale:
-        return None
-    kappa = resistance_kappa(model)
-    return None if kappa is None else (imp.source["c_f"][0], names.index("f_0"), float(kappa))
+            else "compliance" if compliance is not None else "impedance")
+    return Coordinates(name, lo, hi, logit, imp, series, compliance)
 
 
 def _compliance_triple(model, imp: ImpedanceMap) -> tuple | None:

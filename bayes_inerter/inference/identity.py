@@ -82,7 +82,7 @@ def _prior(prior) -> dict:
 def _coordinates(coords) -> dict:
     """The sampler coordinates as their kind and settings (their dataclass's fields)."""
     fields = {f.name: getattr(coords, f.name) for f in dataclasses.fields(coords)}
-    for name in ("series", "compliance", "resistance"):  # checkpoints written before these coordinates match
+    for name in ("series", "compliance"):  # checkpoints written before these coordinates match
         if fields.get(name) is None:
             fields.pop(name, None)
     imp = fields.get("impedance")
