@@ -1,0 +1,220 @@
+"""Why a single record's chain mixes slowly: the posterior's geometry, measured on a chain.
+
+Issue 40, item 1 (and the capped chains of issue 39, item 4's coverage): one replicate
+of the single-record calibration (``study.study_calibration.replicate_device``: the
+device drawn from the study's priors and its record) is fitted by ``fit_record`` for a
+fixed number of steps with the default sampler (26 walkers for 12 parameters) and again
+with ``--walkers`` walkers for as many evaluations; then, on the first chain's draws
+after its first third:
+
+- the share of walker steps that moved, and each parameter's autocorrelation time;
+- **midpoints**: for ``--pairs`` pairs of draws, how far the log posterior at their
+  midpoint in the sampler's coordinates lies below the lower of the two (a posterior
+  that is one convex hump, a normal's, puts the midpoint above both);
+- **bent ridges**: each sampler coordinate's sd given the others, fitted linearly and
+  with their squares and products, beside its own sd;
+- **independence proposals** at equilibrium (``benchmarks/bench_proposal.py``'s
+  measure): the t in normal scores that the adaptation fits, and the same t after a
+  triangular map that takes each coordinate's quadratic regression on the coordinates
+  before it away (a transport map in the sense of Parno and Marzouk 2018; the least
+  identified first), each evaluated on ``--pairs`` proposals paired with as many draws.
+
+Rows go to ``--out``/geometry.csv (one per statistic and variant); the fits stay in
+``--fits`` (runs/chain-geometry, not committed), and a second run reuses them.
+
+    python studies/chain_geometry.py [--seed 11] [--replicate 1] [--steps 3000] [--walkers 52]
+        [--pairs 300] [--out results/chain-geometry] [--fits runs/chain-geometry]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from _table import git_commit, write_rows
+from bayes_inerter.inference import LikelihoodSettings, PosteriorModel, fit_record
+from bayes_inerter.inference.checkpoint import read_chain, stored_identity
+from bayes_inerter.inference.convergence import integrated_time
+from bayes_inerter.inference.coordinates import default_coordinates
+from bayes_inerter.inference.marginals import NormalScores
+from bayes_inerter.inference.moves import IndependenceMove
+from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
+
+ROOT = Path(__file__).resolve().parents[1]
+FIELDS = ("seed", "replicate", "freq_hz", "commit", "variant", "statistic", "value", "value2", "steps", "walkers",
+          "moved", "seconds", "tau")
+
+
+def draw_t(move: IndependenceMove, n: int, rs: np.random.RandomState) -> np.ndarray:
+    """``n`` draws of ``move``'s proposal (its defensive pair of t's, mapped back through
+    its normal scores where it has them)."""
+    d = len(move.mean)
+    z = rs.randn(n, d)
+    if np.isfinite(move.dof):
+        z = z / np.sqrt(rs.chisquare(move.dof, size=n) / move.dof)[:, None]
+    width = np.where(rs.rand(n) < move.wide, move.wide_scale, 1.0)
+    q = move.mean + (z * width[:, None]) @ move.chol.T
+    return move.scores.inverse(q) if move.scores is not None else q
+
+
+def fit(record, out: Path, steps: int, walkers: int | None, seed: int) -> dict:
+    """A fixed-step fit into ``out`` (kept if there), with its seconds."""
+    if not (out / "fit.json").exists():
+        t0 = time.perf_counter()
+        fit_record(record, out, steps=steps, walkers=walkers, seed=seed, priors=STUDY_SBC_PRIORS, plots=False,
+                   likelihood=LikelihoodSettings(residual="motion"), interval="posterior")
+        (out / "seconds.txt").write_text(f"{time.perf_counter() - t0:.1f}\n")
+    info = json.loads((out / "fit.json").read_text())
+    chain = read_chain(out / "chain.h5")
+    kept = chain[len(chain) // 3:]
+    moved = float(np.mean(np.any(np.diff(kept, axis=0) != 0, axis=2)))
+    tau = {n: float(t) for n, t in info["tau"].items()}
+    return {"walkers": chain.shape[1], "steps": len(chain), "moved": moved, "tau": tau,
+            "tau_max": max(tau.values()), "evaluations_per_tau": max(tau.values()) * chain.shape[1],
+            "seconds": float((out / "seconds.txt").read_text())}
+
+
+def _quadratic(z: np.ndarray) -> np.ndarray:
+    k = z.shape[1]
+    return np.column_stack([np.ones(len(z))] + [z[:, a] for a in range(k)]
+                           + [z[:, a] * z[:, b] for a in range(k) for b in range(a, k)])
+
+
+class TriangularMap:
+    """z = T(x): normal scores, then each coordinate less its quadratic regression on the
+    ones before it (least identified first), over its residual sd; T's log-Jacobian is
+    the scores' less the sum of the log sds."""
+
+    def __init__(self, draws: np.ndarray):
+        self.scores = NormalScores.fit(draws, 200)
+        z = self.scores.forward(draws)[0]
+        conditional = 1.0 / np.diag(np.linalg.inv(np.cov(z, rowvar=False)))
+        self.order = np.argsort(-conditional)
+        zo = z[:, self.order]
+        self.coef, self.sd = [], []
+        for i in range(z.shape[1]):
+            f = _quadratic(zo[:, :i])
+            c = np.linalg.lstsq(f, zo[:, i], rcond=None)[0]
+            self.coef.append(c)
+            self.sd.append(float(np.std(zo[:, i] - f @ c)))
+        self.sd = np.array(self.sd)
+
+    def forward(self, x):
+        z, log_jac = self.scores.forward(x)
+        zo = z[:, self.order]
+        out = np.empty_like(zo)
+        for i in range(zo.shape[1]):
+            out[:, i] = (zo[:, i] - _quadratic(zo[:, :i]) @ self.coef[i]) / self.sd[i]
+        return out, log_jac - np.sum(np.log(self.sd))
+
+    def inverse(self, w):
+        zo = np.empty_like(w)
+        for i in range(w.shape[1]):
+            zo[:, i] = w[:, i] * self.sd[i] + _quadratic(zo[:, :i]) @ self.coef[i]
+        z = np.empty_like(zo)
+        z[:, self.order] = zo
+        return self.scores.inverse(z)
+
+
+def geometry(model, coords, chain: np.ndarray, pairs: int, rng: np.random.Generator) -> list[dict]:
+    """The midpoint, bent-ridge and independence-proposal rows of one chain."""
+    d = chain.shape[2]
+    fit_draws = chain[len(chain) // 3:].reshape(-1, d)
+    stationary = chain[len(chain) // 2:].reshape(-1, d)
+
+    def log_post(u):
+        theta, log_jac = coords.transform(np.atleast_2d(u))
+        out = np.array([model.log_prob(t)[0] for t in theta], dtype=float) + log_jac
+        return np.where(np.isfinite(out), out, -np.inf)
+
+    rows = []
+    a = stationary[rng.integers(len(stationary), size=pairs)]
+    b = stationary[rng.integers(len(stationary), size=pairs)]
+    drop = np.minimum(log_post(a), log_post(b)) - log_post(0.5 * (a + b))
+    rows += [{"statistic": "midpoint drop, median (nats)", "value": float(np.median(drop))},
+             {"statistic": "midpoint drop over 10 nats (share)", "value": float(np.mean(drop > 10.0))}]
+    names = list(model.names)
+    for i in range(d):
+        others = np.delete(fit_draws, i, axis=1)
+        others = (others - others.mean(axis=0)) / others.std(axis=0)
+        lin = np.column_stack([np.ones(len(others)), others])
+        y = fit_draws[:, i]
+        r_lin = y - lin @ np.linalg.lstsq(lin, y, rcond=None)[0]
+        quad = _quadratic(others)
+        r_quad = y - quad @ np.linalg.lstsq(quad, y, rcond=None)[0]
+        rows.append({"statistic": f"sd over sd given the rest, linear / quadratic: {names[i]}",
+                     "value": float(np.std(y) / np.std(r_lin)), "value2": float(np.std(y) / np.std(r_quad))})
+    x = stationary[rng.choice(len(stationary), pairs, replace=False)]
+    lp_x = log_post(x)
+    draws_rng = np.random.RandomState(int(rng.integers(2**31)))
+    t_scores = IndependenceMove.fit(fit_draws, knots=200)
+    tmap = TriangularMap(fit_draws)
+    zt = tmap.forward(fit_draws)[0]
+    t_map = IndependenceMove(zt.mean(axis=0), np.cov(zt, rowvar=False))
+    variants = {
+        "t in normal scores (the adaptation's)": (t_scores.log_density, lambda n: draw_t(t_scores, n, draws_rng)),
+        "t after the triangular quadratic map": (lambda u: t_map.log_density(tmap.forward(u)[0]) + tmap.forward(u)[1],
+                                                 lambda n: tmap.inverse(draw_t(t_map, n, draws_rng))),
+    }
+    for name, (log_q, draw) in variants.items():
+        y = draw(pairs)
+        w_y, w_x = log_post(y) - log_q(y), lp_x - log_q(x)
+        accept = np.minimum(1.0, np.exp(np.clip(w_y - w_x, -700.0, 50.0)))
+        rows.append({"statistic": f"independence acceptance at equilibrium: {name}", "value": float(np.mean(accept))})
+    return rows
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seed", type=int, default=11, help="the single-record calibration's seed")
+    ap.add_argument("--replicate", type=int, default=1)
+    ap.add_argument("--steps", type=int, default=3000, help="steps of the default sampler's chain")
+    ap.add_argument("--walkers", type=int, default=52, help="walkers of the second chain (as many evaluations)")
+    ap.add_argument("--pairs", type=int, default=300)
+    ap.add_argument("--out", default=str(ROOT / "results" / "chain-geometry"))
+    ap.add_argument("--fits", default=str(ROOT / "runs" / "chain-geometry"))
+    args = ap.parse_args(argv)
+    if args.steps < 300 or args.walkers < 2 or args.pairs < 10:
+        print("error: --steps must be at least 300, --walkers at least 2 and --pairs at least 10", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+    cs = replace(StudyCalibration(), steps=None, seed=args.seed, single=True,
+                 likelihood=LikelihoodSettings(residual="motion"), frequencies=(0.5, 1.0, 1.5))
+    device = replicate_device(cs, args.replicate)
+    record = device.records[0]
+    commit = git_commit(ROOT)
+    base = {"seed": args.seed, "replicate": args.replicate, "freq_hz": record.metadata.get("drive_frequency_hz"),
+            "commit": commit}
+    rows = []
+    fits = Path(args.fits)
+    first = fits / f"seed{args.seed}_{args.replicate}_default"
+    runs = {"default": fit(record, first, args.steps, None, args.replicate)}
+    print(f"default sampler: {runs['default']['walkers']} walkers, tau {runs['default']['tau_max']:.0f} steps, "
+          f"{runs['default']['moved']:.3f} of walker steps moved", flush=True)
+    steps2 = max(300, args.steps * runs["default"]["walkers"] // args.walkers)
+    runs[f"{args.walkers} walkers"] = fit(record, fits / f"seed{args.seed}_{args.replicate}_w{args.walkers}",
+                                          steps2, args.walkers, args.replicate)
+    for name, r in runs.items():
+        rows.append({**base, "variant": name, "statistic": "largest tau (steps) x walkers",
+                     "value": r["evaluations_per_tau"], "value2": r["tau_max"], "steps": r["steps"],
+                     "walkers": r["walkers"], "moved": round(r["moved"], 4), "seconds": r["seconds"],
+                     "tau": " ".join(f"{k}={v:.0f}" for k, v in sorted(r["tau"].items(), key=lambda kv: -kv[1]))})
+    reference = (stored_identity(first / "chain.h5") or {}).get("reference")
+    model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=LikelihoodSettings(residual="motion"))
+    if reference is not None:
+        model = model.with_reference(reference)
+    coords = default_coordinates(model)
+    for row in geometry(model, coords, read_chain(first / "chain.h5"), args.pairs, np.random.default_rng(args.seed)):
+        rows.append({**base, "variant": "default", **row})
+    write_rows(out / "geometry.csv", [{k: row.get(k, "") for k in FIELDS} for row in rows])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
