@@ -4,7 +4,9 @@ Issue 40, item 1 (and the capped chains of issue 39, item 4's coverage): one rep
 of the single-record calibration (``study.study_calibration.replicate_device``: the
 device drawn from the study's priors and its record) is fitted by ``fit_record`` for a
 fixed number of steps with the default sampler (26 walkers for 12 parameters) and again
-with ``--walkers`` walkers for as many evaluations; then, on the first chain's draws
+with ``--walkers`` walkers for as many evaluations (and with ``--transport``, a third
+time with the independence move after the triangular map below,
+``Adaptation(transport=True)``); then, on the first chain's draws
 after its first third:
 
 - the share of walker steps that moved, and each parameter's autocorrelation time;
@@ -19,11 +21,12 @@ after its first third:
   before it away (a transport map in the sense of Parno and Marzouk 2018; the least
   identified first), each evaluated on ``--pairs`` proposals paired with as many draws.
 
-Rows go to ``--out``/geometry.csv (one per statistic and variant); the fits stay in
+Rows go to ``--out``/geometry.csv (one per statistic and variant; another replicate's
+rows are kept); the fits stay in
 ``--fits`` (runs/chain-geometry, not committed), and a second run reuses them.
 
     python studies/chain_geometry.py [--seed 11] [--replicate 1] [--steps 3000] [--walkers 52]
-        [--pairs 300] [--out results/chain-geometry] [--fits runs/chain-geometry]
+        [--transport] [--pairs 300] [--out results/chain-geometry] [--fits runs/chain-geometry]
 """
 
 from __future__ import annotations
@@ -37,8 +40,9 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import git_commit, write_rows
+from _table import git_commit, read_rows, write_rows
 from bayes_inerter.inference import LikelihoodSettings, PosteriorModel, fit_record
+from bayes_inerter.inference.adaptation import Adaptation
 from bayes_inerter.inference.checkpoint import read_chain, stored_identity
 from bayes_inerter.inference.convergence import integrated_time
 from bayes_inerter.inference.coordinates import default_coordinates
@@ -63,12 +67,12 @@ def draw_t(move: IndependenceMove, n: int, rs: np.random.RandomState) -> np.ndar
     return move.scores.inverse(q) if move.scores is not None else q
 
 
-def fit(record, out: Path, steps: int, walkers: int | None, seed: int) -> dict:
+def fit(record, out: Path, steps: int, walkers: int | None, seed: int, adaptation: Adaptation = Adaptation()) -> dict:
     """A fixed-step fit into ``out`` (kept if there), with its seconds."""
     if not (out / "fit.json").exists():
         t0 = time.perf_counter()
         fit_record(record, out, steps=steps, walkers=walkers, seed=seed, priors=STUDY_SBC_PRIORS, plots=False,
-                   likelihood=LikelihoodSettings(residual="motion"), interval="posterior")
+                   likelihood=LikelihoodSettings(residual="motion"), interval="posterior", adaptation=adaptation)
         (out / "seconds.txt").write_text(f"{time.perf_counter() - t0:.1f}\n")
     info = json.loads((out / "fit.json").read_text())
     chain = read_chain(out / "chain.h5")
@@ -175,13 +179,16 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=11, help="the single-record calibration's seed")
     ap.add_argument("--replicate", type=int, default=1)
     ap.add_argument("--steps", type=int, default=3000, help="steps of the default sampler's chain")
-    ap.add_argument("--walkers", type=int, default=52, help="walkers of the second chain (as many evaluations)")
+    ap.add_argument("--walkers", type=int, default=52,
+                    help="walkers of the second chain, for as many evaluations (0: no second chain)")
+    ap.add_argument("--transport", action="store_true",
+                    help="a third chain, its independence move after the triangular map (Adaptation(transport=True))")
     ap.add_argument("--pairs", type=int, default=300)
     ap.add_argument("--out", default=str(ROOT / "results" / "chain-geometry"))
     ap.add_argument("--fits", default=str(ROOT / "runs" / "chain-geometry"))
     args = ap.parse_args(argv)
-    if args.steps < 300 or args.walkers < 2 or args.pairs < 10:
-        print("error: --steps must be at least 300, --walkers at least 2 and --pairs at least 10", file=sys.stderr)
+    if args.steps < 300 or args.walkers == 1 or args.walkers < 0 or args.pairs < 10:
+        print("error: --steps must be at least 300, --walkers 0 or at least 2 and --pairs at least 10", file=sys.stderr)
         return 2
     out = Path(args.out)
     cs = replace(StudyCalibration(), steps=None, seed=args.seed, single=True,
@@ -197,9 +204,13 @@ def main(argv=None) -> int:
     runs = {"default": fit(record, first, args.steps, None, args.replicate)}
     print(f"default sampler: {runs['default']['walkers']} walkers, tau {runs['default']['tau_max']:.0f} steps, "
           f"{runs['default']['moved']:.3f} of walker steps moved", flush=True)
-    steps2 = max(300, args.steps * runs["default"]["walkers"] // args.walkers)
-    runs[f"{args.walkers} walkers"] = fit(record, fits / f"seed{args.seed}_{args.replicate}_w{args.walkers}",
-                                          steps2, args.walkers, args.replicate)
+    if args.walkers:
+        steps2 = max(300, args.steps * runs["default"]["walkers"] // args.walkers)
+        runs[f"{args.walkers} walkers"] = fit(record, fits / f"seed{args.seed}_{args.replicate}_w{args.walkers}",
+                                              steps2, args.walkers, args.replicate)
+    if args.transport:
+        runs["transport map"] = fit(record, fits / f"seed{args.seed}_{args.replicate}_transport", args.steps, None,
+                                    args.replicate, Adaptation(transport=True))
     for name, r in runs.items():
         rows.append({**base, "variant": name, "statistic": "largest tau (steps) x walkers",
                      "value": r["evaluations_per_tau"], "value2": r["tau_max"], "steps": r["steps"],
@@ -212,7 +223,9 @@ def main(argv=None) -> int:
     coords = default_coordinates(model)
     for row in geometry(model, coords, read_chain(first / "chain.h5"), args.pairs, np.random.default_rng(args.seed)):
         rows.append({**base, "variant": "default", **row})
-    write_rows(out / "geometry.csv", [{k: row.get(k, "") for k in FIELDS} for row in rows])
+    others = [r for r in read_rows(out / "geometry.csv")  # other replicates' rows kept
+              if (r["seed"], r["replicate"]) != (str(args.seed), str(args.replicate))]
+    write_rows(out / "geometry.csv", [{k: row.get(k, "") for k in FIELDS} for row in others + rows])
     return 0
 
 

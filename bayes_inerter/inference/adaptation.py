@@ -23,6 +23,7 @@ import numpy as np
 from .convergence import transient
 from .marginals import KNOTS
 from .moves import BlockMove, IndependenceMove
+from .transport import TriangularScores
 
 __all__ = ["Adaptation", "Schedule", "STRETCH", "FIT_MAX_STEPS"]
 
@@ -68,6 +69,10 @@ class Adaptation:
         many knots per coordinate (default 200), or (None) in the sampler's coordinates.
     blocks : share of ``weight`` given to a :class:`.moves.BlockMove` fitted in the
         same normal scores (needs ``knots``; default 0.5; 0: none).
+    transport : the independence move's t fitted after a triangular quadratic map of the
+        normal scores (:class:`.transport.TriangularScores`; needs ``knots``), the block
+        move kept in the normal scores alone (default False: not measured to mix faster
+        yet, results/chain-geometry).
     """
 
     weight: float = 0.5
@@ -78,12 +83,15 @@ class Adaptation:
     wide_scale: float = 3.0
     knots: int | None = KNOTS
     blocks: float = 0.5
+    transport: bool = False
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.blocks < 1.0:
             raise ValueError(f"adaptation's block share must lie in [0, 1), got {self.blocks}")
         if self.blocks > 0.0 and self.knots is None:
             raise ValueError("adaptation block moves are fitted in normal scores: give knots too")
+        if self.transport and self.knots is None:
+            raise ValueError("adaptation's transport map starts from normal scores: give knots too")
         if self.knots is not None and not (isinstance(self.knots, int) and self.knots >= 4):
             raise ValueError(f"adaptation knots must be a whole number of at least 4 or None, got {self.knots!r}")
         if not 0.0 < self.weight < 1.0:
@@ -107,12 +115,25 @@ class Adaptation:
             return None, None
         thin = -(-(len(chain) - skip) // FIT_MAX_STEPS)  # 1 up to FIT_MAX_STEPS steps
         draws = chain[skip::thin].reshape(-1, chain.shape[-1])
-        proposal = IndependenceMove.fit(draws, knots=self.knots, dof=self.dof, scale=self.scale, wide=self.wide,
-                                        wide_scale=self.wide_scale)
+        t = {"dof": self.dof, "scale": self.scale, "wide": self.wide, "wide_scale": self.wide_scale}
+        proposal = self._transported(draws, t) if self.transport else None
+        if proposal is None:
+            proposal = IndependenceMove.fit(draws, knots=self.knots, **t)
         if self.blocks == 0.0:
             return proposal, None
         scores = proposal.scores if proposal is not None else None
+        scores = scores.scores if isinstance(scores, TriangularScores) else scores
         return proposal, BlockMove.fit(draws, knots=self.knots, scores=scores)
+
+    def _transported(self, draws: np.ndarray, t: dict) -> IndependenceMove | None:
+        """The independence move's t fitted after the triangular map of ``draws``, or None
+        where the draws define none (the normal scores' t is then fitted instead)."""
+        try:
+            tmap = TriangularScores.fit(draws, self.knots)
+            w = tmap.forward(draws)[0]
+            return IndependenceMove(w.mean(axis=0), np.cov(w, rowvar=False), scores=tmap, **t)
+        except (ValueError, np.linalg.LinAlgError):
+            return None
 
     def moves(self, base: list, proposal: IndependenceMove | None, block: BlockMove | None = None) -> list:
         """``base`` moves, with ``proposal`` (and ``block``, in ``blocks`` of their share)
@@ -127,6 +148,8 @@ class Adaptation:
         law = "t"
         if self.knots is not None:
             law += f" in normal scores ({self.knots} knots)"
+        if self.transport:
+            law += " after a triangular quadratic map"
         if self.blocks > 0.0:
             law += f"; {self.blocks:g} of its share to block moves from a normal in the same scores"
         return (f"IndependenceMove {self.weight:.3g} ({law}, dof {self.dof:g}, scale {self.scale:g}, "

@@ -42,7 +42,7 @@ def run_identity(model, coordinates, adaptation, moves, nwalkers: int) -> dict:
         "likelihood": _plain(dataclasses.asdict(model.likelihood)),
         "priors": {name: _prior(p) for name, p in model.all_priors.items()},
         "coordinates": None if coordinates is None else _coordinates(coordinates),
-        "adaptation": None if adaptation is None else _plain(dataclasses.asdict(adaptation)),
+        "adaptation": None if adaptation is None else _adaptation(adaptation),
         "moves": [[type(m).__name__, float(w)] for m, w in moves],
         "nwalkers": int(nwalkers),
         "ndim": int(model.ndim),
@@ -77,6 +77,15 @@ def _prior(prior) -> dict:
     """A prior as its law's name and its settings (a dataclass's fields)."""
     settings = dataclasses.asdict(prior) if dataclasses.is_dataclass(prior) else {"repr": repr(prior)}
     return {"law": type(prior).__name__, **_plain(settings)}
+
+
+def _adaptation(adaptation) -> dict:
+    """The adaptation's settings (its dataclass's fields), ``transport`` only where it is
+    on (checkpoints written before it existed match)."""
+    fields = dataclasses.asdict(adaptation)
+    if not fields.get("transport"):
+        fields.pop("transport", None)
+    return _plain(fields)
 
 
 def _coordinates(coords) -> dict:
