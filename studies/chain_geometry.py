@@ -16,10 +16,10 @@ after its first third:
 - **bent ridges**: each sampler coordinate's sd given the others, fitted linearly and
   with their squares and products, beside its own sd;
 - **independence proposals** at equilibrium (``benchmarks/bench_proposal.py``'s
-  measure): the t in normal scores that the adaptation fits, and the same t after a
-  triangular map that takes each coordinate's quadratic regression on the coordinates
-  before it away (a transport map in the sense of Parno and Marzouk 2018; the least
-  identified first), each evaluated on ``--pairs`` proposals paired with as many draws.
+  measure): the t in normal scores that the adaptation fits, and the same t after the
+  triangular map of ``inference.transport`` (each coordinate's quadratic regression on
+  the less identified ones taken away), each evaluated on ``--pairs`` proposals paired
+  with as many draws.
 
 Rows go to ``--out``/geometry.csv (one per statistic and variant; another replicate's
 rows are kept); the fits stay in
@@ -46,8 +46,8 @@ from bayes_inerter.inference.adaptation import Adaptation
 from bayes_inerter.inference.checkpoint import read_chain, stored_identity
 from bayes_inerter.inference.convergence import integrated_time
 from bayes_inerter.inference.coordinates import default_coordinates
-from bayes_inerter.inference.marginals import NormalScores
 from bayes_inerter.inference.moves import IndependenceMove
+from bayes_inerter.inference.transport import TriangularScores, quadratic_features
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,48 +84,6 @@ def fit(record, out: Path, steps: int, walkers: int | None, seed: int, adaptatio
             "seconds": float((out / "seconds.txt").read_text())}
 
 
-def _quadratic(z: np.ndarray) -> np.ndarray:
-    k = z.shape[1]
-    return np.column_stack([np.ones(len(z))] + [z[:, a] for a in range(k)]
-                           + [z[:, a] * z[:, b] for a in range(k) for b in range(a, k)])
-
-
-class TriangularMap:
-    """z = T(x): normal scores, then each coordinate less its quadratic regression on the
-    ones before it (least identified first), over its residual sd; T's log-Jacobian is
-    the scores' less the sum of the log sds."""
-
-    def __init__(self, draws: np.ndarray):
-        self.scores = NormalScores.fit(draws, 200)
-        z = self.scores.forward(draws)[0]
-        conditional = 1.0 / np.diag(np.linalg.inv(np.cov(z, rowvar=False)))
-        self.order = np.argsort(-conditional)
-        zo = z[:, self.order]
-        self.coef, self.sd = [], []
-        for i in range(z.shape[1]):
-            f = _quadratic(zo[:, :i])
-            c = np.linalg.lstsq(f, zo[:, i], rcond=None)[0]
-            self.coef.append(c)
-            self.sd.append(float(np.std(zo[:, i] - f @ c)))
-        self.sd = np.array(self.sd)
-
-    def forward(self, x):
-        z, log_jac = self.scores.forward(x)
-        zo = z[:, self.order]
-        out = np.empty_like(zo)
-        for i in range(zo.shape[1]):
-            out[:, i] = (zo[:, i] - _quadratic(zo[:, :i]) @ self.coef[i]) / self.sd[i]
-        return out, log_jac - np.sum(np.log(self.sd))
-
-    def inverse(self, w):
-        zo = np.empty_like(w)
-        for i in range(w.shape[1]):
-            zo[:, i] = w[:, i] * self.sd[i] + _quadratic(zo[:, :i]) @ self.coef[i]
-        z = np.empty_like(zo)
-        z[:, self.order] = zo
-        return self.scores.inverse(z)
-
-
 def geometry(model, coords, chain: np.ndarray, pairs: int, rng: np.random.Generator) -> list[dict]:
     """The midpoint, bent-ridge and independence-proposal rows of one chain."""
     d = chain.shape[2]
@@ -150,7 +108,7 @@ def geometry(model, coords, chain: np.ndarray, pairs: int, rng: np.random.Genera
         lin = np.column_stack([np.ones(len(others)), others])
         y = fit_draws[:, i]
         r_lin = y - lin @ np.linalg.lstsq(lin, y, rcond=None)[0]
-        quad = _quadratic(others)
+        quad = quadratic_features(others)
         r_quad = y - quad @ np.linalg.lstsq(quad, y, rcond=None)[0]
         rows.append({"statistic": f"sd over sd given the rest, linear / quadratic: {names[i]}",
                      "value": float(np.std(y) / np.std(r_lin)), "value2": float(np.std(y) / np.std(r_quad))})
@@ -158,7 +116,7 @@ def geometry(model, coords, chain: np.ndarray, pairs: int, rng: np.random.Genera
     lp_x = log_post(x)
     draws_rng = np.random.RandomState(int(rng.integers(2**31)))
     t_scores = IndependenceMove.fit(fit_draws, knots=200)
-    tmap = TriangularMap(fit_draws)
+    tmap = TriangularScores.fit(fit_draws)
     zt = tmap.forward(fit_draws)[0]
     t_map = IndependenceMove(zt.mean(axis=0), np.cov(zt, rowvar=False))
     variants = {

@@ -36,6 +36,20 @@ def test_quadratic_features_are_the_constant_columns_and_products():
     assert quadratic_features(z[:, :0]).shape == (2, 1)
 
 
+def test_far_proposals_map_to_finite_points():
+    # a 12-coordinate chain with bends between neighbours: w far in the tails (the wide
+    # t's draws) must come back finite, which quadratics of quadratics do not
+    rng = np.random.default_rng(10)
+    base = rng.normal(size=(5000, 12))
+    x = base.copy()
+    x[:, 1:] += 0.7 * base[:, :-1] ** 2
+    tmap = TriangularScores.fit(x, 100)
+    w = rng.normal(size=(2000, 12)) * 12.0
+    back = tmap.inverse(w)
+    assert np.all(np.isfinite(back))
+    assert np.max(np.abs(tmap.forward(back)[0] - w)) < 1e-6 * np.max(np.abs(w))
+
+
 def test_the_map_is_one_to_one_with_its_jacobian():
     draws = _banana(4000, np.random.default_rng(1))
     tmap = TriangularScores.fit(draws, 100)

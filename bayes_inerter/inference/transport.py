@@ -11,9 +11,13 @@ a quadratic regression on the ones before it, over the residual's sd,
 
     w_i = (z_i - g_i(z_1, ..., z_{i-1})) / s_i,
 
-so w is nearer a standard normal in every direction than z. The map is one to one, its
-inverse is forward substitution, and its log-Jacobian is the normal scores' less the
-sum of log s_i (the triangular part's determinant is constant). It serves as the ``scores``
+so w is nearer a standard normal in every direction than z. The regressions take the
+earlier scores clipped to +-``CLIP``: composed down the triangle, quadratics of the
+scores themselves would grow as a polynomial of degree 2^(d-1) in w, and a proposal in
+the t's tails would map to infinity (seen on a 12-parameter chain); clipped, each g_i is
+bounded. Whatever each g_i is, the map is one to one, its inverse is forward
+substitution, and its log-Jacobian is the normal scores' less the sum of log s_i (the
+triangular part's determinant is constant). It serves as the ``scores``
 of :class:`.moves.IndependenceMove`, which needs only a bijection with its Jacobian; not
 of :class:`.moves.BlockMove`, which keeps the coordinates outside a block exactly and so
 needs a map of each coordinate alone.
@@ -25,12 +29,18 @@ import numpy as np
 
 from .marginals import KNOTS, NormalScores
 
-__all__ = ["TriangularScores", "quadratic_features"]
+__all__ = ["TriangularScores", "quadratic_features", "CLIP"]
+
+#: The regressions' inputs, the earlier coordinates' normal scores, are clipped to
+#: +-CLIP (a draw beyond 3 sd is one in 370): see the module docstring.
+CLIP = 3.0
 
 
-def quadratic_features(z: np.ndarray) -> np.ndarray:
-    """(n, 1 + k + k (k + 1) / 2): a constant, the k columns of ``z`` and their products
-    in pairs (squares included)."""
+def quadratic_features(z: np.ndarray, clip: float | None = None) -> np.ndarray:
+    """(n, 1 + k + k (k + 1) / 2): a constant, the k columns of ``z`` (clipped to
+    +-``clip`` where given) and their products in pairs (squares included)."""
+    if clip is not None:
+        z = np.clip(z, -clip, clip)
     n, k = z.shape
     cols = [np.ones(n)] + [z[:, a] for a in range(k)] + [z[:, a] * z[:, b] for a in range(k) for b in range(a, k)]
     return np.column_stack(cols)
@@ -80,7 +90,7 @@ class TriangularScores:
         zo = z[:, order]
         coef, sd = [], []
         for i in range(d):
-            f = quadratic_features(zo[:, :i])
+            f = quadratic_features(zo[:, :i], CLIP)
             c = np.linalg.lstsq(f, zo[:, i], rcond=None)[0]
             coef.append(c)
             sd.append(float(np.std(zo[:, i] - f @ c)))
@@ -92,7 +102,7 @@ class TriangularScores:
         zo = z[:, self.order]
         w = np.empty_like(zo)
         for i in range(zo.shape[1]):
-            w[:, i] = (zo[:, i] - quadratic_features(zo[:, :i]) @ self.coef[i]) / self.sd[i]
+            w[:, i] = (zo[:, i] - quadratic_features(zo[:, :i], CLIP) @ self.coef[i]) / self.sd[i]
         return w, log_jac - np.sum(np.log(self.sd))
 
     def inverse(self, w):
@@ -100,7 +110,7 @@ class TriangularScores:
         w = np.atleast_2d(np.asarray(w, dtype=float))
         zo = np.empty_like(w)
         for i in range(w.shape[1]):
-            zo[:, i] = w[:, i] * self.sd[i] + quadratic_features(zo[:, :i]) @ self.coef[i]
+            zo[:, i] = w[:, i] * self.sd[i] + quadratic_features(zo[:, :i], CLIP) @ self.coef[i]
         z = np.empty_like(zo)
         z[:, self.order] = zo
         return self.scores.inverse(z)
