@@ -127,7 +127,8 @@ def geometry(model, coords, chain: np.ndarray, pairs: int, rng: np.random.Genera
     for name, (log_q, draw) in variants.items():
         y = draw(pairs)
         w_y, w_x = log_post(y) - log_q(y), lp_x - log_q(x)
-        accept = np.minimum(1.0, np.exp(np.clip(w_y - w_x, -700.0, 50.0)))
+        with np.errstate(invalid="ignore"):  # a proposal outside the domain: never accepted
+            accept = np.where(np.isfinite(w_y), np.minimum(1.0, np.exp(np.clip(w_y - w_x, -700.0, 50.0))), 0.0)
         rows.append({"statistic": f"independence acceptance at equilibrium: {name}", "value": float(np.mean(accept))})
     return rows
 
