@@ -175,11 +175,14 @@ def main(argv=None) -> int:
                      "value": r["evaluations_per_tau"], "value2": r["tau_max"], "steps": r["steps"],
                      "walkers": r["walkers"], "moved": round(r["moved"], 4), "seconds": r["seconds"],
                      "tau": " ".join(f"{k}={v:.0f}" for k, v in sorted(r["tau"].items(), key=lambda kv: -kv[1]))})
-    reference = (stored_identity(first / "chain.h5") or {}).get("reference")
+    stored = stored_identity(first / "chain.h5") or {}
+    reference = stored.get("reference")
     model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=LikelihoodSettings(residual="motion"))
     if reference is not None:
         model = model.with_reference(reference)
-    coords = default_coordinates(model)
+    # the chain's own coordinates: the sampler falls back from the impedance ones where
+    # the start lies outside their domain
+    coords = default_coordinates(model, (stored.get("coordinates") or {}).get("kind", "impedance"))
     for row in geometry(model, coords, read_chain(first / "chain.h5"), args.pairs, np.random.default_rng(args.seed)):
         rows.append({**base, "variant": "default", **row})
     others = [r for r in read_rows(out / "geometry.csv")  # other replicates' rows kept
