@@ -118,6 +118,10 @@ def test_one_replicate_ranks_every_physical_parameter():
     assert all(0 <= r <= cs.draws for r in rep["ranks"].values())
     assert all(rep["central"]["50"][n] <= rep["central"]["94"][n] for n in NAMES)  # nested by construction
     assert rep["iterations"] == 40
+    assert rep["coordinates"].startswith(("impedance", "unconstrained"))  # the sampler's, for diagnosis
+    taus = rep["tau_by_parameter"]  # the joint fit's b is named by its setting
+    assert {"b" if n.startswith("b_") else n for n in taus} >= set(NAMES)
+    assert rep["tau_max"] == pytest.approx(max(taus.values()))
     assert json.loads(json.dumps(rep)) == rep
     lo, hi = np.exp(STUDY_SBC_PRIORS["b"].bounds)
     assert lo <= rep["truth"]["b"] <= hi
