@@ -55,18 +55,6 @@ FIELDS = ("seed", "replicate", "freq_hz", "commit", "variant", "statistic", "val
           "moved", "seconds", "tau")
 
 
-def draw_t(move: IndependenceMove, n: int, rs: np.random.RandomState) -> np.ndarray:
-    """``n`` draws of ``move``'s proposal (its defensive pair of t's, mapped back through
-    its normal scores where it has them)."""
-    d = len(move.mean)
-    z = rs.randn(n, d)
-    if np.isfinite(move.dof):
-        z = z / np.sqrt(rs.chisquare(move.dof, size=n) / move.dof)[:, None]
-    width = np.where(rs.rand(n) < move.wide, move.wide_scale, 1.0)
-    q = move.mean + (z * width[:, None]) @ move.chol.T
-    return move.scores.inverse(q) if move.scores is not None else q
-
-
 def fit(record, out: Path, steps: int, walkers: int | None, seed: int, adaptation: Adaptation = Adaptation()) -> dict:
     """A fixed-step fit into ``out`` (kept if there), with its seconds."""
     if not (out / "fit.json").exists():
@@ -118,15 +106,14 @@ def geometry(model, coords, chain: np.ndarray, pairs: int, rng: np.random.Genera
     t_scores = IndependenceMove.fit(fit_draws, knots=200)
     tmap = TriangularScores.fit(fit_draws)
     zt = tmap.forward(fit_draws)[0]
-    t_map = IndependenceMove(zt.mean(axis=0), np.cov(zt, rowvar=False))
+    t_map = IndependenceMove(zt.mean(axis=0), np.cov(zt, rowvar=False), scores=tmap)
     variants = {
-        "t in normal scores (the adaptation's)": (t_scores.log_density, lambda n: draw_t(t_scores, n, draws_rng)),
-        "t after the triangular quadratic map": (lambda u: t_map.log_density(tmap.forward(u)[0]) + tmap.forward(u)[1],
-                                                 lambda n: tmap.inverse(draw_t(t_map, n, draws_rng))),
+        "t in normal scores (the adaptation's)": t_scores,
+        "t after the triangular quadratic map": t_map,
     }
-    for name, (log_q, draw) in variants.items():
-        y = draw(pairs)
-        w_y, w_x = log_post(y) - log_q(y), lp_x - log_q(x)
+    for name, move in variants.items():
+        y = move.draw(pairs, draws_rng)
+        w_y, w_x = log_post(y) - move.log_density(y), lp_x - move.log_density(x)
         with np.errstate(invalid="ignore"):  # a proposal outside the domain: never accepted
             accept = np.where(np.isfinite(w_y), np.minimum(1.0, np.exp(np.clip(w_y - w_x, -700.0, 50.0))), 0.0)
         rows.append({"statistic": f"independence acceptance at equilibrium: {name}", "value": float(np.mean(accept))})

@@ -81,7 +81,7 @@ def test_the_map_straightens_a_bend_that_normal_scores_keep():
     rates = []
     for move in (IndependenceMove.fit(draws, knots=100), Adaptation(knots=100, transport=True)._transported(
             draws, {"dof": 10.0, "scale": 1.1, "wide": 0.2, "wide_scale": 3.0})):
-        y, _ = move._propose(np.zeros((2000, 3)), np.random.RandomState(5))
+        y = move.draw(2000, np.random.RandomState(5))
         w_y = _log_banana(y) - move.log_density(y)
         w_x = _log_banana(stationary) - move.log_density(stationary)
         rates.append(float(np.mean(np.minimum(1.0, np.exp(np.clip(w_y - w_x, -700, 50))))))

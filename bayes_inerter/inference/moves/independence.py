@@ -116,14 +116,17 @@ class IndependenceMove(MHMove):
         return np.logaddexp(np.log1p(-self.wide) + self._log_t(x, 1.0),
                             np.log(self.wide) + self._log_t(x, self.wide_scale))
 
-    def _propose(self, coords, random):
-        coords = np.asarray(coords, dtype=float)
-        n = len(coords)
-        z = random.randn(*coords.shape)
+    def draw(self, n: int, random) -> np.ndarray:
+        """``n`` draws of the proposal (its defensive pair of t's, mapped back through its
+        normal scores where it has them); ``random``: a ``numpy.random.RandomState``."""
+        z = random.randn(n, len(self.mean))
         if np.isfinite(self.dof):
             z = z / np.sqrt(random.chisquare(self.dof, size=n) / self.dof)[:, None]
         width = np.where(random.rand(n) < self.wide, self.wide_scale, 1.0)
         q = self.mean + (z * width[:, None]) @ self.chol.T
-        if self.scores is not None:
-            q = self.scores.inverse(q)
+        return self.scores.inverse(q) if self.scores is not None else q
+
+    def _propose(self, coords, random):
+        coords = np.asarray(coords, dtype=float)
+        q = self.draw(len(coords), random)
         return q, self.log_density(coords) - self.log_density(q)
