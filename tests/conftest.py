@@ -8,17 +8,43 @@ from hypothesis import settings
 settings.register_profile("bayes-inerter", derandomize=True, database=None)
 settings.load_profile("bayes-inerter")
 
-#: Generations of the sampler's start search in the tests: twenty, where the package's
-#: default (``optimize.DE_MAXITER``) is forty. The tests check what the pipeline does with
-#: a start, not how good the start is (tests/test_inference_optimize.py checks that with
-#: its own settings); forty would add about a minute to the quick subset.
-TEST_DE_MAXITER = 20
+#: The sampler's start search in the tests, lighter than the package's default. The tests
+#: check what the pipeline does with a start, not how good the start is
+#: (tests/test_inference_optimize.py checks that with its own settings, and the tests of
+#: the search's stages restore the defaults they test): twenty generations of the
+#: evolution where the default (``optimize.DE_MAXITER``) is forty, at most one Nelder-Mead
+#: restart where the default is six (``NM_RESTARTS``), and no polish with the discrepancy's
+#: sd held (``TAU_CONTINUATION``). Each is read at call time. With the default search a
+#: fit's start took about 22 of its 28 s, and the quick subset ran over four minutes on
+#: two cores.
+TEST_SEARCH = {"DE_MAXITER": 20, "NM_RESTARTS": 0, "TAU_CONTINUATION": ()}
+TEST_DE_MAXITER = TEST_SEARCH["DE_MAXITER"]
+
+#: The same settings as Python source, for a command run in a process of its own (a fresh
+#: interpreter does not read conftest).
+SEARCH_SOURCE = "from bayes_inerter.inference import optimize; " + "; ".join(
+    f"optimize.{name} = {value!r}" for name, value in TEST_SEARCH.items()) + "; "
+
+
+#: The package's own values of TEST_SEARCH's settings, as imported (set at configuration).
+DEFAULT_SEARCH: dict = {}
 
 
 def pytest_configure(config):
     from bayes_inerter.inference import optimize
 
-    optimize.DE_MAXITER = TEST_DE_MAXITER  # read at call time; forked workers inherit it
+    for name, value in TEST_SEARCH.items():  # forked workers inherit them
+        DEFAULT_SEARCH.setdefault(name, getattr(optimize, name))
+        setattr(optimize, name, value)
+
+
+@pytest.fixture
+def default_search(monkeypatch):
+    """The package's own start search, for a test of its stages."""
+    from bayes_inerter.inference import optimize
+
+    for name, value in DEFAULT_SEARCH.items():
+        monkeypatch.setattr(optimize, name, value)
 
 
 def inverse_dynamics_force(params, freq, *, amplitude=0.01, duration=3.0, fs=1000.0, ramp=1.0):

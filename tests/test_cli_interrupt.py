@@ -22,6 +22,7 @@ import time
 import numpy as np
 import pytest
 from numba import njit
+from conftest import SEARCH_SOURCE
 
 from bayes_inerter.cli import main
 from bayes_inerter.executor import caused_by_interrupt, interrupt_raised, interrupts_held
@@ -196,8 +197,7 @@ def test_ctrl_c_in_the_start_search_is_a_keyboard_interrupt(model, tmp_path):
 DE_MAXITER = 3
 
 COMMAND = [sys.executable, "-c",
-           "import sys; from bayes_inerter.inference import optimize; "
-           f"optimize.DE_MAXITER = {DE_MAXITER}; "
+           "import sys; " + SEARCH_SOURCE + f"optimize.DE_MAXITER = {DE_MAXITER}; "
            "from bayes_inerter.cli import main; sys.exit(main(sys.argv[1:]))"]
 
 #: What an unclean end prints: a traceback, emcee's dump of the walkers, numba's error.

@@ -11,7 +11,7 @@ import emcee
 import h5py
 import numpy as np
 import pytest
-from conftest import TEST_DE_MAXITER
+from conftest import SEARCH_SOURCE
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.cli import main
@@ -169,12 +169,10 @@ def test_same_seed_same_summary(tmp_path, record_file):
 
 
 #: The command line in a process of its own, as ``python -m bayes_inerter.cli`` runs it,
-#: with the tests' start search (conftest's TEST_DE_MAXITER: a fresh interpreter does not
+#: with the tests' start search (conftest's SEARCH_SOURCE: a fresh interpreter does not
 #: read conftest), so a killed command's chain can be compared with one run here.
 COMMAND = [sys.executable, "-c",
-           "import sys; from bayes_inerter.inference import optimize; "
-           f"optimize.DE_MAXITER = {TEST_DE_MAXITER}; "
-           "from bayes_inerter.cli import main; sys.exit(main(sys.argv[1:]))"]
+           "import sys; " + SEARCH_SOURCE + "from bayes_inerter.cli import main; sys.exit(main(sys.argv[1:]))"]
 
 #: The kill tests stop runs at a step count they watch in chain.h5: they write every step.
 EVERY_STEP = ("--checkpoint-seconds", "0")

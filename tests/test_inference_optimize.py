@@ -6,6 +6,10 @@ import pytest
 from bayes_inerter.inference.optimize import (RESTART_GAIN, laplace_covariance, laplace_ensemble, local_optimum,
                                               mirrored_modes)
 
+#: These tests measure the search itself: the package's settings, not the lighter ones the
+#: rest of the suite runs (conftest's TEST_SEARCH).
+pytestmark = pytest.mark.usefixtures("default_search")
+
 
 class GaussianModel:
     """A stand-in for PosteriorModel: a correlated normal in the first two coordinates,
@@ -169,10 +173,12 @@ def test_the_rigid_guess_polished_rescues_a_start_in_another_basin(monkeypatch):
 
     model = PosteriorModel(paper_like_record("B1", 1.5, seed=1016))
     b_true = paper_parameters("B1").b
-    theta, lp = optimize.find_start(model, np.random.default_rng(1016))
+    # twenty generations, as this case was found (with forty the evolution alone ends at
+    # b 0.61 of the truth, in neither basin)
+    theta, lp = optimize.find_start(model, np.random.default_rng(1016), maxiter=20)
     assert abs(model.parameters(theta).b / b_true - 1.0) < 0.05
     monkeypatch.setattr(optimize, "POLISH_RIGID_GUESS", False)
-    theta_wrong, lp_wrong = optimize.find_start(model, np.random.default_rng(1016))
+    theta_wrong, lp_wrong = optimize.find_start(model, np.random.default_rng(1016), maxiter=20)
     assert model.parameters(theta_wrong).b / b_true < 0.5 and lp > lp_wrong
 
 
