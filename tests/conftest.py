@@ -1,3 +1,5 @@
+import os
+
 import numpy as np
 import pytest
 from hypothesis import settings
@@ -12,12 +14,13 @@ settings.load_profile("bayes-inerter")
 #: check what the pipeline does with a start, not how good the start is
 #: (tests/test_inference_optimize.py checks that with its own settings, and the tests of
 #: the search's stages restore the defaults they test): twenty generations of the
-#: evolution where the default (``optimize.DE_MAXITER``) is forty, at most one Nelder-Mead
-#: restart where the default is six (``NM_RESTARTS``), and no polish with the discrepancy's
-#: sd held (``TAU_CONTINUATION``). Each is read at call time. With the default search a
-#: fit's start took about 22 of its 28 s, and the quick subset ran over four minutes on
-#: two cores.
-TEST_SEARCH = {"DE_MAXITER": 20, "NM_RESTARTS": 0, "TAU_CONTINUATION": ()}
+#: evolution where the default (``optimize.DE_MAXITER``) is forty, one Nelder-Mead pass of
+#: 200 iterations where the default is up to seven of 800 (``NM_RESTARTS``,
+#: ``NM_MAXITER``), and no polish with the discrepancy's sd held (``TAU_CONTINUATION``).
+#: Each is read at call time. With the default search a fit's start took about 22 of its
+#: 28 s, and the quick subset ran over four minutes on two cores. (Ten generations left a
+#: calibration replicate of tests/test_study_calibration.py without a finite start.)
+TEST_SEARCH = {"DE_MAXITER": 20, "NM_MAXITER": 200, "NM_RESTARTS": 0, "TAU_CONTINUATION": ()}
 TEST_DE_MAXITER = TEST_SEARCH["DE_MAXITER"]
 
 #: The same settings as Python source, for a command run in a process of its own (a fresh
@@ -36,6 +39,27 @@ def pytest_configure(config):
     for name, value in TEST_SEARCH.items():  # forked workers inherit them
         DEFAULT_SEARCH.setdefault(name, getattr(optimize, name))
         setattr(optimize, name, value)
+    workers = getattr(config.option, "numprocesses", None)
+    if isinstance(workers, int) and workers > 1 and not hasattr(config, "workerinput"):
+        _compile_before_the_workers()
+
+
+def _compile_before_the_workers() -> None:
+    """Compile the kernels that every worker needs (``_warm.py``), each once, in two
+    processes, before pytest-xdist starts its workers: on a fresh clone each worker
+    compiled the record generator's and the paper networks' kernels itself, both at
+    once. Where this fails the workers compile what they need, and the tests say what
+    is wrong."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    here = Path(__file__).parent
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(here), os.environ.get("PYTHONPATH")]))}
+    jobs = [subprocess.Popen([sys.executable, str(here / "_warm.py"), part], env=env, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL) for part in ("records", "networks")]
+    for job in jobs:
+        job.wait()
 
 
 @pytest.fixture

@@ -9,6 +9,10 @@ from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.calibration import (CalibrationSettings, compare_calibrations, coverage_table, replicate,
                                             run_calibration)
 
+#: One worker runs this module (``test.sh``'s ``--dist loadgroup``): each worker that ran a
+#: test of the calibration fixture would make it.
+pytestmark = pytest.mark.xdist_group("study_calibration")
+
 TINY = CalibrationSettings(steps=30, draws=9, generator=GeneratorSettings(duration=2.0, ramp=0.6))
 
 

@@ -72,7 +72,7 @@ DE_POPSIZE = 8  # population per parameter
 #: interval. Read at call time (``find_start(maxiter=None)``),
 #: so a caller may set it (the test suite runs twenty, for time).
 DE_MAXITER = 40
-NM_MAXITER = 800  # Nelder-Mead iterations on the full posterior
+NM_MAXITER = 800  # Nelder-Mead iterations a pass on the full posterior (read at call time)
 #: Nelder-Mead's simplex collapses along this posterior's ridges and stops far short of
 #: the optimum: on a generated A3 record at 1 Hz one pass from the evolved point ended
 #: 167 nats below where three more passes, each from the last one's result with a fresh
@@ -426,14 +426,16 @@ def _with_discrepancy_estimate(model: PosteriorModel, phys: np.ndarray) -> np.nd
     return theta
 
 
-def local_optimum(model: PosteriorModel, theta: np.ndarray, *, maxiter: int = NM_MAXITER, restarts: int = 0,
+def local_optimum(model: PosteriorModel, theta: np.ndarray, *, maxiter: int | None = None, restarts: int = 0,
                   log_prob=None):
     """(theta, log posterior) of the optimum Nelder-Mead reaches from ``theta`` (or
-    ``theta`` itself if it finds nothing better). With ``restarts`` > 0 it starts again
+    ``theta`` itself if it finds nothing better) in ``maxiter`` iterations a pass (None:
+    :data:`NM_MAXITER` as it is when called). With ``restarts`` > 0 it starts again
     from its result, with a fresh simplex, while a pass gains more than
     :data:`RESTART_GAIN` nats, at most ``restarts`` more passes. ``log_prob``: the same
     function as ``model.log_prob`` computed elsewhere (``joint.pooled_log_prob``)."""
     log_prob = log_prob or model.log_prob
+    maxiter = NM_MAXITER if maxiter is None else maxiter
 
     def neg(x):
         lp, _ = log_prob(x)
