@@ -79,21 +79,28 @@ def _prior(prior) -> dict:
     return {"law": type(prior).__name__, **_plain(settings)}
 
 
+#: Settings added after checkpoints were first written, with the value in effect before
+#: each existed: an identity leaves a setting out while it holds that value, so a
+#: checkpoint written before the setting existed still matches.
+LATER_ADAPTATION = {"transport": False}
+LATER_COORDINATES = {"series": None, "compliance": None}
+
+
+def _without_later(fields: dict, later: dict) -> dict:
+    """``fields`` less those of ``later`` that hold the value ``later`` gives them."""
+    return {k: v for k, v in fields.items() if not (k in later and v == later[k])}
+
+
 def _adaptation(adaptation) -> dict:
-    """The adaptation's settings (its dataclass's fields), ``transport`` only where it is
-    on (checkpoints written before it existed match)."""
-    fields = dataclasses.asdict(adaptation)
-    if not fields.get("transport"):
-        fields.pop("transport", None)
-    return _plain(fields)
+    """The adaptation's settings (its dataclass's fields; see :data:`LATER_ADAPTATION`)."""
+    return _plain(_without_later(dataclasses.asdict(adaptation), LATER_ADAPTATION))
 
 
 def _coordinates(coords) -> dict:
-    """The sampler coordinates as their kind and settings (their dataclass's fields)."""
+    """The sampler coordinates as their kind and settings (their dataclass's fields; see
+    :data:`LATER_COORDINATES`)."""
     fields = {f.name: getattr(coords, f.name) for f in dataclasses.fields(coords)}
-    for name in ("series", "compliance"):  # checkpoints written before these coordinates match
-        if fields.get(name) is None:
-            fields.pop(name, None)
+    fields = _without_later(fields, LATER_COORDINATES)
     imp = fields.get("impedance")
     if imp is not None:
         fields["impedance"] = dataclasses.asdict(imp)
