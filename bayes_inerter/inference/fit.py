@@ -81,6 +81,10 @@ class FitResult:
     thin: int = 1
     #: the fit's PSIS-LOO as loo.json holds it (``results.loo_summary``; empty for the joint model)
     loo: dict = field(default_factory=dict)
+    #: each sampled parameter's autocorrelation time, steps, by name (fit.json's "tau")
+    tau_by_parameter: dict = field(default_factory=dict)
+    #: the sampler's coordinates, described (fit.json's "coordinates")
+    coordinates: str = ""
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -213,7 +217,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, idata,
                          info["timings_s"], got.shrink, run.recovered, warnings=got.ended, masses=masses,
                          b_theory=b_theory, b_interval=b_interval, drive=drive, burn_in=sample.burn,
-                         warmup=int(run.warmup), thin=sample.thin, loo=loo)
+                         warmup=int(run.warmup), thin=sample.thin, loo=loo, tau_by_parameter=info["tau"],
+                         coordinates=info["coordinates"])
 
 
 def _interval_settings(interval) -> IntervalSettings:
@@ -291,7 +296,8 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
         return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"],
                          got.shrink, run.recovered, draws, warnings=got.ended, burn_in=sample.burn,
-                         warmup=int(run.warmup), thin=sample.thin)
+                         warmup=int(run.warmup), thin=sample.thin, tau_by_parameter=info["tau"],
+                         coordinates=info["coordinates"])
 
 
 @dataclass(frozen=True)

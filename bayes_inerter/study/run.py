@@ -132,7 +132,8 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
     if not (same and ended):
         return None
     return FitResult(folder, rows, bool(info["converged"]), info.get("reason", ""), int(info["iterations"]),
-                     np.array(list(info.get("tau", {}).values())), None, info.get("timings_s", {}), {}, "", draws)
+                     np.array(list(info.get("tau", {}).values())), None, info.get("timings_s", {}), {}, "", draws,
+                     tau_by_parameter=info.get("tau", {}), coordinates=info.get("coordinates", ""))
 
 
 def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None = None, on_done=None,

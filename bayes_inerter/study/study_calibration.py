@@ -215,7 +215,6 @@ def study_replicate(cs: StudyCalibration, k: int) -> dict:
 
     with tempfile.TemporaryDirectory() as tmp:
         rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(tmp) / "fit")
-        info = json.loads((Path(tmp) / "fit" / "fit.json").read_text())
     kept["b"] = kept.pop(f"b_{cs.setting}")
     n_kept = len(kept["b"])
     if n_kept < cs.draws:
@@ -226,7 +225,7 @@ def study_replicate(cs: StudyCalibration, k: int) -> dict:
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None, "L": cs.draws,
            "kept": n_kept, "truth": truth, "ranks": {}, "hdi": {}, "central": {},
            # which chains are slow and why, readable later without running them again
-           "coordinates": info.get("coordinates"), "tau_by_parameter": info.get("tau")}
+           "coordinates": res.coordinates, "tau_by_parameter": res.tau_by_parameter}
     for name, t in truth.items():
         x = kept[name]
         out["ranks"][name] = int(np.sum(x[pick] < t))
