@@ -104,9 +104,7 @@ def geometry(model, coords, chain: np.ndarray, pairs: int, rng: np.random.Genera
     lp_x = log_post(x)
     draws_rng = np.random.RandomState(int(rng.integers(2**31)))
     t_scores = IndependenceMove.fit(fit_draws, knots=200)
-    tmap = TriangularScores.fit(fit_draws)
-    zt = tmap.forward(fit_draws)[0]
-    t_map = IndependenceMove(zt.mean(axis=0), np.cov(zt, rowvar=False), scores=tmap)
+    t_map = IndependenceMove.fit_in(fit_draws, TriangularScores.fit(fit_draws))
     variants = {
         "t in normal scores (the adaptation's)": t_scores,
         "t after the triangular quadratic map": t_map,

@@ -130,10 +130,9 @@ class Adaptation:
         where the draws define none (the normal scores' t is then fitted instead)."""
         try:
             tmap = TriangularScores.fit(draws, self.knots)
-            w = tmap.forward(draws)[0]
-            return IndependenceMove(w.mean(axis=0), np.cov(w, rowvar=False), scores=tmap, **t)
         except (ValueError, np.linalg.LinAlgError):
             return None
+        return IndependenceMove.fit_in(draws, tmap, **t)
 
     def moves(self, base: list, proposal: IndependenceMove | None, block: BlockMove | None = None) -> list:
         """``base`` moves, with ``proposal`` (and ``block``, in ``blocks`` of their share)

@@ -87,11 +87,19 @@ class IndependenceMove(MHMove):
             except ValueError:
                 scores = None
             if scores is not None:
-                return cls.fit(scores.forward(draws)[0], scores=scores, **kwargs)
+                return cls.fit_in(draws, scores, **kwargs)
         try:
             return cls(draws.mean(axis=0), np.cov(draws, rowvar=False), **kwargs)
         except np.linalg.LinAlgError:
             return None
+
+    @classmethod
+    def fit_in(cls, draws, scores, **kwargs) -> "IndependenceMove | None":
+        """The move fitted (as :meth:`fit` without knots) to ``draws`` mapped by ``scores``,
+        a bijection with ``forward`` (values and log-Jacobian) and ``inverse``
+        (``marginals.NormalScores``, ``transport.TriangularScores``), and proposing through
+        it; None where the mapped draws define none."""
+        return cls.fit(scores.forward(draws)[0], scores=scores, **kwargs)
 
     def _log_t(self, x, width: float) -> np.ndarray:
         """Log density of the t widened by ``width``, up to a constant common to every
