@@ -21,7 +21,6 @@ settings.load_profile("bayes-inerter")
 #: 28 s, and the quick subset ran over four minutes on two cores. (Ten generations left a
 #: calibration replicate of tests/test_study_calibration.py without a finite start.)
 TEST_SEARCH = {"DE_MAXITER": 20, "NM_MAXITER": 200, "NM_RESTARTS": 0, "TAU_CONTINUATION": ()}
-TEST_DE_MAXITER = TEST_SEARCH["DE_MAXITER"]
 
 #: The same settings as Python source, for a command run in a process of its own (a fresh
 #: interpreter does not read conftest).
@@ -36,7 +35,7 @@ DEFAULT_SEARCH: dict = {}
 def pytest_configure(config):
     from bayes_inerter.inference import optimize
 
-    for name, value in TEST_SEARCH.items():  # forked workers inherit them
+    for name, value in TEST_SEARCH.items():  # each xdist worker runs this in its own process
         DEFAULT_SEARCH.setdefault(name, getattr(optimize, name))
         setattr(optimize, name, value)
     workers = getattr(config.option, "numprocesses", None)
