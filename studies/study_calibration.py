@@ -10,6 +10,10 @@ already there. About a minute per replicate and process on a 2-core machine.
         [--seed 0] [--out FOLDER] [--single] [--residual motion] [--converge] [--freqs 0.5 1.5]
         [--input-noise 0]
 
+``--raise-cap`` raises a folder's cap to ``--max-steps`` before running: the replicates
+whose chains stopped unconverged at its old cap move to ``capped-<old>/`` and are fitted
+again (``study_calibration.raise_cap``; the others' chains are the same under any cap).
+
 ``--summarise`` writes coverage_so_far.csv from the replicates finished in ``--out``
 (counts over every chain and over the converged ones), for a run still in chunks, and
 rank_correlations.csv: the parameters whose truths' ranks move together.
@@ -39,7 +43,8 @@ from pathlib import Path
 from _table import run_with_bar
 from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.study.study_calibration import (StudyCalibration, finished_replicates, inspect_replicate,
-                                                  rank_correlations, run_study_calibration, write_coverage_so_far)
+                                                  rank_correlations, raise_cap, run_study_calibration,
+                                                  write_coverage_so_far)
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "study-calibration"
@@ -60,6 +65,8 @@ if __name__ == "__main__":
     ap.add_argument("--converge", action="store_true", help="each chain to the convergence rule")
     ap.add_argument("--max-steps", type=int, default=StudyCalibration.max_steps)
     ap.add_argument("--freqs", nargs="+", type=float, default=None)
+    ap.add_argument("--raise-cap", action="store_true",
+                    help="raise --out's cap to --max-steps first: its capped replicates are fitted again")
     ap.add_argument("--summarise", action="store_true",
                     help="write --out's coverage_so_far.csv from the replicates finished there, run nothing")
     args = ap.parse_args()
@@ -92,6 +99,13 @@ if __name__ == "__main__":
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)
+    if args.raise_cap:
+        try:
+            moved = raise_cap(args.out, args.max_steps)
+        except ValueError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            sys.exit(2)
+        print(f"cap raised to {args.max_steps} steps; replicates to fit again: {moved or 'none'}", flush=True)
     if args.inspect is not None:
         kind = "single" if cs.single else "joint"
         got = inspect_replicate(cs, args.inspect, ROOT / "runs" / "study-calibration"

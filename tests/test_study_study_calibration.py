@@ -10,7 +10,7 @@ from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
                                                   coverage_rows, coverage_so_far, finished_replicates,
-                                                  inspect_replicate, rank_correlations, replicate_device,
+                                                  inspect_replicate, raise_cap, rank_correlations, replicate_device,
                                                   study_replicate, write_coverage_so_far, write_study_calibration)
 
 NAMES = ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B"]
@@ -91,6 +91,28 @@ def test_rank_correlations_finds_parameters_whose_ranks_move_together(tmp_path):
     write_coverage_so_far(tmp_path)
     lines = (tmp_path / "rank_correlations.csv").read_text().splitlines()
     assert lines[0] == "parameter,with,r,replicates" and len(lines) == 1 + len(pairs)
+
+
+def test_raising_the_cap_moves_only_the_capped_chains_aside(tmp_path):
+    settings = {"steps": None, "max_steps": 600, "seed": 3}
+    (tmp_path / "settings.json").write_text(json.dumps(settings))
+    (tmp_path / "replicates").mkdir()
+    results = [_fake(0, True), _fake(1, True), _fake(2, True), {"replicate": 3, "error": "RuntimeError: no"}]
+    results[0]["converged"], results[1]["converged"], results[2]["converged"] = True, False, False
+    results[2]["iterations"] = 250  # stopped early, not at the cap (an old fixed-length chain): left alone
+    for r in results:
+        (tmp_path / "replicates" / f"{r['replicate']:04d}.json").write_text(json.dumps(r))
+    assert raise_cap(tmp_path, 1200) == [1]
+    assert [r["replicate"] for r in finished_replicates(tmp_path)] == [0, 2, 3]
+    assert json.loads((tmp_path / "capped-600" / "0001.json").read_text()) == results[1]
+    assert json.loads((tmp_path / "settings.json").read_text()) == {**settings, "max_steps": 1200}
+    with pytest.raises(ValueError, match="above the folder's 1200"):
+        raise_cap(tmp_path, 1200)
+    (tmp_path / "settings.json").write_text(json.dumps({**settings, "steps": 600}))
+    with pytest.raises(ValueError, match="no cap to raise"):
+        raise_cap(tmp_path, 2400)
+    with pytest.raises(ValueError, match="no settings.json"):
+        raise_cap(tmp_path / "elsewhere", 2400)
 
 
 def test_chains_long_enough_counts_fifty_taus():

@@ -63,7 +63,7 @@ from ..inference.priors import LogUniform, Uniform
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
-__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate",
+__all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "write_coverage_so_far", "rank_correlations",
            "RANK_CORRELATION"]
@@ -270,6 +270,38 @@ def chains_long_enough(results: list[dict], factor: float = Convergence.n_tau) -
     autocorrelation time (the first part of the study's convergence rule,
     ``Convergence.n_tau``)."""
     return sum(1 for r in results if r.get("tau_max") and r["iterations"] >= factor * r["tau_max"])
+
+
+def raise_cap(out, max_steps: int) -> list[int]:
+    """Raise the convergence cap of the run in ``out`` to ``max_steps``: the replicates
+    whose chains stopped at the old cap unconverged move to ``out``/capped-<old cap>
+    (kept, for the record) and a run into ``out`` with ``max_steps`` fits them again;
+    settings.json takes the new cap. Returns the replicates moved.
+
+    The cap enters a chain only where it stops it (``sampler._until_converged``), so a
+    chain that converged before the old cap is the same chain under the new one, step
+    for step, and its replicate stays as it is."""
+    out = Path(out)
+    settings_file = out / "settings.json"
+    if not settings_file.is_file():
+        raise ValueError(f"{out} holds no run (no settings.json); run the study into it first")
+    saved = json.loads(settings_file.read_text())
+    old = saved.get("max_steps")
+    if saved.get("steps") is not None or old is None:
+        raise ValueError(f"{out} ran fixed-length chains ({saved.get('steps')} steps), not to the convergence rule: "
+                         "there is no cap to raise")
+    if not (isinstance(max_steps, int) and max_steps > old):
+        raise ValueError(f"the new cap must be a whole number of steps above the folder's {old}, got {max_steps!r}")
+    moved = []
+    keep = out / f"capped-{old}"
+    for f in sorted((out / "replicates").glob("[0-9]*.json")):
+        r = json.loads(f.read_text())
+        if "error" not in r and not r.get("converged") and r.get("iterations", 0) >= old:
+            keep.mkdir(exist_ok=True)
+            f.replace(keep / f.name)
+            moved.append(int(r["replicate"]))
+    settings_file.write_text(json.dumps({**saved, "max_steps": max_steps}, indent=2) + "\n")
+    return moved
 
 
 def finished_replicates(out) -> list[dict]:
