@@ -213,6 +213,18 @@ def test_the_mirrored_split_is_found_where_it_is_a_mode_of_its_own():
     assert mirrored_modes(TwoEnds(bimodal=False), start, lp) == []
 
 
+def test_the_shares_mirrored_can_be_named():
+    """Only the shares named are mirrored (TwoEnds' split is f_share's); a name that is
+    no friction split is refused."""
+    start = np.array([1.0, 0.05])
+    model = TwoEnds(drop=3.0)
+    lp = model.log_prob(start)[0]
+    assert mirrored_modes(model, start, lp, shares=("c_share",)) == []
+    assert len(mirrored_modes(model, start, lp, shares=("c_share", "f_share"))) == 1
+    with pytest.raises(ValueError, match="c_share"):
+        mirrored_modes(model, start, lp, shares=("b",))
+
+
 def test_a_model_without_the_split_has_no_mirror():
     model = GaussianModel()
     model.names = ["b", "f_0", "c_n"]

@@ -254,7 +254,7 @@ def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
 
 
 def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_POPSIZE, maxiter=None,
-               objectives=None, many=None, continuation=None):
+               objectives=None, many=None, continuation=None, mirrors=None):
     """Return (theta, log posterior) of a quick optimum (see module docstring).
 
     ``objectives``: names of :data:`OBJECTIVES` evolved in stage 1, each in turn with the
@@ -264,7 +264,9 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     each (for example on a process pool): differential evolution then evaluates each
     generation through it. The result does not depend on it. ``continuation``: the
     factors of :func:`tau_continued` (None: :data:`TAU_CONTINUATION` as it is when
-    called; (): none).
+    called; (): none). ``mirrors``: the shares whose mirrors the search polishes and
+    keeps where higher (:func:`mirrored_modes`; None: :data:`MIRROR_SHARES` as it is
+    when called).
     """
     maxiter = DE_MAXITER if maxiter is None else maxiter
     objectives = default_objectives(model) if objectives is None else tuple(objectives)
@@ -284,7 +286,7 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     continued = tau_continued(model, best[0], continuation)
     if continued is not None and continued[1] > best[1]:
         best = continued
-    for theta, lp in mirrored_modes(model, best[0], best[1], nats=math.inf):
+    for theta, lp in mirrored_modes(model, best[0], best[1], nats=math.inf, shares=mirrors):
         if lp > best[1]:
             best = (theta, lp)
     return best
@@ -325,15 +327,20 @@ def _held(model: PosteriorModel, theta: np.ndarray, i: int, value: float) -> np.
     return at(x)
 
 
-def mirrored_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats: float | None = None) -> list:
-    """The optima that ``theta``'s mirrors reach (:data:`MIRROR_SHARES`, each share x at
-    1 - x, polished by :func:`local_optimum` with restarts), as (theta, log posterior),
-    those apart from ``theta`` by more than :data:`MIRROR_SEPARATION` in the share and
-    within ``nats`` (default :data:`MIRROR_NATS`) of ``lp``; [] for a model without
-    those shares."""
+def mirrored_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats: float | None = None,
+                   shares: tuple | None = None) -> list:
+    """The optima that ``theta``'s mirrors reach (``shares``, default :data:`MIRROR_SHARES`,
+    each share x at 1 - x, polished by :func:`local_optimum` with restarts), as (theta,
+    log posterior), those apart from ``theta`` by more than :data:`MIRROR_SEPARATION` in
+    the share and within ``nats`` (default :data:`MIRROR_NATS`) of ``lp``; [] for a model
+    without those shares."""
     nats = MIRROR_NATS if nats is None else nats
+    shares = MIRROR_SHARES if shares is None else tuple(shares)
+    unknown = [s for s in shares if s not in _RAW_PAIRS]
+    if unknown:
+        raise ValueError(f"mirrored shares must be some of {', '.join(_RAW_PAIRS)}, got {list(shares)}")
     out = []
-    for share in MIRROR_SHARES:
+    for share in shares:
         mirror, distance = _mirror(model, np.asarray(theta, dtype=float), share)
         if mirror is None:
             continue
