@@ -2,12 +2,14 @@
 results/calibration holds the study's run)."""
 
 import json
+from dataclasses import dataclass
+from typing import ClassVar
 
 import pytest
 
 from bayes_inerter.records import GeneratorSettings
-from bayes_inerter.study.calibration import (CalibrationSettings, compare_calibrations, coverage_table, replicate,
-                                            run_calibration)
+from bayes_inerter.study.calibration import (RUNNING, CalibrationSettings, compare_calibrations, coverage_table,
+                                            replicate, run_calibration, run_replicates)
 
 #: One worker runs this module (``test.sh``'s ``--dist loadgroup``): each worker that ran a
 #: test of the calibration fixture would make it.
@@ -85,3 +87,29 @@ def test_coverage_counts():
     assert row["replicates"] == 10 and row["coverage_50"] == 0.5 and row["coverage_90"] == 0.9
     assert row["se_90"] == pytest.approx((0.9 * 0.1 / 10) ** 0.5)
     assert row["rank_chi2_p"] == pytest.approx(1.0)  # one draw in each of the 10 bins: perfectly uniform
+
+
+@dataclass(frozen=True)
+class _Resuming:
+    """Settings whose replicates run in a work folder they are given (as
+    ``StudyCalibration``'s do): the folder is where a stopped replicate's fit is kept."""
+
+    resumes: ClassVar[bool] = True
+    seed: int = 0
+
+    def replicate(self, k, folder=None):
+        return {"replicate": k, "folder": str(folder)}
+
+
+@dataclass(frozen=True)
+class _Plain:
+    seed: int = 0
+
+    def replicate(self, k):
+        return {"replicate": k}
+
+
+def test_a_resuming_replicate_is_given_a_work_folder_under_the_run(tmp_path):
+    got = run_replicates(_Resuming(), tmp_path / "a", 2)
+    assert [r["folder"] for r in got] == [str(tmp_path / "a" / RUNNING / f"{k:04d}") for k in range(2)]
+    assert run_replicates(_Plain(), tmp_path / "b", 2) == [{"replicate": 0}, {"replicate": 1}]

@@ -170,10 +170,18 @@ def _replicate_file(out: Path, k: int) -> Path:
     return out / "replicates" / f"{k:04d}.json"
 
 
+#: Where a replicate whose settings resume (``resumes``) runs its fit: ``out``/.running/<k>,
+#: removed when the replicate is done (not committed: .gitignore).
+RUNNING = ".running"
+
+
 def _worker(args):
     cs, k, out = args
     try:
-        result = cs.replicate(k)
+        if getattr(cs, "resumes", False):
+            result = cs.replicate(k, out / RUNNING / f"{k:04d}")
+        else:
+            result = cs.replicate(k)
     except Exception as exc:  # one replicate's failure is reported, the others go on
         result = {"replicate": k, "error": f"{type(exc).__name__}: {exc}"}
     path = _replicate_file(out, k)

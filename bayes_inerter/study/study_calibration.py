@@ -48,8 +48,10 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import shutil
 import tempfile
 from dataclasses import dataclass, field
+from typing import ClassVar
 from pathlib import Path
 
 import numpy as np
@@ -131,8 +133,13 @@ class StudyCalibration:
         if not (isinstance(self.draws, int) and self.draws >= 9):
             raise ValueError(f"draws must be a whole number of at least 9, got {self.draws!r}")
 
-    def replicate(self, k: int) -> dict:
-        return study_replicate(self, k)
+    #: Its replicates' fits continue from a checkpoint kept in a work folder
+    #: (``calibration.run_replicates`` gives each one): a chain of tens of thousands of
+    #: steps stopped by a session's end goes on where it stopped.
+    resumes: ClassVar[bool] = True
+
+    def replicate(self, k: int, folder=None) -> dict:
+        return study_replicate(self, k, folder)
 
     def describe(self) -> str:
         steps = (f"{self.steps} steps per chain" if self.steps else
@@ -207,14 +214,20 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     return rng, truth, records, redraws, res, kept
 
 
-def study_replicate(cs: StudyCalibration, k: int) -> dict:
+def study_replicate(cs: StudyCalibration, k: int, folder=None) -> dict:
     """Replicate ``k``: the truth's rank among ``cs.draws`` posterior draws per physical
     parameter, whether each of the :data:`LEVELS` intervals (highest-density and
-    equal-tailed) holds it, and the chain's diagnostics."""
+    equal-tailed) holds it, and the chain's diagnostics. ``folder``: where its fit runs,
+    continued from the checkpoint there if an earlier run left one, and removed once the
+    replicate is done (None: a temporary folder, nothing kept if stopped)."""
     import arviz as az
 
-    with tempfile.TemporaryDirectory() as tmp:
-        rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(tmp) / "fit")
+    if folder is None:
+        with tempfile.TemporaryDirectory() as tmp:
+            rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(tmp) / "fit")
+    else:
+        rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(folder) / "fit")
+        shutil.rmtree(folder, ignore_errors=True)
     kept["b"] = kept.pop(f"b_{cs.setting}")
     n_kept = len(kept["b"])
     if n_kept < cs.draws:
