@@ -112,6 +112,9 @@ if __name__ == "__main__":
                                 / f"{kind}_seed{cs.seed}_{args.inspect}_{cs.steps}")
         print(json.dumps(got, indent=1))
         sys.exit(0)
-    res = run_with_bar(lambda progress: run_study_calibration(cs, args.out, args.replicates, processes=args.processes, progress=progress),
+    # each replicate's fit in progress (its checkpoint, tens of MB) outside results/, continued by the next run
+    work = ROOT / "runs" / "study-calibration" / Path(args.out).resolve().name
+    res = run_with_bar(lambda progress: run_study_calibration(cs, args.out, args.replicates, processes=args.processes,
+                                                              progress=progress, work=work),
                        args.replicates, "calibration", mininterval=10)
     print(f"wrote {res['report']} ({res['replicates']} replicates, {len(res['failed'])} failed)")

@@ -113,3 +113,5 @@ def test_a_resuming_replicate_is_given_a_work_folder_under_the_run(tmp_path):
     got = run_replicates(_Resuming(), tmp_path / "a", 2)
     assert [r["folder"] for r in got] == [str(tmp_path / "a" / RUNNING / f"{k:04d}") for k in range(2)]
     assert run_replicates(_Plain(), tmp_path / "b", 2) == [{"replicate": 0}, {"replicate": 1}]
+    got = run_replicates(_Resuming(), tmp_path / "c", 1, work=tmp_path / "elsewhere")  # a checkpoint kept apart
+    assert got[0]["folder"] == str(tmp_path / "elsewhere" / "0000")

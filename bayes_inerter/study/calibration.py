@@ -170,16 +170,18 @@ def _replicate_file(out: Path, k: int) -> Path:
     return out / "replicates" / f"{k:04d}.json"
 
 
-#: Where a replicate whose settings resume (``resumes``) runs its fit: ``out``/.running/<k>,
-#: removed when the replicate is done (not committed: .gitignore).
+#: Where a replicate whose settings resume (``resumes``) runs its fit by default:
+#: ``out``/.running/<k>, removed when the replicate is done (not committed: .gitignore).
+#: A chain's checkpoint there is tens of megabytes: a study keeping its results small
+#: gives ``run_replicates`` a ``work`` folder elsewhere.
 RUNNING = ".running"
 
 
 def _worker(args):
-    cs, k, out = args
+    cs, k, out, work = args
     try:
         if getattr(cs, "resumes", False):
-            result = cs.replicate(k, out / RUNNING / f"{k:04d}")
+            result = cs.replicate(k, work / f"{k:04d}")
         else:
             result = cs.replicate(k)
     except Exception as exc:  # one replicate's failure is reported, the others go on
@@ -202,10 +204,13 @@ def _with_defaults(saved: dict, defaults: dict) -> dict:
     return out
 
 
-def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=None) -> list[dict]:
+def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=None, work=None) -> list[dict]:
     """Run replicates 0..``replicates``-1 of ``cs`` (any frozen settings dataclass with a
     ``replicate(k)`` method) into ``out``/replicates, one JSON each, those already there
-    reused, and return them all in order. A replicate that raised holds ``error``."""
+    reused, and return them all in order. A replicate that raised holds ``error``.
+    Settings that resume (``resumes`` true) have ``replicate(k, folder)`` run replicate
+    k's fit in ``work``/<k> (None: ``out``/:data:`RUNNING`), continued there by the next
+    run if this one stops."""
     from ..inference.fit import check_output_folder
 
     out = Path(out)
@@ -221,7 +226,8 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
     done = replicates - len(todo)
     if progress:
         progress(done, replicates)
-    jobs = [(cs, k, out) for k in todo]
+    work = out / RUNNING if work is None else Path(work)
+    jobs = [(cs, k, out, work) for k in todo]
     with make_executor(processes if len(jobs) > 1 else 1) as executor:
         for outcome in executor.as_completed(_worker, jobs):  # each replicate in a process of its own
             if not outcome.ok:

@@ -134,8 +134,8 @@ class StudyCalibration:
             raise ValueError(f"draws must be a whole number of at least 9, got {self.draws!r}")
 
     #: Its replicates' fits continue from a checkpoint kept in a work folder
-    #: (``calibration.run_replicates`` gives each one): a chain of tens of thousands of
-    #: steps stopped by a session's end goes on where it stopped.
+    #: (``calibration.run_replicates``'s ``work`` gives each one): a chain of tens of
+    #: thousands of steps stopped by a session's end goes on where it stopped.
     resumes: ClassVar[bool] = True
 
     def replicate(self, k: int, folder=None) -> dict:
@@ -430,13 +430,15 @@ def write_study_calibration(out, cs: StudyCalibration, results: list[dict], vers
             "report": report, "section": section}
 
 
-def run_study_calibration(cs: StudyCalibration, out, replicates: int, *, processes: int = 1, progress=None) -> dict:
+def run_study_calibration(cs: StudyCalibration, out, replicates: int, *, processes: int = 1, progress=None,
+                          work=None) -> dict:
     """Run ``replicates`` replicates into ``out`` (one JSON each; those already there are
-    reused) and write the tables, figures and reports (:func:`write_study_calibration`)."""
+    reused) and write the tables, figures and reports (:func:`write_study_calibration`).
+    ``work``: where each replicate's fit runs until done (``calibration.run_replicates``)."""
     from ..inference.fit import versions
     from .calibration import run_replicates
 
-    results = run_replicates(cs, out, replicates, processes=processes, progress=progress)
+    results = run_replicates(cs, out, replicates, processes=processes, progress=progress, work=work)
     return write_study_calibration(out, cs, results, versions())
 
 
