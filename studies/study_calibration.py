@@ -65,6 +65,9 @@ if __name__ == "__main__":
     ap.add_argument("--converge", action="store_true", help="each chain to the convergence rule")
     ap.add_argument("--max-steps", type=int, default=StudyCalibration.max_steps)
     ap.add_argument("--freqs", nargs="+", type=float, default=None)
+    ap.add_argument("--work", default=None, metavar="FOLDER",
+                    help="where each replicate's fit runs until done, continued by the next run "
+                         "(default: runs/study-calibration/<name of --out>)")
     ap.add_argument("--raise-cap", action="store_true",
                     help="raise --out's cap to --max-steps first: its capped replicates are fitted again")
     ap.add_argument("--summarise", action="store_true",
@@ -113,7 +116,7 @@ if __name__ == "__main__":
         print(json.dumps(got, indent=1))
         sys.exit(0)
     # each replicate's fit in progress (its checkpoint, tens of MB) outside results/, continued by the next run
-    work = ROOT / "runs" / "study-calibration" / Path(args.out).resolve().name
+    work = Path(args.work) if args.work else ROOT / "runs" / "study-calibration" / Path(args.out).resolve().name
     res = run_with_bar(lambda progress: run_study_calibration(cs, args.out, args.replicates, processes=args.processes,
                                                               progress=progress, work=work),
                        args.replicates, "calibration", mininterval=10)
