@@ -25,6 +25,8 @@ The records (``--set``):
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import math
 import sys
 import time
 from pathlib import Path
@@ -48,8 +50,10 @@ NOISE_FREE = (0, 1, 2, 22, 23, 24, 25, 26, 21, 3)
 FIELDS = ("set", "record", "freq_hz", "seed", "variant", "log_post", "b_error_pct", "gain", "tau", "seconds")
 
 
-def records(which: str, args):
-    """(record label, frequency, seed, model, true b) of each record of the set ``which``."""
+def records(which: str, args, *, zeta_b: float | None = None, seed_by_record: bool = False):
+    """(record label, frequency, seed, model, true b) of each record of the set ``which``;
+    the noise-free device's plate mode damped ``zeta_b`` (None: Table I's c_B) and each
+    noise-free record searched from its grid index as seed (``seed_by_record``; else 0)."""
     if which == "sbc":
         for k, freq, record, b_true in sbc_design_records(args.sbc_seed, range(args.sbc_replicates)):
             yield str(k), freq, args.sbc_seed, PosteriorModel(record, priors=STUDY_SBC_PRIORS), b_true
@@ -62,7 +66,10 @@ def records(which: str, args):
         for k in args.noise_free:
             setting, freq = grid_case(k)
             p = paper_parameters(setting)
-            yield setting, freq, 0, PosteriorModel(generate_record(p, freq, settings=quiet, setting_name=setting)), p.b
+            if zeta_b is not None:
+                p = dataclasses.replace(p, c_B=2.0 * zeta_b * math.sqrt(p.k_B * p.m_B))
+            yield (setting, freq, k if seed_by_record else 0,
+                   PosteriorModel(generate_record(p, freq, settings=quiet, setting_name=setting)), p.b)
 
 
 def main(argv=None) -> int:

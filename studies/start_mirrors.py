@@ -23,7 +23,6 @@ laboratories 11 to 13, ``start_continuation.PAPER_LIKE``) and ``noise-free`` (re
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import sys
 import time
@@ -31,35 +30,13 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import append_row, grid_case, read_rows, sbc_design_records
-from start_continuation import PAPER_LIKE
-from bayes_inerter import paper_parameters
-from bayes_inerter.inference import PosteriorModel, optimize
-from bayes_inerter.records import GeneratorSettings, generate_record
-from bayes_inerter.records.paper_like import paper_like_record
-from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS
+from _table import append_row, read_rows
+from start_continuation import records
+from bayes_inerter.inference import optimize
 
 ROOT = Path(__file__).resolve().parents[1]
 VARIANTS = {"f_share": ("f_share",), "f_share+c_share": ("f_share", "c_share")}
 FIELDS = ("set", "record", "freq_hz", "seed", "variant", "log_post", "b_error_pct", "c_share", "seconds")
-
-
-def records(which: str, args):
-    """(record label, frequency, seed, model, true b) of each record of the set ``which``."""
-    if which == "sbc":
-        for k, freq, record, b_true in sbc_design_records(args.sbc_seed, range(args.sbc_replicates)):
-            yield str(k), freq, args.sbc_seed, PosteriorModel(record, priors=STUDY_SBC_PRIORS), b_true
-    elif which == "paper-like":
-        for setting, freq, lab in PAPER_LIKE:
-            yield setting, freq, lab, PosteriorModel(paper_like_record(setting, freq, seed=lab)), \
-                paper_parameters(setting).b
-    else:
-        quiet = GeneratorSettings(force_noise=0.0, accel_noise=0.0, disp_noise=0.0)
-        for k in args.noise_free:
-            setting, freq = grid_case(k)
-            p = paper_parameters(setting)
-            p = dataclasses.replace(p, c_B=2.0 * args.zeta_b * math.sqrt(p.k_B * p.m_B))
-            yield setting, freq, k, PosteriorModel(generate_record(p, freq, settings=quiet, setting_name=setting)), p.b
 
 
 def main(argv=None) -> int:
@@ -77,7 +54,7 @@ def main(argv=None) -> int:
         return 2
     done = {(r["set"], r["record"], r["freq_hz"], r["seed"], r["variant"]) for r in read_rows(args.out)}
     for which in args.set:
-        for label, freq, seed, model, b_true in records(which, args):
+        for label, freq, seed, model, b_true in records(which, args, zeta_b=args.zeta_b, seed_by_record=True):
             for variant, shares in VARIANTS.items():
                 key = (which, label, str(float(freq)), str(seed), variant)
                 if key in done:
