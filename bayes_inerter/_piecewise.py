@@ -64,7 +64,11 @@ def _assemble(A, B, nodes, mass, gaps, link_c, link_k, masses):
     wcol = n + 2 * n_in
     m = wcol + nc + nl
     Abar, L = np.zeros((m, m)), np.zeros((max(nl, 1), m, m))
-    Abar[:n, :n] = A
+    for i in range(n):  # element by element: an array assigned to a slice costs seconds to compile
+        for k in range(n):
+            Abar[i, k] = A[i, k]
+        for q in range(n_in):
+            Abar[i, n + q] = B[i, q]
     for q in range(nl):
         j = gaps[q]
         for node, sign in ((j, -1.0), (j + 1, 1.0)):
@@ -73,8 +77,9 @@ def _assemble(A, B, nodes, mass, gaps, link_c, link_k, masses):
             L[q, node, j + 1] -= c
             L[q, node, N + j] += k
             L[q, node, wcol + nc + q] -= k
-        Abar[:n, :n] -= L[q, :n, :n]
-    Abar[:n, n:n + n_in] = B
+        for i in range(n):
+            for k in range(n):
+                Abar[i, k] -= L[q, i, k]
     for q in range(n_in):
         Abar[n + q, n + n_in + q] = 1.0
     pattern = Abar != 0

@@ -274,8 +274,11 @@ def _augmented(A, B, nodes, mass):
     nc = nodes.shape[0]
     m = n + 2 * n_in + nc
     Abar = np.zeros((m, m))
-    Abar[:n, :n] = A
-    Abar[:n, n : n + n_in] = B
+    for i in range(n):  # element by element: an array assigned to a slice costs seconds to compile
+        for j in range(n):
+            Abar[i, j] = A[i, j]
+        for q in range(n_in):
+            Abar[i, n + q] = B[i, q]
     for q in range(n_in):
         Abar[n + q, n + n_in + q] = 1.0
     for i in range(nc):

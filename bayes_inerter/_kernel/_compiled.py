@@ -58,11 +58,29 @@ def tables(Abar, h, J):
         acc += term
         if np.max(np.abs(term)) < 1e-300 or np.max(np.abs(term)) < 1e-18 * np.max(np.abs(acc)):
             break
-    F[J] = acc
+    fill2(F[J], acc)
     for j in range(J - 1, -1, -1):
         G = F[j + 1]
-        F[j] = 2.0 * G + G @ G
+        fill2(F[j], 2.0 * G + G @ G)
     return F
+
+
+@njit(cache=True)
+def fill1(dst, src):
+    """dst[:] = src for 1-d arrays of one length, element by element. Numba's own
+    assignment of an array to a slice checks the shapes with an error message whose
+    compilation took 4 to 6 s in every process that compiled a kernel; these loops take
+    none of it."""
+    for i in range(dst.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True)
+def fill2(dst, src):
+    """dst[:, :] = src for 2-d arrays of one shape, element by element (see ``fill1``)."""
+    for i in range(dst.shape[0]):
+        for j in range(dst.shape[1]):
+            dst[i, j] = src[i, j]
 
 
 @njit(cache=True)
@@ -148,7 +166,7 @@ def setup(Abar, n, n_in, node, mass, h, out_node):
     OUT = np.zeros((n_modes, m))
     R = np.zeros((max(nc, 1), m))
     for i in range(nc):
-        R[i] = mass[i] * Abar[node[i]]
+        fill1(R[i], mass[i] * Abar[node[i]])
         for q in range(nc):
             R[i, wcol + q] = 0.0
     for mode in range(n_modes):
@@ -158,11 +176,11 @@ def setup(Abar, n, n_in, node, mass, h, out_node):
                 As[node[i], :] = 0.0
         T = tables(As, h, J)
         for lev in range(J + 1):
-            F[mode, lev] = T[lev][:n]
+            fill2(F[mode, lev], T[lev][:n])
         for i in range(nc):
-            VD[mode, i] = As[node[i]]
-            RD[mode, i] = R[i] @ As
-        OUT[mode] = As[out_node]
+            fill1(VD[mode, i], As[node[i]])
+            fill1(RD[mode, i], R[i] @ As)
+        fill1(OUT[mode], As[out_node])
     return J, F, VD, RD, OUT, R
 
 
@@ -173,7 +191,7 @@ def start(z_init, inputs, n, n_in, m, node, R, f0):
     nc = node.shape[0]
     wcol = n + 2 * n_in
     z = np.zeros(m)
-    z[:n] = z_init
+    fill1(z[:n], z_init)
     for q in range(n_in):
         z[n + q] = inputs[0, q]
     sgn = np.ones(max(nc, 1))

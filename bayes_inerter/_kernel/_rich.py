@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ._compiled import levels
+from ._compiled import fill1, fill2, levels
 
 
 class Net(NamedTuple):
@@ -83,7 +83,7 @@ def top_tables(As, n, h, J, F):
     X = As * t
     term = X[:n].copy()
     G = F[J]
-    G[:, :] = term
+    fill2(G, term)
     for q in range(2, 30):
         nxt = np.zeros((n, m))
         for i in range(n):
@@ -132,7 +132,7 @@ def enter(mode, net, tabs):
         if s < net.radix[i] - 1:
             As[net.node[i], net.node[i]] += net.dslope[i, s]
     for i in range(nc):  # the holding force: the node's mass times its acceleration
-        R[mode, i] = net.mass[i] * As[net.node[i]]  # without its own (any contact's) force
+        fill1(R[mode, i], net.mass[i] * As[net.node[i]])  # without its own (any contact's) force
         for q in range(nc):
             R[mode, i, wcol + q] = 0.0
     for i in range(nc):
@@ -140,10 +140,10 @@ def enter(mode, net, tabs):
             As[net.node[i], :] = 0.0
     top_tables(As, net.n, net.h, J, F[mode])
     for e in range(ne):
-        VD[mode, e] = As[net.col[e]]
+        fill1(VD[mode, e], As[net.col[e]])
     for i in range(nc):
-        RD[mode, i] = R[mode, i] @ As
-    OUT[mode] = As[net.out_node]
+        fill1(RD[mode, i], R[mode, i] @ As)
+    fill1(OUT[mode], As[net.out_node])
     ready[mode] = True
 
 
@@ -238,7 +238,7 @@ def start(z_init, inputs, net, tabs):
     nc, ne, m = net.node.shape[0], net.col.shape[0], net.Abar.shape[0]
     n, n_in = net.n, net.n_in
     z = np.zeros(m)
-    z[:n] = z_init
+    fill1(z[:n], z_init)
     for q in range(n_in):
         z[n + q] = inputs[0, q]
     st = np.zeros(max(ne, 1), dtype=np.int64)

@@ -131,7 +131,8 @@ def kernel({kernel_params}):
     accel[0] = {output}
     vel[0] = z{out_node}
     if store:
-        states[0] = z[:n]
+        for i in range(n):
+            states[0, i] = z[i]
     va = np.empty({guards_or_1})
     da = np.empty({guards_or_1})
     $guard_locals

@@ -82,7 +82,8 @@ def _sosfiltfilt(sos, zi, x, pad):
     for i in range(pad):
         ext[i] = 2.0 * x[0] - x[pad - i]
         ext[n + pad + i] = 2.0 * x[n - 1] - x[n - 2 - i]
-    ext[pad : pad + n] = x
+    for i in range(n):  # element by element: an array assigned to a slice costs seconds to compile
+        ext[pad + i] = x[i]
     _sosfilt_inplace(sos, zi, ext[0], ext)
     rev = ext[::-1].copy()
     _sosfilt_inplace(sos, zi, rev[0], rev)
