@@ -349,7 +349,8 @@ def kernel(Abar, n_, n_in_, node, f0, mass, inputs, h, z_init, out_node_, store,
     accel[0] = (((((0.0 + OUT[mode, 0] * z0) + OUT[mode, 1] * z1) + OUT[mode, 3] * z3) + OUT[mode, 5] * z5) + OUT[mode, 7] * z7)
     vel[0] = z0
     if store:
-        states[0] = z[:n]
+        for i in range(n):
+            states[0, i] = z[i]
     va = np.empty(3)
     da = np.empty(3)
     bound0 = f0[0]
