@@ -132,6 +132,11 @@ def plot_corner(values: np.ndarray, names, *, truths=None, paper=None, title: st
     return fig
 
 
+#: How far above its frame a corner panel's own texts (its title, tick labels) may stand,
+#: inches: panels lower than this below the figure's title and legend are not measured.
+REACH = 1.0
+
+
 def _title_and_legend(fig, title: str, handles: list, *, grow: bool) -> None:
     """``title`` at the top of a corner figure, the legend of ``handles`` under it on the
     right (in the empty upper triangle where it fits); the panels moved down until
@@ -151,7 +156,12 @@ def _title_and_legend(fig, title: str, handles: list, *, grow: bool) -> None:
         if legend is not None:
             legend.set_bbox_to_anchor((0.98, (below - 0.05 * inch) / height), transform=fig.transFigure)
             texts.append(legend.get_window_extent(renderer))
-        panels = [ax.get_tightbbox(renderer) for ax in fig.axes if ax.get_frame_on()]
+        # only panels whose frame tops lie within REACH of the texts' bottom can reach them
+        # (their titles and tick labels stand out a fraction of an inch); a corner plot of
+        # 15 parameters has 120 panels, each tight box several milliseconds
+        low = min((t.y0 for t in texts), default=height)
+        panels = [ax.get_tightbbox(renderer) for ax in fig.axes
+                  if ax.get_frame_on() and ax.get_position().y1 * height + REACH * inch >= low]
         need = max([p.y1 - t.y0 for t in texts for p in panels if t.overlaps(p)], default=0.0)
         if need <= 0:
             return
