@@ -84,6 +84,9 @@ def main(argv=None) -> int:
             warnings.filterwarnings("ignore", category=FutureWarning)
             warnings.filterwarnings("ignore", category=RuntimeWarning)
             code = args.func(args)
+        # where stdout is buffered (not a terminal, no PYTHONUNBUFFERED) a closed pipe shows
+        # only at its flush: here, where it is handled, not at exit (status 120 and a message)
+        sys.stdout.flush()
         if _INTERRUPTED:  # came where it could only be dropped, and nothing asked again
             raise KeyboardInterrupt
         return code
