@@ -4,8 +4,8 @@ record (the generator's servo kernel: 38 s to compile on the development machine
 evaluates the default likelihood on it (32 s more);
 ``python tests/_warm.py networks`` simulates the paper's reduced, rigid and linear
 networks from a force (46 s), and the rigid one under Stribeck friction (the kernel for
-piecewise-linear laws, about 35 s more). Each worker would otherwise compile them itself, both at
-once; with a warm cache each takes about two seconds."""
+piecewise-linear laws, about 35 s more). Each worker would otherwise compile them
+itself, both at once; with a warm cache each takes about two seconds."""
 
 import sys
 

@@ -237,9 +237,8 @@ def test_the_smooth_law_uses_the_stiff_solver():
 def test_stribeck_and_backlash_take_the_exact_kernel():
     """By default Stribeck friction runs as its piecewise-linear form on the exact kernel,
     and so does a network with backlash; the stiff solver remains an option. (Stribeck on
-    the rigid network, the shape the quick subset's hybrid reference test compiles; the
-    dead zone on the linear network, the smallest kernel with a gap, whose agreement with
-    the plain reference ``test_kernel.py`` checks with the slow tests.)"""
+    the rigid network and the dead zone on the linear one: the shapes the quick subset's
+    reference tests compile.)"""
     p = paper_parameters("A2")
     t, f = inverse_dynamics_force(p, 1.0, duration=0.6, ramp=0.2)
     stribeck = simulate(p, t, f, network="rigid", friction="stribeck")
