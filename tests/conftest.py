@@ -4,6 +4,14 @@ import numpy as np
 import pytest
 from hypothesis import settings
 
+from bayes_inerter import _arviz
+
+#: arviz imported once here, before the test modules that import it: conftest is imported
+#: by pytest's main process before it starts the workers, and arviz's first import of
+#: the day, in processes started at once, can fail on its stamp file (``_arviz``; seen on
+#: a clean clone with an empty ~/.cache, two workers collecting together).
+_arviz.module()
+
 #: Property tests draw the same examples on every run and machine (hypothesis's examples
 #: are otherwise random each run, so a rare failing example would fail CI by chance; a
 #: property is still tried on many examples, the same ones everywhere).

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _arviz
 from .fit import check_output_folder, fit_record
 from .model import MODELS, LikelihoodSettings, refusal
 from .results import loo_data
@@ -100,7 +101,7 @@ def stack_draws(draws: dict, weights: dict, rng: np.random.Generator, n: int | N
 
 
 def _hdi(x: np.ndarray) -> tuple[float, float]:
-    import arviz as az
+    az = _arviz.module()
 
     lo, hi = az.hdi(np.asarray(x, dtype=float), hdi_prob=LEVEL)
     return float(lo), float(hi)
@@ -110,7 +111,7 @@ def _weights(idatas: dict) -> dict:
     """arviz's stacking weights of the fitted models (one model: weight 1)."""
     if len(idatas) == 1:
         return {m: 1.0 for m in idatas}
-    import arviz as az
+    az = _arviz.module()
 
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")  # large Pareto k: flagged per fit instead

@@ -6,6 +6,8 @@ import warnings
 
 import numpy as np
 
+from .. import _arviz
+
 __all__ = ["rhat_ess"]
 
 
@@ -17,7 +19,7 @@ def rhat_ess(chain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     read R-hat as a check that no walker is stuck apart, and take the autocorrelation
     time from emcee.
     """
-    import arviz as az
+    az = _arviz.module()
 
     steps, walkers, ndim = chain.shape
     if steps < 4:

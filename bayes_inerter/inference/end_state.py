@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _arviz
 from .convergence import steps_for
 
 __all__ = ["EndWarning", "end_state_warnings", "prior_limited_warning", "convergence_warning", "BOUND_LOG_TOL",
@@ -74,7 +75,7 @@ def _inertances(names) -> list[int]:
 def _hdi(x) -> tuple[float, float]:
     import warnings
 
-    import arviz as az
+    az = _arviz.module()
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _arviz
 from .harmonic import at_times
 from .model import PosteriorModel
 
@@ -107,7 +108,7 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
                       max_draws: int = MAX_DRAWS, keep_sims: int = 200):
     """InferenceData of the kept draws; also the full-rate low-passed simulations of up to
     ``keep_sims`` draws (for credible bands), shape (n, K)."""
-    import arviz as az
+    az = _arviz.module()
 
     idx = _subset(sample, max_draws)
     theta = sample.theta[:, idx]
@@ -204,7 +205,7 @@ def summary_rows(sample: PosteriorSample, kinds: dict | None = None) -> list[dic
     ``kinds``: each name's ``kind`` ("sampled", "derived", ...; empty where not given).
     A derived quantity that is not defined in every draw (NaN: ``b_app``) is summarised
     over the draws where it is, and its kind says in how many."""
-    import arviz as az
+    az = _arviz.module()
 
     rows = []
     data = sample.as_dict()
@@ -240,7 +241,7 @@ def summary_rows(sample: PosteriorSample, kinds: dict | None = None) -> list[dic
 
 def _moments(x: np.ndarray) -> dict:
     """mean, sd and the 94 % HDI of draws ``x`` (any shape, all finite)."""
-    import arviz as az
+    az = _arviz.module()
 
     hdi = az.hdi(np.ravel(x), hdi_prob=0.94)
     return {"mean": float(np.mean(x)), "sd": float(np.std(x, ddof=1)), "hdi_3%": float(hdi[0]),
@@ -260,7 +261,7 @@ def loo_data(idata):
     draw: what PSIS-LOO reads. A derived quantity defined on some draws only (``b_app``,
     NaN elsewhere) enters arviz's relative efficiency, which ignores it, and made arviz
     log "Array contains NaN-value" for every fit; without it the LOO is the same."""
-    import arviz as az
+    az = _arviz.module()
 
     post = idata.posterior
     finite = [v for v in post.data_vars if np.all(np.isfinite(np.asarray(post[v])))]
@@ -274,7 +275,7 @@ def loo_summary(idata) -> dict:
     comparison can be rebuilt without it."""
     import warnings
 
-    import arviz as az
+    az = _arviz.module()
 
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a large Pareto k is reported in the result instead

@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _arviz
 from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
 from ..records.sensitivity import SensorCalibration
 from .fits import RecordFit, collect, fit_loo  # the tables' input, named here as before
@@ -211,7 +212,7 @@ def joint_estimate(inertance: list[dict], draws: dict, converged: bool,
     ``b_cal_*`` columns are recomputed about the joint b. Settings the joint model does not
     have keep the product (``estimate`` ``"records combined"``).
     """
-    import arviz as az
+    az = _arviz.module()
 
     out = []
     for row in inertance:
@@ -271,7 +272,7 @@ def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | No
     (and ``covers_truth_cal``), the sensors' share added (normal): ``u`` times the term
     plus the same regression of the rows' ``moving_mass`` (nan where a row has none).
     """
-    import arviz as az
+    az = _arviz.module()
 
     geometry = geometry or DEFAULT_GEOMETRY
     if not inertance:

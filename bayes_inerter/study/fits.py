@@ -9,6 +9,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from .. import _arviz
+
 __all__ = ["RecordFit", "collect", "fit_loo"]
 
 
@@ -59,6 +61,6 @@ def fit_loo(fit: RecordFit) -> dict:
     path = fit.folder / LOO_FILE
     if path.is_file():
         return json.loads(path.read_text())
-    import arviz as az
+    az = _arviz.module()
 
     return write_loo(fit.folder, az.from_netcdf(str(fit.folder / "posterior.nc")))

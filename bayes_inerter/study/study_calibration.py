@@ -56,6 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _arviz
 from ..device import TABLE_I, paper_parameters
 from ..inference.convergence import Convergence
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
@@ -220,7 +221,7 @@ def study_replicate(cs: StudyCalibration, k: int, folder=None) -> dict:
     equal-tailed) holds it, and the chain's diagnostics. ``folder``: where its fit runs,
     continued from the checkpoint there if an earlier run left one, and removed once the
     replicate is done (None: a temporary folder, nothing kept if stopped)."""
-    import arviz as az
+    az = _arviz.module()
 
     if folder is None:
         with tempfile.TemporaryDirectory() as tmp:
