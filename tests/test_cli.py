@@ -155,3 +155,31 @@ def test_a_command_that_ends_after_a_dropped_ctrl_c_exits_130(monkeypatch, capsy
     assert signal.getsignal(signal.SIGINT) is before  # the handler is put back
     monkeypatch.setattr(cli, "cmd_inspect", lambda args: 0)
     assert main(["inspect", "any.csv"]) == 0  # the next command starts afresh
+
+
+@pytest.mark.parametrize("fails", [False, True])
+def test_output_into_a_closed_pipe_keeps_the_commands_own_status(tmp_path, fails):
+    """With stdout buffered (no PYTHONUNBUFFERED) a closed pipe shows only at a flush;
+    Python's own at exit would end the process with status 120, a failed command's too.
+    The command here is a stand-in that prints, then fails or not."""
+    import os
+
+    script = ("import sys\n"
+              "import bayes_inerter.cli as cli\n"
+              "def command(args):\n"
+              "    print('a line of output\\n' * 50)\n"
+              f"    if {fails}:\n"
+              "        raise cli.CliError('the stand-in failed')\n"
+              "    return 0\n"
+              "cli.cmd_inspect = command\n"
+              f"sys.exit(cli.main(['inspect', {str(tmp_path / 'r.csv')!r}]))\n")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    proc.stdout.close()  # as `| head -0` does
+    err = proc.stderr.read().decode()
+    status = proc.wait()
+    assert "Traceback" not in err and "Broken pipe" not in err
+    if fails:
+        assert status == 1 and "error: the stand-in failed" in err
+    else:
+        assert status in (0, 141)

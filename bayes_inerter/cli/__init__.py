@@ -53,6 +53,23 @@ def _check_interrupt() -> None:
         raise KeyboardInterrupt
 
 
+def _stdout_to_devnull() -> None:
+    import os
+
+    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+
+
+def _flush_quietly() -> None:
+    """Flush stdout on every way out of :func:`main`. Where stdout is buffered (not a
+    terminal, no PYTHONUNBUFFERED) a closed pipe shows only at a flush; left to Python's
+    flush at exit it ends the process with status 120 and a message, whatever the
+    command's own status (a failed command's 1 too)."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _stdout_to_devnull()
+
+
 def main(argv=None) -> int:
     import signal
     import threading
@@ -84,9 +101,7 @@ def main(argv=None) -> int:
             warnings.filterwarnings("ignore", category=FutureWarning)
             warnings.filterwarnings("ignore", category=RuntimeWarning)
             code = args.func(args)
-        # where stdout is buffered (not a terminal, no PYTHONUNBUFFERED) a closed pipe shows
-        # only at its flush: here, where it is handled, not at exit (status 120 and a message)
-        sys.stdout.flush()
+        sys.stdout.flush()  # a closed pipe shows here, where it is handled (see _flush_quietly)
         if _INTERRUPTED:  # came where it could only be dropped, and nothing asked again
             raise KeyboardInterrupt
         return code
@@ -94,9 +109,7 @@ def main(argv=None) -> int:
         print("interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except BrokenPipeError:  # the reader went away (| head): nothing more to say, to anyone
-        import os
-
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        _stdout_to_devnull()
         return EXIT_PIPE
     except Exception as exc:
         # an error Ctrl-C caused (numba's SystemError where it came inside compiled code) is
@@ -111,4 +124,5 @@ def main(argv=None) -> int:
     finally:
         if ours:
             signal.signal(signal.SIGINT, previous)
+        _flush_quietly()
 
