@@ -91,6 +91,17 @@ def _assemble(A, B, nodes, mass, gaps, link_c, link_k, masses):
     return Abar, L, pattern
 
 
+_NO_GAPS, _NO_LINKS = np.zeros(0, dtype=np.int64), np.zeros(0)
+
+
+def augmented(A, B, nodes, mass):
+    """The kernel's augmented matrix for a network without gaps: z = [x, u, du, w] (see
+    ``_kernel``), w the contacts' Coulomb forces acting on their ``nodes`` of ``mass``
+    (kg). :func:`_assemble`'s matrix with no gap links, so the two kernels' matrices are
+    built in one place."""
+    return _assemble(A, B, nodes, mass, _NO_GAPS, _NO_LINKS, _NO_LINKS, _NO_LINKS)[0]
+
+
 def network_arrays(compiled: CompiledNetwork, A, B, h: float, out_node: int = 0):
     """(shape, net): the kernel's shape and arrays for the network, its linear part
     x' = A x + B u given with every link closed and each node's viscous friction in."""

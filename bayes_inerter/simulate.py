@@ -230,7 +230,7 @@ def exact_runner(A, B, nodes, f0, mass, h, *, max_events=MAX_EVENTS_PER_STEP, sa
     n_in = B.shape[1]
     nodes = np.asarray(nodes, dtype=np.int64)
     mass = np.asarray(mass, dtype=float)
-    Abar = _augmented(np.ascontiguousarray(A, dtype=float), B, nodes, mass)
+    Abar = _piecewise.augmented(np.ascontiguousarray(A, dtype=float), B, nodes, mass)
     kernel = _kernel.kernel_for(n, n_in, nodes, 0, (Abar != 0).tobytes())
     h, max_events = float(h), int(max_events)
 
@@ -263,27 +263,6 @@ def _outputs(out, h, max_events, sampling):
     if sampling == "mean":
         accel = mean_acceleration(vel, h)
     return accel, states
-
-
-@njit(cache=True)
-def _augmented(A, B, nodes, mass):
-    """The kernel's augmented matrix: z = [x, u, du, w] (see ``_kernel``), w the contacts'
-    Coulomb forces acting on their nodes."""
-    n = A.shape[0]
-    n_in = B.shape[1]
-    nc = nodes.shape[0]
-    m = n + 2 * n_in + nc
-    Abar = np.zeros((m, m))
-    for i in range(n):  # element by element: an array assigned to a slice costs seconds to compile
-        for j in range(n):
-            Abar[i, j] = A[i, j]
-        for q in range(n_in):
-            Abar[i, n + q] = B[i, q]
-    for q in range(n_in):
-        Abar[n + q, n + n_in + q] = 1.0
-    for i in range(nc):
-        Abar[nodes[i], n + 2 * n_in + i] = -1.0 / mass[i]
-    return Abar
 
 
 def simulate_network(

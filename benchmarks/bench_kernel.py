@@ -36,11 +36,12 @@ import numpy as np
 
 from _timing import record_row
 from bayes_inerter import _kernel as new_kernel
+from bayes_inerter._piecewise import augmented as _augmented
 from bayes_inerter.device import paper_parameters
 from bayes_inerter.models import build_network
 from bayes_inerter.network import compile_network
 from bayes_inerter.records.generator import paper_record
-from bayes_inerter.simulate import MAX_EVENTS_PER_STEP, _augmented, _contacts, check_record
+from bayes_inerter.simulate import MAX_EVENTS_PER_STEP, _contacts, check_record
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_RECORDS = ["A0_0.5Hz", "A1_1Hz", "A3_1Hz", "B2_1.5Hz", "B1_1Hz", "A2_1.5Hz"]

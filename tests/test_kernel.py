@@ -10,7 +10,7 @@ from bayes_inerter import _kernel, _piecewise, paper_parameters
 from bayes_inerter.friction import Coulomb, PiecewiseLinear
 from bayes_inerter.models import build_network
 from bayes_inerter.network import compile_network
-from bayes_inerter.simulate import _augmented, _contacts
+from bayes_inerter.simulate import _contacts
 
 CASES = [("reduced", "A3", 1.0, 1.0), ("reduced", "A0", 0.5, 0.9), ("reduced", "B2", 1.5, 1.0),
          # the full network's kernel and its plain reference take a minute on a busy
@@ -36,7 +36,7 @@ def kernel_arguments(network, setting, freq, *, scale=1.0, store=False, max_even
     """The kernel's arguments for a network driven as simulate drives it."""
     A, B, nodes, f0, mass, inputs, h = network_arrays(network, setting, freq, scale=scale, duration=duration)
     n = A.shape[0]
-    Abar = _augmented(A, B, nodes, mass)
+    Abar = _piecewise.augmented(A, B, nodes, mass)
     return (Abar, n, 1, nodes, f0, mass, inputs, h, np.zeros(n), 0, store, max_events)
 
 
