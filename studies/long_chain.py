@@ -2,7 +2,7 @@
 between the nut stiffness k_n and the inertance b that the walkers cross slowly.
 
     python studies/long_chain.py [--setting A3] [--freq 1] [--record FILE.csv]
-        [--steps 5000] [--seed 0] [--processes 1] [--out results/long-chain]
+        [--steps 5000] [--seed 0] [--processes 1] [--out runs/long-chain]
 
 The record is the full study's (the paper grid generated with seed 0, default
 generator settings) for ``--setting`` and ``--freq``, or a record file.
@@ -31,7 +31,7 @@ def main():
     ap.add_argument("--steps", type=int, default=5000)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--processes", type=int, default=1)
-    ap.add_argument("--out", default=str(ROOT / "results" / "long-chain"))
+    ap.add_argument("--out", default=str(ROOT / "runs" / "long-chain"))
     args = ap.parse_args()
 
     import emcee

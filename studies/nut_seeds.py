@@ -8,7 +8,7 @@ noise, the joint optimum on other seeds' records says: each run starts restarted
 Nelder-Mead at the generating parameters. Writes ``--out``/nut_seeds.csv and prints it.
 
     python studies/nut_seeds.py [--settings B1,B2] [--seeds 0,1,2,3]
-        [--out results/long-chain]
+        [--out runs/long-chain]
 
 The big-flywheel settings are where b_app - b = b^2 k_n / c_n^2 is largest (about
 37 kg at B2 with the generating values), so they say the most about it.
@@ -28,7 +28,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--settings", default="B1,B2")
     ap.add_argument("--seeds", default="0,1,2,3")
-    ap.add_argument("--out", default=str(ROOT / "results" / "long-chain"))
+    ap.add_argument("--out", default=str(ROOT / "runs" / "long-chain"))
     args = ap.parse_args()
 
     from tqdm import tqdm

@@ -4,7 +4,7 @@ while it gains, each grid point started from the one before) and where b and the
 viscous friction sit there. It shows the shape the walkers have to cross.
 
     python studies/ridge_profile.py [--setting A3] [--freq 1] [--points 15]
-        [--out results/long-chain]
+        [--out runs/long-chain]
 
 The record is the full study's (paper grid, seed 0) for ``--setting`` and ``--freq``;
 the first point starts at the generating parameters. Writes
@@ -27,7 +27,7 @@ def main():
     ap.add_argument("--setting", default="A3")
     ap.add_argument("--freq", type=float, default=1.0)
     ap.add_argument("--points", type=int, default=15)
-    ap.add_argument("--out", default=str(ROOT / "results" / "long-chain"))
+    ap.add_argument("--out", default=str(ROOT / "runs" / "long-chain"))
     args = ap.parse_args()
 
     from tqdm import tqdm

@@ -6,7 +6,7 @@ start and seed three ways, side by side:
 - ``impedance``: in the impedance coordinates (``inference.coordinates``, the default).
 
     python studies/walks.py [--record A3:1 ...] [--steps 3000] [--seed 0]
-        [--processes 2] [--out results/long-chain/walks.csv]
+        [--processes 2] [--out runs/long-chain/walks.csv]
 
 The walks compare where emcee's ensemble moves go, so none of them adds the fitted
 independence move (``sampler.Adaptation``; ``benchmarks/bench_adaptation.py`` measures
@@ -78,7 +78,7 @@ def main():
     ap.add_argument("--steps", type=int, default=3000)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--processes", type=int, default=2)
-    ap.add_argument("--out", default=str(ROOT / "results" / "long-chain" / "walks.csv"))
+    ap.add_argument("--out", default=str(ROOT / "runs" / "long-chain" / "walks.csv"))
     args = ap.parse_args()
     jobs = []
     with tempfile.TemporaryDirectory() as folder:
