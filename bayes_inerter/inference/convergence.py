@@ -108,23 +108,28 @@ def integrated_time(chain: np.ndarray, c: float = 5.0) -> np.ndarray:
     """emcee's integrated autocorrelation time of each parameter of ``chain`` (steps,
     walkers, ndim), ``emcee.autocorr.integrated_time(chain, c, tol=0)``: the walkers'
     normalised autocorrelation functions averaged, and summed up to Sokal's window.
-    Computed with one real FFT per parameter over all walkers at once, where emcee takes
-    a complex one per walker and parameter: the same numbers to a few parts in 1e15,
-    in about 0.6 times the time on chains of 10,000 to 20,000 steps (a convergence check
-    of a long chain was mostly this)."""
+    Computed with one real FFT per parameter over all walkers at once (each walker's
+    series contiguous), zero-padded to the shortest fast length that keeps the
+    correlation linear (2 n - 1), where emcee takes a complex FFT per walker and
+    parameter padded to twice the next power of two: the same numbers to a few parts in
+    1e15, in about a quarter of emcee's time on chains of 10,000 to 20,000 steps (a
+    convergence check of a long chain is mostly this)."""
+    import scipy.fft
+
     chain = np.asarray(chain, dtype=float)
     if chain.ndim != 3:
         raise ValueError(f"chain must be (steps, walkers, ndim), got shape {chain.shape}")
     n, _, ndim = chain.shape
-    m = 2 * emcee.autocorr.next_pow_two(n)
+    m = scipy.fft.next_fast_len(2 * n - 1, real=True)
     tau = np.empty(ndim)
     for j in range(ndim):
-        x = chain[:, :, j] - chain[:, :, j].mean(axis=0)
-        f = np.fft.rfft(x, n=m, axis=0)
-        acf = np.fft.irfft(f.real ** 2 + f.imag ** 2, n=m, axis=0)[:n]
+        x = np.ascontiguousarray(chain[:, :, j].T)  # (walkers, steps)
+        x -= x.mean(axis=1, keepdims=True)
+        f = scipy.fft.rfft(x, n=m, axis=1)
+        acf = scipy.fft.irfft(f.real ** 2 + f.imag ** 2, n=m, axis=1)[:, :n]
         with np.errstate(invalid="ignore", divide="ignore"):  # a walker that never moved: NaN, as emcee's
-            acf = acf / acf[0]
-        taus = 2.0 * np.cumsum(acf.mean(axis=1)) - 1.0
+            acf = acf / acf[:, :1]
+        taus = 2.0 * np.cumsum(acf.mean(axis=0)) - 1.0
         tau[j] = taus[emcee.autocorr.auto_window(taus, c)]
     return tau
 
