@@ -133,3 +133,93 @@ def test_a_stale_quote_is_caught():
     assert quoted_b_mismatches("no numbers quoted", rows) != []
     assert quoted_b_mismatches("`results/quick/inertance.csv` now holds A7 1.0;", rows) == [
         "A7: not in results/quick/inertance.csv"]
+
+
+#: A path the user guide or docs/ cite, under one of the repository's own folders.
+CITED = re.compile(r"(?<![\w/.-])((?:results|studies|benchmarks|docs|bayes_inerter|tests|scripts)/[\w./-]*[\w/])")
+#: What follows the stem of a path with a placeholder.
+PLACEHOLDER = re.compile(r"[\w./-]*[<{*]")
+#: A script or command a results folder's README can name as what made it.
+MAKER = re.compile(r"\b((?:studies|benchmarks|scripts)/[\w-]+\.py)\b|\bbayes-inerter \w+|\brun\.sh\b")
+
+
+def tracked_paths(root: Path = ROOT) -> set[str]:
+    """Every committed file of ``root`` and every folder that holds one (relative, posix)."""
+    try:
+        out = subprocess.run(["git", "ls-files", "-z"], cwd=root, capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("not a git checkout: no list of committed files")
+    paths = set()
+    for name in filter(None, out.split("\0")):
+        parts = name.split("/")
+        paths.update("/".join(parts[:i]) for i in range(1, len(parts) + 1))
+    return paths
+
+
+def missing_citations(text: str, paths: set[str]) -> list[str]:
+    """The paths ``text`` cites that are not among ``paths`` (a placeholder's stem, as in
+    ``results/coverage-<family>/``, is not a citation)."""
+    missing = []
+    for m in CITED.finditer(text):
+        if PLACEHOLDER.match(text, m.end()):
+            continue
+        path = m.group(1).rstrip("/.")
+        if path not in paths:
+            missing.append(path)
+    return sorted(set(missing))
+
+
+def test_a_missing_citation_is_caught():
+    paths = {"docs", "docs/studies.md", "results", "results/quick", "results/quick/inertance.csv"}
+    text = ("see docs/studies.md and `results/quick/inertance.csv`, `results/coverage-<family>/`; "
+            "python studies/long_chain.py writes results/long-chain/.")
+    assert missing_citations(text, paths) == ["results/long-chain", "studies/long_chain.py"]
+
+
+def test_every_path_the_guide_and_docs_cite_is_committed():
+    """A renamed module, a removed study or a deleted results folder leaves no citation
+    behind in README.md or docs/ (CHANGELOG.md is history and may name what is gone)."""
+    paths = tracked_paths()
+    assert "results/quick/inertance.csv" in paths  # the listing found the results
+    found = {}
+    for doc in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        if missing := missing_citations(doc.read_text(encoding="utf-8"), paths):
+            found[doc.relative_to(ROOT).as_posix()] = missing
+    assert not found, f"cited but not in the repository: {found}"
+
+
+def unmade_results(root: Path, paths: set[str]) -> list[str]:
+    """The folders directly under ``root``/results without a committed README, or whose
+    README names no script that is committed (nor the command line, nor run.sh)."""
+    bad = []
+    for folder in sorted(p for p in paths if p.count("/") == 1 and p.startswith("results/")):
+        if folder + "/README.md" not in paths:
+            if any(p.startswith(folder + "/") for p in paths):  # a folder, not a file
+                bad.append(f"{folder}: no README.md")
+            continue
+        makers = MAKER.findall((root / folder / "README.md").read_text(encoding="utf-8"))
+        scripts = [m for m in makers if m]
+        if any(m == "" for m in makers) and not scripts:
+            continue  # the command line or run.sh made it
+        if not scripts or not any(s in paths for s in scripts):
+            bad.append(f"{folder}: its README names no committed script ({', '.join(scripts) or 'none'})")
+    return bad
+
+
+def test_a_results_folder_without_its_maker_is_caught(tmp_path):
+    paths = {"results", "results/a", "results/a/README.md", "results/b", "results/b/README.md", "results/c",
+             "results/c/t.csv", "results/d", "results/d/README.md", "results/x.md", "studies", "studies/a.py"}
+    (tmp_path / "results" / "a").mkdir(parents=True)
+    (tmp_path / "results" / "a" / "README.md").write_text("python studies/a.py --out results/a\n")
+    (tmp_path / "results" / "b").mkdir()
+    (tmp_path / "results" / "b" / "README.md").write_text("python studies/gone.py\n")
+    (tmp_path / "results" / "d").mkdir()
+    (tmp_path / "results" / "d" / "README.md").write_text("made by `bayes-inerter study --out results/d`\n")
+    assert unmade_results(tmp_path, paths) == ["results/b: its README names no committed script (studies/gone.py)",
+                                               "results/c: no README.md"]
+
+
+def test_every_results_folder_names_the_script_that_makes_it():
+    paths = tracked_paths()
+    assert "results/quick/README.md" in paths
+    assert unmade_results(ROOT, paths) == []
