@@ -53,20 +53,22 @@ class BlockMove(MHMove):
         super().__init__(self._propose)
 
     @classmethod
-    def fit(cls, draws, *, knots: int | None = None, scores: NormalScores | None = None,
+    def fit(cls, draws, *, knots: int | None = None, scores: NormalScores | None = None, z=None,
             **kwargs) -> "BlockMove | None":
         """The move fitted to ``draws`` (n, ndim): the mean and covariance of their normal
         scores, in the map ``scores`` if given (one already fitted to the same draws, such
         as an ``IndependenceMove``'s) or else in their map with ``knots`` knots; None
-        where they define none."""
+        where they define none. ``z``: the draws mapped by ``scores``, where the caller
+        has them already (the same numbers, without mapping 50,000 draws again)."""
         if scores is None and knots is None:
             raise ValueError("a block move needs a normal-scores map or the knots to fit one")
         draws = usable_draws(draws)
         if draws is None:
             return None
         try:
-            scores = scores if scores is not None else NormalScores.fit(draws, knots)
-            z = scores.forward(draws)[0]
+            if scores is None:
+                scores, z = NormalScores.fit(draws, knots), None
+            z = scores.forward(draws)[0] if z is None else z
             return cls(z.mean(axis=0), np.cov(z, rowvar=False), scores, **kwargs)
         except (ValueError, np.linalg.LinAlgError):
             return None
