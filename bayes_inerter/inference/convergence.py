@@ -112,8 +112,8 @@ def integrated_time(chain: np.ndarray, c: float = 5.0) -> np.ndarray:
     series contiguous), zero-padded to the shortest fast length that keeps the
     correlation linear (2 n - 1), where emcee takes a complex FFT per walker and
     parameter padded to twice the next power of two: the same numbers to a few parts in
-    1e15, in about a quarter of emcee's time on chains of 10,000 to 20,000 steps (a
-    convergence check of a long chain is mostly this)."""
+    1e15, in 0.35 to 0.4 times emcee's time on chains of 6,667 to 13,333 steps of 26
+    walkers and 12 parameters (a convergence check of a long chain is mostly this)."""
     import scipy.fft
 
     chain = np.asarray(chain, dtype=float)
