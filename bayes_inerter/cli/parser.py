@@ -33,7 +33,7 @@ _positive_int = _number_type(int, lambda v: v >= 1, "at least 1", "whole number"
 _non_negative_int = _number_type(int, lambda v: v >= 0, "0 or more", "whole number")
 #: ``inference.checkpoint.WRITE_SECONDS``, written out for the same reason as the
 #: coordinates below; a test keeps the two equal.
-CHECKPOINT_SECONDS = 0.5
+CHECKPOINT_SECONDS = 2.0
 #: ``inference.coordinates.COORDINATES``, written out so that the parser does not import
 #: the inference package (emcee, arviz) before it is needed; a test keeps the two equal.
 FIT_COORDINATES = ("impedance", "unconstrained", "physical", "series", "compliance")
