@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .convergence import transient
-from .marginals import KNOTS, NormalScores
-from .moves import BlockMove, IndependenceMove, usable_draws
+from .marginals import KNOTS
+from .moves import BlockMove, IndependenceMove
 from .transport import TriangularScores
 
 __all__ = ["Adaptation", "Schedule", "STRETCH", "FIT_MAX_STEPS"]
@@ -119,26 +119,12 @@ class Adaptation:
         proposal = self._transported(draws, t) if self.transport else None
         z = None
         if proposal is None:
-            proposal, z = self._in_scores(draws, t)
+            proposal, z = IndependenceMove.fit_scored(draws, knots=self.knots, **t)
         if self.blocks == 0.0:
             return proposal, None
         scores = proposal.scores if proposal is not None else None
-        if isinstance(scores, TriangularScores):
-            scores, z = scores.scores, None
-        return proposal, BlockMove.fit(draws, knots=self.knots, scores=scores, z=z if scores is not None else None)
-
-    def _in_scores(self, draws: np.ndarray, t: dict) -> tuple[IndependenceMove | None, np.ndarray | None]:
-        """``IndependenceMove.fit(draws, knots=self.knots, **t)``, and the draws' normal
-        scores where it fitted them, for the block move (mapping the draws is most of a
-        refit)."""
-        if self.knots is None or usable_draws(draws) is None:
-            return IndependenceMove.fit(draws, knots=self.knots, **t), None
-        try:
-            scores = NormalScores.fit(draws, self.knots)
-        except ValueError:  # too few draws for the map: the t in their own coordinates
-            return IndependenceMove.fit(draws, **t), None
-        z = scores.forward(draws)[0]
-        return IndependenceMove.fit(z, scores=scores, **t), z
+        scores = scores.scores if isinstance(scores, TriangularScores) else scores
+        return proposal, BlockMove.fit(draws, knots=self.knots, scores=scores, z=z)  # z: None after the map
 
     def _transported(self, draws: np.ndarray, t: dict) -> IndependenceMove | None:
         """The independence move's t fitted after the triangular map of ``draws``, or None

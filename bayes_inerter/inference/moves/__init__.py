@@ -2,12 +2,10 @@
 independence proposals from a fitted multivariate t (:mod:`.independence`) and
 Metropolis-within-Gibbs block proposals from a normal in normal scores (:mod:`.block`).
 Each leaves any posterior invariant; docs/inference.md says what each was measured to do,
-and which moves were tried and not kept. :func:`usable_draws` is the check the fitted
-moves share: whether draws can define a proposal."""
+and which moves were tried and not kept."""
 
-from ._draws import usable_draws
 from .block import BlockMove
 from .independence import IndependenceMove
 from .ridge import NutRidgeMove, ridge_indices
 
-__all__ = ["IndependenceMove", "BlockMove", "NutRidgeMove", "ridge_indices", "usable_draws"]
+__all__ = ["IndependenceMove", "BlockMove", "NutRidgeMove", "ridge_indices"]

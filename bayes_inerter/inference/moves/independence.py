@@ -78,20 +78,29 @@ class IndependenceMove(MHMove):
         knots). None where they cannot define one (fewer draws than dimensions, or a
         singular covariance); draws too few for a normal-scores map give the t in their own
         coordinates."""
+        return cls.fit_scored(draws, knots=knots, **kwargs)[0]
+
+    @classmethod
+    def fit_scored(cls, draws, *, knots: int | None = None,
+                   **kwargs) -> tuple["IndependenceMove | None", np.ndarray | None]:
+        """:meth:`fit`, and the draws mapped to the normal scores it fitted them in (None
+        where it fitted none): a block move fitted to the same draws in the same scores
+        takes them (``BlockMove.fit(z=)``) rather than mapping the draws again."""
         draws = usable_draws(draws)
         if draws is None:
-            return None
+            return None, None
         if knots is not None:
             try:
                 scores = NormalScores.fit(draws, knots)
             except ValueError:
                 scores = None
             if scores is not None:
-                return cls.fit_in(draws, scores, **kwargs)
+                z = scores.forward(draws)[0]
+                return cls.fit(z, scores=scores, **kwargs), z
         try:
-            return cls(draws.mean(axis=0), np.cov(draws, rowvar=False), **kwargs)
+            return cls(draws.mean(axis=0), np.cov(draws, rowvar=False), **kwargs), None
         except np.linalg.LinAlgError:
-            return None
+            return None, None
 
     @classmethod
     def fit_in(cls, draws, scores, **kwargs) -> "IndependenceMove | None":
