@@ -28,14 +28,20 @@ def machine_paths(text: str) -> list[tuple[int, str]]:
     return [(i, line.strip()) for i, line in enumerate(text.splitlines(), 1) if MACHINE_PATH.search(line)]
 
 
-def committed_text_files(root: Path = ROOT) -> list[Path]:
-    """The committed (tracked) text files of :data:`CHECKED` under ``root``."""
+def committed_names(root: Path, *under: str) -> list[str]:
+    """The committed (tracked) files of ``root`` (relative, posix), those ``under`` the
+    given paths if any; the test is skipped outside a git checkout."""
     try:
-        out = subprocess.run(["git", "ls-files", "-z", "--", *CHECKED], cwd=root, capture_output=True, text=True,
+        out = subprocess.run(["git", "ls-files", "-z", "--", *under], cwd=root, capture_output=True, text=True,
                              check=True).stdout
     except (OSError, subprocess.CalledProcessError):
         pytest.skip("not a git checkout: no list of committed files")
-    return [root / name for name in out.split("\0") if name.endswith(SUFFIXES)]
+    return [name for name in out.split("\0") if name]
+
+
+def committed_text_files(root: Path = ROOT) -> list[Path]:
+    """The committed (tracked) text files of :data:`CHECKED` under ``root``."""
+    return [root / name for name in committed_names(root, *CHECKED) if name.endswith(SUFFIXES)]
 
 
 def quoted_b_mismatches(doc: str, rows: list[dict]) -> list[str]:
@@ -145,12 +151,8 @@ MAKER = re.compile(r"\b((?:studies|benchmarks|scripts)/[\w-]+\.py)\b|\bbayes-ine
 
 def tracked_paths(root: Path = ROOT) -> set[str]:
     """Every committed file of ``root`` and every folder that holds one (relative, posix)."""
-    try:
-        out = subprocess.run(["git", "ls-files", "-z"], cwd=root, capture_output=True, text=True, check=True).stdout
-    except (OSError, subprocess.CalledProcessError):
-        pytest.skip("not a git checkout: no list of committed files")
     paths = set()
-    for name in filter(None, out.split("\0")):
+    for name in committed_names(root):
         parts = name.split("/")
         paths.update("/".join(parts[:i]) for i in range(1, len(parts) + 1))
     return paths
@@ -198,10 +200,8 @@ def unmade_results(root: Path, paths: set[str]) -> list[str]:
                 bad.append(f"{folder}: no README.md")
             continue
         makers = MAKER.findall((root / folder / "README.md").read_text(encoding="utf-8"))
-        scripts = [m for m in makers if m]
-        if any(m == "" for m in makers) and not scripts:
-            continue  # the command line or run.sh made it
-        if not scripts or not any(s in paths for s in scripts):
+        scripts = [m for m in makers if m]  # "" where the command line or run.sh made it
+        if not makers or (scripts and not any(s in paths for s in scripts)):
             bad.append(f"{folder}: its README names no committed script ({', '.join(scripts) or 'none'})")
     return bad
 
