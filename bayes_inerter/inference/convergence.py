@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import emcee
 import numpy as np
+import scipy.fft
 
 __all__ = ["Convergence", "Check", "Monitor", "WARMUP", "transient", "check_chain", "steps_for", "tau_settled",
            "is_converged", "why_not", "integrated_time"]
@@ -114,8 +115,6 @@ def integrated_time(chain: np.ndarray, c: float = 5.0) -> np.ndarray:
     parameter padded to twice the next power of two: the same numbers to a few parts in
     1e15, in 0.35 to 0.4 times emcee's time on chains of 6,667 to 13,333 steps of 26
     walkers and 12 parameters (a convergence check of a long chain is mostly this)."""
-    import scipy.fft
-
     chain = np.asarray(chain, dtype=float)
     if chain.ndim != 3:
         raise ValueError(f"chain must be (steps, walkers, ndim), got shape {chain.shape}")
