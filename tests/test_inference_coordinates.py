@@ -78,6 +78,32 @@ def test_round_trip_across_the_prior_box(records, name):
     assert np.max(np.abs(coords.to_u(back) - u[ok])) < 1e-7
 
 
+@pytest.mark.parametrize("likelihood", [AR1, LikelihoodSettings()], ids=["ar1", "default"])
+def test_the_compiled_map_is_the_array_maps_to_rounding(records, likelihood):
+    """``inverse_with_jacobian`` (one compiled pass, what the sampler calls) gives
+    ``inverse`` and ``log_jacobian`` to rounding, and the same domain, across the prior box
+    and beyond it (B2 at 1.5 Hz: a 10 s record, which the default likelihood needs)."""
+    record = generate_record(paper_parameters("B2"), 1.5, rng=3, setting_name="B2")
+    model = PosteriorModel(record, likelihood=likelihood)
+    imp = default_coordinates(model).impedance
+    assert imp.damping
+    rng = np.random.default_rng(4)
+    v = imp.forward(_random_thetas(model, 3000, rng))
+    v = np.where(np.isfinite(v), v, rng.normal(size=v.shape)) + 0.3 * rng.normal(size=v.shape)
+    names = list(model.names)
+    v[:20, [names.index("c_n"), names.index("k_n")]] = -1000.0  # a nut of zero impedance: 1 / 0
+    theta, log_j = imp.inverse_with_jacobian(v)
+    old = imp.inverse(v)
+    inside = np.all(np.isfinite(old), axis=1)
+    assert 0.2 < inside.mean() < 0.9  # both sides of the domain's edge are tried
+    assert np.array_equal(np.all(np.isfinite(theta), axis=1), inside)
+    assert np.array_equal(np.isfinite(log_j), inside)
+    assert np.max(np.abs(theta[inside] - old[inside])) < 1e-11
+    assert np.max(np.abs(log_j[inside] - imp.log_jacobian(old[inside]))) < 1e-11
+    one, one_j = imp.inverse_with_jacobian(v[np.argmax(inside)])  # one point: no leading axis
+    assert one.shape == v.shape[1:] and np.shape(one_j) == ()
+
+
 def test_the_papers_devices_lie_deep_inside_the_domain(records):
     model = JointModel(records, likelihood=AR1)
     imp = default_coordinates(model).impedance

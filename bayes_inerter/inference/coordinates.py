@@ -134,8 +134,8 @@ class Coordinates:
         v, logj = self._unbox(u)
         if self.impedance is None:
             return v, logj
-        theta = self.impedance.inverse(v)
-        return theta, logj + self.impedance.log_jacobian(theta)
+        theta, map_logj = self.impedance.inverse_with_jacobian(v)
+        return theta, logj + map_logj
 
     def to_u(self, theta) -> np.ndarray:
         """u from theta (strictly inside the prior box where walked as logits)."""
