@@ -64,7 +64,7 @@ def test_bad_maps_refused_with_one_line(tmp_path, columns, units, message):
 
 def test_unknown_column_without_a_map_names_the_option(tmp_path):
     p = tmp_path / "r.csv"
-    p.write_text("time_s,force_N,accel_m_s2,temp\n" + "\n".join(f"{t!r},1.0,2.0,3" for t in T) + "\n")
+    p.write_text("time_s,force_N,accel_m_s2,temp\n" + "\n".join(f"{float(t)!r},1.0,2.0,3" for t in T) + "\n")
     with pytest.raises(RecordError, match="unknown column 'temp'.*--columns"):
         read_record(p)
 
