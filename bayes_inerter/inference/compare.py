@@ -29,7 +29,7 @@ import numpy as np
 from .. import _arviz
 from .fit import check_output_folder, fit_record
 from .model import MODELS, LikelihoodSettings, refusal
-from .results import loo_data
+from .results import hdi, loo_data
 
 __all__ = ["ModelFit", "Comparison", "compare_models", "stack_draws", "COMPARED", "PARETO_K_LIMIT", "COMPARE_FILE"]
 
@@ -100,13 +100,6 @@ def stack_draws(draws: dict, weights: dict, rng: np.random.Generator, n: int | N
     return out
 
 
-def _hdi(x: np.ndarray) -> tuple[float, float]:
-    az = _arviz.module()
-
-    lo, hi = az.hdi(np.asarray(x, dtype=float), hdi_prob=LEVEL)
-    return float(lo), float(hi)
-
-
 def _weights(idatas: dict) -> dict:
     """arviz's stacking weights of the fitted models (one model: weight 1)."""
     if len(idatas) == 1:
@@ -151,7 +144,7 @@ def compare_models(record, out, *, models=COMPARED, likelihood: LikelihoodSettin
             fit_options["progress"], fit_options["report"] = progress_for(m)
         res = fit_record(record, out / m, model=m, likelihood=likelihood, seed=seed, **fit_options)
         b = np.asarray(res.idata.posterior["b"], dtype=float)
-        lo, hi = _hdi(b.ravel())
+        lo, hi = hdi(b, LEVEL)
         loo = res.loo
         idatas[m], draws[m] = res.idata, b
         fits[m] = ModelFit(m, float(np.median(b)), lo, hi, loo["elpd_loo"], loo["elpd_se"], loo["p_loo"],
@@ -160,7 +153,7 @@ def compare_models(record, out, *, models=COMPARED, likelihood: LikelihoodSettin
     fits = {m: (f if f.skipped else ModelFit(**{**asdict(f), "weight": weights[m]})) for m, f in fits.items()}
     stacked = stack_draws(draws, weights, np.random.default_rng(seed))
     out.mkdir(parents=True, exist_ok=True)
-    lo, hi = _hdi(stacked)
+    lo, hi = hdi(stacked, LEVEL)
     result = Comparison(tuple(fits[m] for m in models), float(np.median(stacked)), lo, hi, out)
     _write(result, likelihood, seed)
     return result

@@ -33,8 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _arviz
 from .convergence import steps_for
+from .results import hdi
 
 __all__ = ["EndWarning", "end_state_warnings", "prior_limited_warning", "convergence_warning", "BOUND_LOG_TOL",
            "BOUND_SHARE", "PHI_WARNING", "NOT_CONVERGED", "PRIOR_LIMITED", "CAP_FACTOR"]
@@ -72,21 +72,10 @@ def _inertances(names) -> list[int]:
     return [i for i, n in enumerate(names) if n == "b" or n.startswith("b_")]
 
 
-def _hdi(x) -> tuple[float, float]:
-    import warnings
-
-    az = _arviz.module()
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        lo, hi = az.hdi(np.asarray(x), hdi_prob=0.94)
-    return float(lo), float(hi)
-
-
 def _at_bounds(x, lo: float, hi: float) -> list[tuple[str, float]]:
     """The bounds of [lo, hi] that the draws ``x`` (in the sampled scale) press on (see
     module docstring), as ("lower", lo) and ("upper", hi)."""
-    h_lo, h_hi = _hdi(x)
+    h_lo, h_hi = hdi(x)
     return [(side, bound) for side, share, near, bound in (
         ("lower", np.mean(x <= lo + BOUND_LOG_TOL), h_lo <= lo + BOUND_LOG_TOL, lo),
         ("upper", np.mean(x >= hi - BOUND_LOG_TOL), h_hi >= hi - BOUND_LOG_TOL, hi)) if share >= BOUND_SHARE or near]

@@ -32,7 +32,21 @@ from .model import PosteriorModel
 
 __all__ = ["PosteriorSample", "ar1_noise", "loo_data", "posterior_sample", "contraction", "to_inference_data",
            "summary_rows", "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "NUMBER_COLUMNS",
-           "MAX_DRAWS", "every_nth"]
+           "MAX_DRAWS", "every_nth", "hdi", "HDI_PROB"]
+
+#: The probability of the highest-density intervals the package reports (the summaries'
+#: hdi_3% and hdi_97%).
+HDI_PROB = 0.94
+
+
+def hdi(x, prob: float = HDI_PROB) -> tuple[float, float]:
+    """The ``prob`` highest-density interval of the draws ``x`` (any shape, flattened),
+    arviz's, as two floats."""
+    az = _arviz.module()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lo, hi = az.hdi(np.ravel(np.asarray(x, dtype=float)), hdi_prob=prob)
+    return float(lo), float(hi)
 
 
 def every_nth(thin: int) -> str:
@@ -224,14 +238,14 @@ def summary_rows(sample: PosteriorSample, kinds: dict | None = None) -> list[dic
                 rows.append({"name": name, "kind": kind, **_moments(x[defined]), "r_hat": math.nan,
                              "ess_bulk": math.nan, "ess_tail": math.nan})
                 continue
-            hdi = az.hdi(x.ravel(), hdi_prob=0.94)
+            lo, hi = hdi(x)
             rows.append({
                 "name": name,
                 "kind": kind,
                 "mean": float(np.mean(x)),
                 "sd": float(np.std(x, ddof=1)),
-                "hdi_3%": float(hdi[0]),
-                "hdi_97%": float(hdi[1]),
+                "hdi_3%": lo,
+                "hdi_97%": hi,
                 "r_hat": float(az.rhat(x)),
                 "ess_bulk": float(az.ess(x, method="bulk")),
                 "ess_tail": float(az.ess(x, method="tail")),
@@ -241,11 +255,8 @@ def summary_rows(sample: PosteriorSample, kinds: dict | None = None) -> list[dic
 
 def _moments(x: np.ndarray) -> dict:
     """mean, sd and the 94 % HDI of draws ``x`` (any shape, all finite)."""
-    az = _arviz.module()
-
-    hdi = az.hdi(np.ravel(x), hdi_prob=0.94)
-    return {"mean": float(np.mean(x)), "sd": float(np.std(x, ddof=1)), "hdi_3%": float(hdi[0]),
-            "hdi_97%": float(hdi[1])}
+    lo, hi = hdi(x)
+    return {"mean": float(np.mean(x)), "sd": float(np.std(x, ddof=1)), "hdi_3%": lo, "hdi_97%": hi}
 
 
 def write_summary(path, rows: list[dict]) -> None:

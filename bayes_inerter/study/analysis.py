@@ -39,8 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _arviz
 from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
+from ..inference.results import hdi
 from ..records.sensitivity import SensorCalibration
 from .fits import RecordFit, collect, fit_loo  # the tables' input, named here as before
 
@@ -212,15 +212,13 @@ def joint_estimate(inertance: list[dict], draws: dict, converged: bool,
     ``b_cal_*`` columns are recomputed about the joint b. Settings the joint model does not
     have keep the product (``estimate`` ``"records combined"``).
     """
-    az = _arviz.module()
-
     out = []
     for row in inertance:
         row = dict(row, estimate="records combined")
         x = draws.get(f"b_{row['setting']}")
         if x is not None:
             x = np.asarray(x, dtype=float).ravel()
-            lo, hi = az.hdi(x, hdi_prob=0.94)
+            lo, hi = hdi(x)
             row.update({f"b_product_{c[2:]}": row[c] for c in PRODUCT_COLUMNS})
             row.update({"b_median": float(np.median(x)), "b_hdi_3%": float(lo), "b_hdi_97%": float(hi),
                         "b_sd": float(np.std(x, ddof=1)), "estimate": "joint", "converged": bool(converged)})
@@ -272,8 +270,6 @@ def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | No
     (and ``covers_truth_cal``), the sensors' share added (normal): ``u`` times the term
     plus the same regression of the rows' ``moving_mass`` (nan where a row has none).
     """
-    az = _arviz.module()
-
     geometry = geometry or DEFAULT_GEOMETRY
     if not inertance:
         return []
@@ -293,7 +289,7 @@ def flywheel_regression(inertance: list[dict], geometry=None, truth_b: dict | No
         if draws.ndim != 2 or draws.shape[1] != len(inertance):
             raise ValueError(f"draws: shape (draws, {len(inertance)}) wanted, got {draws.shape}")
         coef_draws = draws @ project.T  # (draws, terms)
-        spread = [(float(np.mean(c)), float(np.std(c, ddof=1)), *map(float, az.hdi(c, hdi_prob=0.94)))
+        spread = [(float(np.mean(c)), float(np.std(c, ddof=1)), *hdi(c))
                   for c in coef_draws.T]
     truth = None
     if truth_b and all(r["setting"] in truth_b for r in inertance):

@@ -56,13 +56,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _arviz
 from ..device import TABLE_I, paper_parameters
 from ..inference.convergence import Convergence
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
 from ..inference.likelihood import LikelihoodSettings
 from ..inference.model import PosteriorModel
 from ..inference.priors import LogUniform, Uniform
+from ..inference.results import hdi
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
@@ -221,8 +221,6 @@ def study_replicate(cs: StudyCalibration, k: int, folder=None) -> dict:
     equal-tailed) holds it, and the chain's diagnostics. ``folder``: where its fit runs,
     continued from the checkpoint there if an earlier run left one, and removed once the
     replicate is done (None: a temporary folder, nothing kept if stopped)."""
-    az = _arviz.module()
-
     if folder is None:
         with tempfile.TemporaryDirectory() as tmp:
             rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(tmp) / "fit")
@@ -245,7 +243,7 @@ def study_replicate(cs: StudyCalibration, k: int, folder=None) -> dict:
         out["ranks"][name] = int(np.sum(x[pick] < t))
         for level in LEVELS:
             key = f"{round(100 * level)}"
-            lo, hi = az.hdi(x, hdi_prob=level)
+            lo, hi = hdi(x, level)
             out["hdi"].setdefault(key, {})[name] = bool(lo <= t <= hi)
             lo, hi = np.quantile(x, [0.5 - level / 2, 0.5 + level / 2])
             out["central"].setdefault(key, {})[name] = bool(lo <= t <= hi)
