@@ -200,6 +200,13 @@ COMMAND = [sys.executable, "-c",
            "import sys; " + SEARCH_SOURCE + f"optimize.DE_MAXITER = {DE_MAXITER}; "
            "from bayes_inerter.cli import main; sys.exit(main(sys.argv[1:]))"]
 
+#: The same command with a start search of many generations, for the run interrupted inside
+#: it: three generations can end within the second the test waits on a fast processor (on
+#: one, 27 steps were written by then); this one lasts seconds on any.
+SLOW_SEARCH_COMMAND = [sys.executable, "-c",
+                       "import sys; " + SEARCH_SOURCE + "optimize.DE_MAXITER = 100000; "
+                       "from bayes_inerter.cli import main; sys.exit(main(sys.argv[1:]))"]
+
 #: What an unclean end prints: a traceback, emcee's dump of the walkers, numba's error.
 UNCLEAN = ("Traceback", "Exception while calling", "SystemError", "Exception ignored")
 
@@ -286,12 +293,12 @@ def _wait_for_steps(run: _Run, out, steps: int, timeout: float = 120.0) -> None:
         time.sleep(0.02)
 
 
-def _fit(record_file, out, steps: int = 40) -> list:
+def _fit(record_file, out, steps: int = 40, command=COMMAND) -> list:
     """The command, with the time-domain likelihood: its start search and steps simulate
     the record, so each lasts long enough to be interrupted in (the default's, motion in,
     force out, simulate nothing), and the 2.5 s record holds too few drive periods for
     the default."""
-    return [*COMMAND, "fit", str(record_file), "--out", str(out), "--steps", str(steps), "--walkers", "24",
+    return [*command, "fit", str(record_file), "--out", str(out), "--steps", str(steps), "--walkers", "24",
             "--processes", "1", "--no-plots", "--seed", "3", "--checkpoint-seconds", "0", "--residual", "ar1"]
 
 
@@ -299,9 +306,9 @@ def test_ctrl_c_in_the_start_search_in_sampling_and_in_a_continued_run(tmp_path,
     """About 15 s: three runs of one command, each interrupted once."""
     out = tmp_path / "fit"
     cmd = _fit(record_file, out)
-    # during the start search (its differential evolution and local search take seconds
-    # after the record's lines; no step is written)
-    run = _Run(cmd)
+    # during the start search (a long one: its differential evolution takes seconds after
+    # the record's lines; no step is written)
+    run = _Run(_fit(record_file, out, command=SLOW_SEARCH_COMMAND))
     run.wait_for("drive frequency:")
     time.sleep(1.0)
     assert steps_written(out / "chain.h5") == 0
