@@ -196,16 +196,20 @@ def test_ctrl_c_in_the_start_search_is_a_keyboard_interrupt(model, tmp_path):
 #: here, and each run that samples goes through it (conftest's twenty take twice as long).
 DE_MAXITER = 3
 
-COMMAND = [sys.executable, "-c",
-           "import sys; " + SEARCH_SOURCE + f"optimize.DE_MAXITER = {DE_MAXITER}; "
-           "from bayes_inerter.cli import main; sys.exit(main(sys.argv[1:]))"]
+
+def _command(de_maxiter: int) -> list:
+    """The command line in a process of its own, its start search evolving ``de_maxiter``
+    generations."""
+    return [sys.executable, "-c", "import sys; " + SEARCH_SOURCE + f"optimize.DE_MAXITER = {de_maxiter}; "
+            "from bayes_inerter.cli import main; sys.exit(main(sys.argv[1:]))"]
+
+
+COMMAND = _command(DE_MAXITER)
 
 #: The same command with a start search of many generations, for the run interrupted inside
 #: it: three generations can end within the second the test waits on a fast processor (on
 #: one, 27 steps were written by then); this one lasts seconds on any.
-SLOW_SEARCH_COMMAND = [sys.executable, "-c",
-                       "import sys; " + SEARCH_SOURCE + "optimize.DE_MAXITER = 100000; "
-                       "from bayes_inerter.cli import main; sys.exit(main(sys.argv[1:]))"]
+SLOW_SEARCH_COMMAND = _command(100_000)
 
 #: What an unclean end prints: a traceback, emcee's dump of the walkers, numba's error.
 UNCLEAN = ("Traceback", "Exception while calling", "SystemError", "Exception ignored")
