@@ -118,8 +118,8 @@ def _damping_rows(v, i_b, i_c, idx, log, value, omega, m_B, m_s, iterations, rto
         z_s = _div(ONE, _div(ONE, w_p) - _div(ONE, z_b))
         z_th = _div(ONE, _div(ONE, z_s - jw * m_s) - _div(ONE, z_n))
         b = z_th.imag / omega
-        inside = abs(z_th.real - (1.0 - sr) * c_f) <= 1e-9 * abs(target) and b > 0.0 and c_f > 0.0
-        if inside and np.isfinite(b) and np.isfinite(c_f):
+        solved = abs(z_th.real - (1.0 - sr) * c_f) <= 1e-9 * abs(target)
+        if solved and 0.0 < b < np.inf and 0.0 < c_f < np.inf:
             # the driving point at the solution: its sensitivity G decides the domain
             zt = jw * b + c_f * (1.0 - sr)
             z_nb = _div(ONE, _div(ONE, z_n) + _div(ONE, zt))
