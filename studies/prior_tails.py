@@ -15,8 +15,8 @@ a prior chosen on the records it is measured on.
 
 A record is ``SEED:SETTING:FREQUENCY``: ``records.paper_like.paper_like_record`` of that
 setting and drive frequency (Hz) in the laboratory drawn from SEED (the coverage studies'
-replicate k is seed0 + k). Rows are added to ``--out``/tails.csv (a row already there
-for the same record and variant is kept and not fitted again).
+replicate k is seed0 + k). Each row is appended to ``--out``/tails.csv as its fit ends
+(a row already there for the same record and variant is kept and not fitted again).
 
     python studies/prior_tails.py --record 1369:A6:1 [--record ...] [--variants default tails]
         [--max-steps 20000] [--out results/chain-geometry]
@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import git_commit, read_rows, write_rows
+from _table import append_row, git_commit, read_rows
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
@@ -49,9 +49,15 @@ VARIANTS = {
     "default": {},
     "cf-floor": {"c_f": LogUniform(10.0, 2e5)},  # viscous friction sum: default 0.1 to 2e5 N s/m
     "kn-ceiling": {"k_n": LogUniform(1e3, 1e8)},  # nut stiffness: default 1e3 to 1e9 N/m
-    "kn-floor": {"k_n": LogUniform(1e5, 1e9)},
     "tails": {"c_f": LogUniform(10.0, 2e5), "k_n": LogUniform(1e3, 1e8)},
 }
+
+
+#: tails.csv's columns: the sampled parameters' tau are the single-record model's.
+FIELDS = ("seed", "setting", "freq_hz", "variant", "converged", "steps", "tau_max", "slowest", "b_true",
+          "b_median", "hdi94_lo", "hdi94_hi", "seconds", "commit",
+          *(f"tau_{n}" for n in ("b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "zeta_B", "k_B", "tau",
+                                 "gain", "delay")))
 
 
 def record_spec(text: str) -> tuple[int, str, float]:
@@ -59,7 +65,7 @@ def record_spec(text: str) -> tuple[int, str, float]:
         seed, setting, freq = text.split(":")
         return int(seed), setting.upper(), float(freq)
     except ValueError:
-        sys.exit(f"error: --record takes SEED:SETTING:FREQUENCY (1369:A6:1), got {text!r}")
+        raise argparse.ArgumentTypeError(f"takes SEED:SETTING:FREQUENCY (1369:A6:1), got {text!r}") from None
 
 
 def fit_variant(seed: int, setting: str, freq: float, variant: str, max_steps: int, commit: str) -> dict:
@@ -78,7 +84,7 @@ def fit_variant(seed: int, setting: str, freq: float, variant: str, max_steps: i
            "hdi94_lo": float(lo), "hdi94_hi": float(hi), "seconds": round(time.perf_counter() - t0, 1),
            "commit": commit}
     row.update({f"tau_{n}": round(float(t), 1) for n, t in zip(names, tau)})
-    return row
+    return {k: row.get(k, "") for k in FIELDS}
 
 
 def main(argv=None) -> int:
@@ -89,17 +95,15 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(ROOT / "results" / "chain-geometry"))
     args = ap.parse_args(argv)
     path = Path(args.out) / "tails.csv"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    rows = read_rows(path) if path.exists() else []
-    done = {(int(r["seed"]), r["setting"], float(r["freq_hz"]), r["variant"]) for r in rows}
+    done = {(int(r["seed"]), r["setting"], float(r["freq_hz"]), r["variant"]) for r in read_rows(path)}
     commit = git_commit(ROOT)
     for seed, setting, freq in args.record:
         for variant in args.variants:
             if (seed, setting, freq, variant) in done:
                 continue
+            done.add((seed, setting, freq, variant))
             row = fit_variant(seed, setting, freq, variant, args.max_steps, commit)
-            rows.append(row)
-            write_rows(path, rows)
+            append_row(path, row, FIELDS)
             print(f"{setting} {freq:g} Hz laboratory {seed}, {variant}: {row['steps']} steps, converged "
                   f"{row['converged']}, largest tau {row['tau_max']:.0f} ({row['slowest']}), b {row['b_median']:.0f} "
                   f"(94 % {row['hdi94_lo']:.0f} to {row['hdi94_hi']:.0f}; true {row['b_true']:.0f}), "
