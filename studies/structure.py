@@ -179,7 +179,7 @@ def _posterior_errors(coverage) -> str:
     return (f" This package's default fit (motion in, force out, each chain to the convergence rule or its cap; "
             f"{capped} of {len(coverage)} stopped at the cap) showed no such bias on the same device family in "
             f"other laboratories (results/coverage-paper-like-v5): A0's b {', '.join(a0)}, every setting's within "
-            f"{max(abs(x) for x in every):.1f} % on {len(every)} records. A bias of A0's +23 % size is a "
+            f"{max(abs(x) for x in every):.1f} % on {len(every)} records. A bias of least squares' size is a "
             "force-driven fit's, such as the paper's, not one every fit of these records has.")
 
 
