@@ -45,12 +45,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: Prior variants by name: priors that replace the defaults (``priors.DEFAULT_PRIORS``,
 #: ``SPLIT_PRIORS``), each the default's family over a shorter range.
-VARIANTS = {
-    "default": {},
-    "cf-floor": {"c_f": LogUniform(10.0, 2e5)},  # viscous friction sum: default 0.1 to 2e5 N s/m
-    "kn-ceiling": {"k_n": LogUniform(1e3, 1e8)},  # nut stiffness: default 1e3 to 1e9 N/m
-    "tails": {"c_f": LogUniform(10.0, 2e5), "k_n": LogUniform(1e3, 1e8)},
-}
+_CF_FLOOR = {"c_f": LogUniform(10.0, 2e5)}  # viscous friction sum: default 0.1 to 2e5 N s/m
+_KN_CEILING = {"k_n": LogUniform(1e3, 1e8)}  # nut stiffness: default 1e3 to 1e9 N/m
+VARIANTS = {"default": {}, "cf-floor": _CF_FLOOR, "kn-ceiling": _KN_CEILING, "tails": {**_CF_FLOOR, **_KN_CEILING}}
 
 
 #: tails.csv's columns: the sampled parameters' tau are the single-record model's.
