@@ -48,6 +48,7 @@ from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
 from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.results import hdi
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.paper_like import paper_like_record
 
@@ -65,13 +66,6 @@ def _record(kind: str, setting: str, freq: float, seed: int):
         settings = GeneratorSettings(force_noise=0.0, accel_noise=0.0, disp_noise=0.0) if kind == "noise-free" else None
         return generate_record(paper_parameters(setting), freq, settings=settings, rng=seed, setting_name=setting)
     return paper_like_record(setting, freq, seed=seed)
-
-
-def _hdi(x: np.ndarray, level: float):
-    import arviz as az
-
-    lo, hi = az.hdi(np.asarray(x), hdi_prob=level)
-    return float(lo), float(hi)
 
 
 def _fit(record, candidate: str, max_steps: int, processes: int, seed: int) -> list[dict]:
@@ -92,8 +86,8 @@ def _fit(record, candidate: str, max_steps: int, processes: int, seed: int) -> l
     base = {"b_median": float(np.median(b)), "converged": bool(res.converged),
             "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else "", "steps": int(res.iterations),
             "seconds": round(seconds, 1), "phi": phi}
-    lo94, hi94 = _hdi(b, 0.94)
-    lo50, hi50 = _hdi(b, 0.5)
+    lo94, hi94 = hdi(b, 0.94)
+    lo50, hi50 = hdi(b, 0.5)
     rows = [{**base, "candidate": candidate, "hdi94_lo": lo94, "hdi94_hi": hi94, "hdi50_lo": lo50,
              "hdi50_hi": hi50, "identified": bool(res.b_interval.identified) if candidate != "ar1" else True}]
     if candidate == "ar1":

@@ -38,6 +38,7 @@ from bayes_inerter import paper_parameters
 from bayes_inerter.executor import make_executor
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
+from bayes_inerter.inference.results import hdi
 from bayes_inerter.records import GeneratorSettings, generate_record
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,8 +58,6 @@ def one(job) -> dict:
     path = Path(out) / "records" / f"{k:04d}.json"
     if path.exists():
         return json.loads(path.read_text())
-    import arviz as az
-
     setting, freq = grid_case(k)
     p = device(setting, zeta_b)
     rec = generate_record(p, freq, settings=NOISE_FREE, setting_name=setting)
@@ -67,7 +66,7 @@ def one(job) -> dict:
         res = fit_record(rec, Path(tmp) / "fit", seed=k, plots=False,
                          convergence=replace(Convergence(), max_steps=max_steps))
     b = np.asarray(res.idata.posterior["b"]).ravel()
-    lo, hi = az.hdi(b, hdi_prob=0.94)
+    lo, hi = hdi(b)
     tau = np.asarray(res.tau, dtype=float)
     row = {"record": k, "setting": setting, "freq_hz": freq, "zeta_B": zeta_b, "b_true": p.b,
            "b_median": float(np.median(b)), "error_pct": 100.0 * (float(np.median(b)) / p.b - 1.0),

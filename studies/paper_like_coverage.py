@@ -53,6 +53,7 @@ from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.convergence import Convergence
 from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.results import hdi
 from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -77,8 +78,6 @@ def likelihood_settings(text: str) -> dict:
 
 def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
               likelihood: str = "default") -> dict:
-    import arviz as az
-
     setting, freq = grid_case(k)
     seed = seed0 + k
     rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family])
@@ -97,7 +96,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
            "likelihood_settings": likelihood_settings(likelihood)}
     for level in LEVELS:
-        lo, hi = az.hdi(b, hdi_prob=level)
+        lo, hi = hdi(b, level)
         key = round(100 * level)
         out[f"hdi{key}"] = [float(lo), float(hi)]
         out[f"covered{key}"] = bool(lo <= b_true <= hi)

@@ -29,7 +29,7 @@ import numpy as np
 from .. import _arviz
 from .fit import check_output_folder, fit_record
 from .model import MODELS, LikelihoodSettings, refusal
-from .results import hdi, loo_data
+from .results import HDI_PROB, hdi, loo_data
 
 __all__ = ["ModelFit", "Comparison", "compare_models", "stack_draws", "COMPARED", "PARETO_K_LIMIT", "COMPARE_FILE"]
 
@@ -40,7 +40,7 @@ PARETO_K_LIMIT = 0.7
 #: The comparison's table, in ``out``.
 COMPARE_FILE = "compare.csv"
 #: The levels of b's reported intervals.
-LEVEL = 0.94
+LEVEL = HDI_PROB
 
 
 @dataclass(frozen=True)
