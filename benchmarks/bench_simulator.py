@@ -1,7 +1,8 @@
 """Benchmark: the exact kernel against scipy's Radau on the same record.
 
 Run by hand: ``python benchmarks/bench_simulator.py``. Prints medians and ratios measured
-side by side in one run (this machine is shared and noisy: read ratios, not absolutes).
+side by side in one run (this machine is shared and noisy: read ratios, not absolutes),
+and appends a row to results/performance/simulator.csv (commit, machine, date).
 """
 
 import argparse
@@ -14,6 +15,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
+from _timing import record_row  # noqa: E402
 from conftest import inverse_dynamics_force  # noqa: E402
 from reference import hybrid_reference  # noqa: E402
 
@@ -69,13 +71,20 @@ def main():
               f"Radau error {rel_error(a_radau, ref):.2e}")
 
     print("\ncost against record length (simulate(), median):")
-    base = None
+    per_sample = {}
     for duration in (1.0, 10.0, 100.0, 600.0):
         tt, ff = inverse_dynamics_force(p, args.freq, duration=duration, ramp=1.0)
         _, tm = timed(lambda: simulate(p, tt, ff), max(3, args.repeats // 4))
-        base = base or tm / len(tt)
+        per_sample[duration] = tm / len(tt)
         print(f"  {duration:6.0f} s ({len(tt):7d} samples): {tm * 1e3:9.3f} ms, "
               f"{tm / len(tt) * 1e9:6.0f} ns/sample")
+    path = record_row("simulator", {
+        "setting": args.setting, "freq_hz": args.freq, "duration_s": args.duration, "repeats": args.repeats,
+        "simulate_ms": round(t_api * 1e3, 4), "kernel_ms": round(t_kernel * 1e3, 4),
+        "radau_ms": round(t_radau * 1e3, 1), "speedup_radau": round(t_radau / t_api, 1),
+        "radau_difference": f"{rel_error(a_radau, a):.3e}",
+        **{f"ns_per_sample_{d:g}s": round(v * 1e9, 1) for d, v in per_sample.items()}})
+    print(f"wrote a row to {path}")
 
 
 if __name__ == "__main__":
