@@ -45,7 +45,7 @@ from bayes_inerter.records.paper_like import paper_like_record
 ROOT = Path(__file__).resolve().parents[1]
 
 #: Prior variants by name: priors that replace the defaults (``priors.DEFAULT_PRIORS``,
-#: ``SPLIT_PRIORS``), each the default's family over a shorter range.
+#: ``SPLIT_PRIORS``), each the default's family over another range.
 _CF_FLOOR = {"c_f": LogUniform(10.0, 2e5)}  # viscous friction sum: default 0.1 to 2e5 N s/m
 _KN_CEILING = {"k_n": LogUniform(1e3, 1e8)}  # nut stiffness: default 1e3 to 1e9 N/m
 #: A catalogue nut's axial stiffness (1e8 to 1e9 N/m), a decade either side for the screw
