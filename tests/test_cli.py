@@ -117,26 +117,30 @@ def _drop_a_ctrl_c(monkeypatch):
     import signal
     import weakref
 
-    from bayes_inerter import cli
+    from bayes_inerter.cli import status
 
     class Thing:
         pass
 
     monkeypatch.setattr(sys, "unraisablehook", lambda unraisable: None)  # Python's report of the drop
     thing = Thing()
-    weakref.finalize(thing, cli._on_sigint, signal.SIGINT, None)
+    weakref.finalize(thing, status.on_sigint, signal.SIGINT, None)
     del thing
     gc.collect()
 
 
 def test_a_dropped_ctrl_c_is_raised_again_at_the_next_step(monkeypatch):
-    from bayes_inerter import cli
+    from bayes_inerter.cli import status
 
-    monkeypatch.setattr(cli, "_INTERRUPTED", False)
-    cli._check_interrupt()  # nothing came: nothing raised
-    _drop_a_ctrl_c(monkeypatch)  # no KeyboardInterrupt reaches here ...
-    with pytest.raises(KeyboardInterrupt):
-        cli._check_interrupt()  # ... but the next step's callback raises it
+    status.reset_interrupt()
+    try:
+        status.check_interrupt()  # nothing came: nothing raised
+        _drop_a_ctrl_c(monkeypatch)  # no KeyboardInterrupt reaches here ...
+        assert status.interrupted()
+        with pytest.raises(KeyboardInterrupt):
+            status.check_interrupt()  # ... but the next step's callback raises it
+    finally:
+        status.reset_interrupt()
 
 
 def test_a_command_that_ends_after_a_dropped_ctrl_c_exits_130(monkeypatch, capsys):

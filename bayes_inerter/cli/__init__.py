@@ -3,10 +3,10 @@
 Exit status: 0 success; 1 bad input or a failed run (one-line error, no traceback);
 2 usage error (argparse); 130 interrupted; 141 the output's reader closed the pipe.
 
-Here: how a command runs (its exit status, the one-line error, Ctrl-C). The options are
-in :mod:`.parser`; the commands in :mod:`.records` (``generate``, ``inspect``,
-``demo``), :mod:`.fit`, :mod:`.identify` and :mod:`.study` (``study``, ``report``), which take what they
-need from here when they run.
+Here: how a command runs (the one-line error, Ctrl-C). The exit statuses, the error
+and the interruption's flag are in :mod:`.status`; the options in :mod:`.parser`; the
+commands in :mod:`.records` (``generate``, ``inspect``, ``demo``), :mod:`.fit`,
+:mod:`.identify` and :mod:`.study` (``study``, ``report``).
 """
 
 from __future__ import annotations
@@ -19,38 +19,11 @@ from .identify import cmd_identify
 from .parser import (CHECKPOINT_SECONDS, DEFAULT_RESIDUAL, FIT_COORDINATES, FIT_RESIDUALS, RECORD_CHECKS,  # noqa: F401
                      build_parser)  # (tests' names)
 from .records import cmd_demo, cmd_generate, cmd_inspect
+from .status import (EXIT_FAIL, EXIT_INTERRUPTED, EXIT_PIPE, CliError, interrupted, on_sigint,  # noqa: F401
+                     reset_interrupt)  # (CliError: tests' name)
 from .study import cmd_report, cmd_study
 
 __all__ = ["main"]
-
-EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 130, 141
-
-
-class CliError(Exception):
-    """An error reported as one line on stderr with exit status 1."""
-
-
-#: Set by Ctrl-C (:func:`_on_sigint`) for the rest of the command.
-_INTERRUPTED = False
-
-
-def _on_sigint(signum, frame):
-    """Ctrl-C: remembered, then raised as KeyboardInterrupt. Python drops an exception
-    raised while it runs a weakref callback or a ``__del__`` ("Exception ignored in ..."):
-    a fit on two processes, interrupted there, once ran on to its last step and exit
-    status 0. The commands' per-step callbacks raise it again (:func:`_check_interrupt`).
-    Raised where a compiled function has called back into Python, numba reports it as a
-    SystemError (:func:`..executor.interrupt_raised`): :func:`main` takes that for the
-    interruption it is."""
-    global _INTERRUPTED
-    _INTERRUPTED = True
-    raise KeyboardInterrupt
-
-
-def _check_interrupt() -> None:
-    """Raise KeyboardInterrupt if Ctrl-C came, even if its first raise was dropped."""
-    if _INTERRUPTED:
-        raise KeyboardInterrupt
 
 
 def _stdout_to_devnull() -> None:
@@ -74,19 +47,18 @@ def main(argv=None) -> int:
     import signal
     import threading
 
-    global _INTERRUPTED
     # the commands looked up as main runs: a test puts its own in their place
     parser = build_parser({"demo": cmd_demo, "generate": cmd_generate, "fit": cmd_fit, "identify": cmd_identify,
                            "study": cmd_study,
                            "report": cmd_report, "inspect": cmd_inspect})
     args = parser.parse_args(argv)
-    _INTERRUPTED = False
+    reset_interrupt()
     # Ctrl-C's own handler, where Python's default one is in place (not where SIGINT is
     # ignored, as in a background job, nor off the main thread); restored on the way out
     previous = signal.getsignal(signal.SIGINT)
     ours = previous is signal.default_int_handler and threading.current_thread() is threading.main_thread()
     if ours:
-        signal.signal(signal.SIGINT, _on_sigint)
+        signal.signal(signal.SIGINT, on_sigint)
     import warnings
 
     import numpy as np
@@ -102,7 +74,7 @@ def main(argv=None) -> int:
             warnings.filterwarnings("ignore", category=RuntimeWarning)
             code = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, where it is handled (see _flush_quietly)
-        if _INTERRUPTED:  # came where it could only be dropped, and nothing asked again
+        if interrupted():  # came where it could only be dropped, and nothing asked again
             raise KeyboardInterrupt
         return code
     except KeyboardInterrupt:
@@ -114,7 +86,7 @@ def main(argv=None) -> int:
     except Exception as exc:
         # an error Ctrl-C caused (numba's SystemError where it came inside compiled code) is
         # the interruption, not a failure
-        if _INTERRUPTED or caused_by_interrupt(exc):
+        if interrupted() or caused_by_interrupt(exc):
             print("interrupted", file=sys.stderr)
             return EXIT_INTERRUPTED
         if not isinstance(exc, (CliError, ValueError, OSError, RuntimeError)):

@@ -29,7 +29,7 @@ def cmd_fit(args) -> int:
     from ..inference.model import LikelihoodSettings
     from ..inference.results import every_nth
     from ..inference.sampler import Adaptation
-    from . import EXIT_OK, CliError, _check_interrupt
+    from .status import EXIT_OK, CliError, check_interrupt
     from .records import load_record
 
     if args.steps is not None and args.max_steps is not None:
@@ -49,7 +49,7 @@ def cmd_fit(args) -> int:
                    name=Path(args.record).name, convergence=convergence)
     if args.model == "compare":
         return _compare(rec, args, options)
-    bar = StepProgress("sampling", total=args.steps, check_interrupt=_check_interrupt, cap=convergence.max_steps)
+    bar = StepProgress("sampling", total=args.steps, check_interrupt=check_interrupt, cap=convergence.max_steps)
     try:
         result = fit_record(rec, args.out, model=args.model, progress=bar.step, report=bar.status, **options)
     except BaseException:
@@ -83,14 +83,14 @@ def _compare(rec, args, options) -> int:
     """``fit --model compare``: every model the likelihood knows, compared by LOO."""
     from ..cli_progress import StepProgress
     from ..inference.compare import PARETO_K_LIMIT, compare_models
-    from . import EXIT_OK, _check_interrupt
+    from .status import EXIT_OK, check_interrupt
 
     bars = []
 
     def progress_for(model):
         if bars:
             bars[-1].close()
-        bars.append(StepProgress(f"sampling {model}", total=args.steps, check_interrupt=_check_interrupt,
+        bars.append(StepProgress(f"sampling {model}", total=args.steps, check_interrupt=check_interrupt,
                                  cap=options["convergence"].max_steps))
         return bars[-1].step, bars[-1].status
 

@@ -14,7 +14,7 @@ def cmd_identify(args) -> int:
     from ..inference.identify import LEAST_SQUARES, identify
     from ..inference.model import PosteriorModel
     from ..inference.plots import UNITS
-    from . import EXIT_OK, CliError
+    from .status import EXIT_OK, CliError
     from .records import load_record
 
     rec, device, masses, drive = load_record(args, need_masses=True)  # refused here, before any work
@@ -71,7 +71,7 @@ def _unit(name: str, units: dict) -> str:
 
 def _check_writable(path: Path) -> None:
     """Refuse an --out that cannot be written, before the fit (which takes seconds)."""
-    from . import CliError
+    from .status import CliError
 
     if path.suffix.lower() != ".json":
         raise CliError(f"--out {path}: give a .json file name")

@@ -42,7 +42,7 @@ def cmd_generate(args) -> int:
     from ..device import FREQUENCIES_HZ, SETTINGS, paper_parameters
     from ..records import generate_record, paper_grid, write_record
     from ..records.paper_like import paper_like_grid, paper_like_record
-    from . import EXIT_OK, CliError
+    from .status import EXIT_OK, CliError
 
     settings = _settings_from(args)
     device = _paper_like(settings) if args.truth == "paper-like" else None
@@ -101,7 +101,7 @@ def load_record(args, *, need_masses: bool):
     try:
         drive = resolve_drive(rec)
     except ValueError as exc:
-        from . import CliError
+        from .status import CliError
 
         raise CliError(str(exc)) from None
     return with_drive(rec, drive), device, masses, drive
@@ -113,7 +113,7 @@ def cmd_inspect(args) -> int:
     from ..records import write_record
     from ..records.checks import fundamental
     from ..records.drive import SOURCE_KEY
-    from . import EXIT_OK
+    from .status import EXIT_OK
 
     rec, device, masses, drive = load_record(args, need_masses=False)
     print(f"{args.record}: valid record")
@@ -168,7 +168,7 @@ def _plot_record(rec, path: Path) -> None:
 
 def cmd_demo(args) -> int:
     from ..demo import run_demo
-    from . import EXIT_OK
+    from .status import EXIT_OK
 
     for path in run_demo(Path(args.out), setting=args.setting, freq=args.freq, seed=args.seed):
         print(f"wrote {path}")

@@ -14,7 +14,7 @@ def _plan(args):
     from dataclasses import replace
 
     from ..study import full_plan, quick_plan
-    from . import CliError
+    from .status import CliError
 
     plan = quick_plan() if args.quick else full_plan()
     changes = {}
@@ -103,7 +103,7 @@ class _StudyProgress:
 
 def _say_result(result, out: Path) -> int:
     """Print the study's answer and what to know about its fits; the exit status."""
-    from . import EXIT_FAIL, EXIT_OK
+    from .status import EXIT_FAIL, EXIT_OK
 
     for row in result.tables["inertance"]:
         honest = ""
@@ -133,12 +133,12 @@ def cmd_study(args) -> int:
     import os
 
     from ..study import run_study
-    from . import _check_interrupt
+    from .status import check_interrupt
 
     plan = _plan(args)
     out = Path(args.out or Path("runs") / plan.name)
     processes = args.processes or min(2, os.cpu_count() or 1)
-    progress = _StudyProgress(plan.name, out, _check_interrupt)
+    progress = _StudyProgress(plan.name, out, check_interrupt)
     try:
         result = run_study(plan, out, processes=processes, scheduler=args.scheduler, on_done=progress.on_done,
                            on_jobs=progress.on_jobs, on_joint_step=progress.on_joint_step,
@@ -150,7 +150,7 @@ def cmd_study(args) -> int:
 
 def cmd_report(args) -> int:
     from ..study.redraw import redraw_fits
-    from . import EXIT_FAIL, EXIT_OK
+    from .status import EXIT_FAIL, EXIT_OK
 
     done = redraw_fits(args.folder, on_fit=lambda folder, status: print(f"{folder}: {status}", flush=True))
     drawn = sum(status == "drawn" for _, status in done)
