@@ -81,16 +81,15 @@ def _off(row: dict, key: str, q: int) -> str:
 
 
 def study_calibration_report(out: Path, cs, rows: list[dict], results: list[dict], versions: dict, *,
-                             long_enough: int) -> tuple[Path, Path]:
+                             long_enough: int, levels, priors: dict) -> tuple[Path, Path]:
     """``out``/REPORT.md and ``out``/SECTION.md of a calibration in the study's
     configuration (``study.study_calibration``), written from its coverage rows and
-    replicates. Returns both paths."""
-    from .study_calibration import LEVELS, STUDY_SBC_PRIORS
-
+    replicates, at the interval ``levels`` (fractions) and with the ``priors`` its devices
+    were drawn from. Returns both paths."""
     n = len(results)
     failed = [r for r in results if "error" in r]
     ok = [r for r in results if "ranks" in r]
-    levels = [round(100 * q) for q in LEVELS]
+    levels = [round(100 * q) for q in levels]
     taus = [r["tau_max"] for r in ok if r.get("tau_max")]
     why: dict = {}
     for r in failed:  # one line per distinct error, the replicates it stopped beside it
@@ -121,7 +120,7 @@ def study_calibration_report(out: Path, cs, rows: list[dict], results: list[dict
     cols.append("rank_chi2_p")
     fmt = {c: "{:.3f}" for c in cols[3:]}
     table = markdown_table(rows, cols, fmt) if rows else "(no replicate ran)"
-    prior = "\n".join(f"- {name}: {p.describe()}" for name, p in STUDY_SBC_PRIORS.items())
+    prior = "\n".join(f"- {name}: {p.describe()}" for name, p in priors.items())
     report = ["# Simulation-based calibration in the study's configuration", "",
               "**Question.** Do the intervals the study reports hold the truth as often as they say, where its "
               "numbers come from: 10 s generator records, the joint model, the package's start and the 94 % "

@@ -424,7 +424,8 @@ def write_study_calibration(out, cs: StudyCalibration, results: list[dict], vers
         fig.savefig(out / "coverage.png", dpi=90)
         plt.close(fig)
     report, section = study_calibration_report(out, cs, rows, results, versions,
-                                               long_enough=chains_long_enough(results))
+                                               long_enough=chains_long_enough(results), levels=LEVELS,
+                                               priors=STUDY_SBC_PRIORS)
     return {"coverage": rows, "replicates": len(results), "failed": [r for r in results if "error" in r],
             "report": report, "section": section}
 
