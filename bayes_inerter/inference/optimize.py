@@ -232,9 +232,9 @@ def _initial_point(model: PosteriorModel) -> np.ndarray:
     bounds = model.bounds()[:n]
     guess = model.sampled_from_physical(rigid_guess(model))
     x = []
-    for name, lg, (lo, hi) in zip(model.names[:n], model._log[:n], bounds):
+    for name, (lo, hi) in zip(model.names[:n], bounds):
         if name in guess:
-            x.append(math.log(guess[name]) if lg else guess[name])
+            x.append(math.log(guess[name]) if model.all_priors[name].log_scale else guess[name])
         else:
             x.append(0.5 * (lo + hi))
     return np.clip(np.array(x), bounds[:, 0] + 1e-9, bounds[:, 1] - 1e-9)
