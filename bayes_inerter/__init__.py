@@ -15,7 +15,7 @@ from .device import (
     theoretical_inertance,
 )
 from .friction import Coulomb, PiecewiseLinear, Smooth, Stribeck, make_law
-from .models import NETWORKS, build_network
+from .networks import NETWORKS, build_network
 from .simulate import SimulationError, simulate, simulate_network
 
 __version__ = "0.1.0"

@@ -25,7 +25,7 @@ from scipy import signal
 
 def coarse_acceleration(params, time_s, force, q):
     """The driven terminal's mean acceleration at the record's rate, simulated at 1 / q of it."""
-    from bayes_inerter.models import build_network
+    from bayes_inerter.networks import build_network
     from bayes_inerter.network import compile_network
     from bayes_inerter.simulate import run_piecewise_linear
 

@@ -1,4 +1,4 @@
-"""Benchmark: the exact kernel (``bayes_inerter/_kernel/``) against its earlier version.
+"""Benchmark: the exact kernel (``bayes_inerter/simulate/_kernel/``) against its earlier version.
 
 Run by hand from the project root: ``python benchmarks/bench_kernel.py``.
 
@@ -35,10 +35,10 @@ from pathlib import Path
 import numpy as np
 
 from _timing import record_row
-from bayes_inerter import _kernel as new_kernel
-from bayes_inerter._piecewise import augmented as _augmented
+from bayes_inerter.simulate import _kernel as new_kernel
+from bayes_inerter.simulate._piecewise import augmented as _augmented
 from bayes_inerter.device import paper_parameters
-from bayes_inerter.models import build_network
+from bayes_inerter.networks import build_network
 from bayes_inerter.network import compile_network
 from bayes_inerter.records.generator import paper_record
 from bayes_inerter.simulate import MAX_EVENTS_PER_STEP, _contacts, check_record

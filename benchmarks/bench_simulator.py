@@ -20,7 +20,7 @@ from conftest import inverse_dynamics_force  # noqa: E402
 from reference import hybrid_reference  # noqa: E402
 
 from bayes_inerter import paper_parameters, simulate  # noqa: E402
-from bayes_inerter.models import build_network  # noqa: E402
+from bayes_inerter.networks import build_network  # noqa: E402
 from bayes_inerter.network import compile_network  # noqa: E402
 from bayes_inerter.simulate import contacts, run_piecewise_linear  # noqa: E402
 

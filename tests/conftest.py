@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 from hypothesis import settings
 
-from bayes_inerter import _arviz
+from bayes_inerter import arviz_import
 
 #: arviz imported once here, before the test modules that import it: conftest is imported
 #: by pytest's main process before it starts the workers, and arviz's first import of
-#: the day, in processes started at once, can fail on its stamp file (``_arviz``; seen on
+#: the day, in processes started at once, can fail on its stamp file (``arviz_import``; seen on
 #: a clean clone with an empty ~/.cache, two workers collecting together).
-_arviz.module()
+arviz_import.module()
 
 #: Property tests draw the same examples on every run and machine (hypothesis's examples
 #: are otherwise random each run, so a rare failing example would fail CI by chance; a

@@ -1,6 +1,6 @@
 """The exact kernel's algorithm written plainly: no speed tricks, no generated code.
 
-The same hybrid system and the same rules as ``bayes_inerter._kernel``, in plain numpy
+The same hybrid system and the same rules as ``bayes_inerter.simulate._kernel``, in plain numpy
 and scipy, to check the generated kernels against (to rounding: the exponentials come
 from scipy's ``expm``, not from the kernel's tables):
 

@@ -16,7 +16,7 @@ from bayes_inerter.inference.impedance import MAX_SENSITIVITY_CHANGE
 from bayes_inerter.inference.joint import JointModel
 from bayes_inerter.inference.likelihood import LikelihoodSettings
 from bayes_inerter.inference.sampler import run_sampler
-from bayes_inerter.models import build_network
+from bayes_inerter.networks import build_network
 from bayes_inerter.network import accel_response
 from bayes_inerter.records import GeneratorSettings, generate_record
 

@@ -6,9 +6,10 @@ import pytest
 from conftest import inverse_dynamics_force, with_backlash
 from reference_kernel import Reference
 
-from bayes_inerter import _kernel, _piecewise, paper_parameters
+from bayes_inerter import paper_parameters
+from bayes_inerter.simulate import _kernel, _piecewise
 from bayes_inerter.friction import Coulomb, PiecewiseLinear
-from bayes_inerter.models import build_network
+from bayes_inerter.networks import build_network
 from bayes_inerter.network import compile_network
 from bayes_inerter.simulate import _contacts
 

@@ -12,11 +12,11 @@ import pytest
 from test_kernel import kernel_arguments
 
 import bayes_inerter
-from bayes_inerter import _kernel
-from bayes_inerter._kernel import cache
+from bayes_inerter.simulate import _kernel
+from bayes_inerter.simulate._kernel import cache
 
 #: A kernel that calls a helper returning an array (the compiled ``_compiled.tables``).
-TABLES_HEADER = "import numpy as np\nfrom numba import njit\nfrom bayes_inerter._kernel._compiled import tables\n\n"
+TABLES_HEADER = "import numpy as np\nfrom numba import njit\nfrom bayes_inerter.simulate._kernel._compiled import tables\n\n"
 TABLES_SOURCE = "@_jit\ndef kernel(A, h, J):\n    return tables(A, h, J)\n"
 
 
@@ -76,7 +76,7 @@ def test_kernels_call_their_folders_copy_of_the_helpers(monkeypatch, tmp_path):
     monkeypatch.setenv(cache.KERNEL_DIR_ENV, str(tmp_path))
     fn = cache.load(TABLES_SOURCE, header=TABLES_HEADER)
     A = np.array([[0.0, 1.0], [-4.0, -0.1]])
-    from bayes_inerter._kernel._compiled import tables
+    from bayes_inerter.simulate._kernel._compiled import tables
 
     np.testing.assert_array_equal(fn(A, 1e-3, 3), tables(A, 1e-3, 3))
     helper = fn.py_func.__globals__["tables"]
@@ -90,7 +90,7 @@ def test_kernels_call_their_folders_copy_of_the_helpers(monkeypatch, tmp_path):
 CLASH = f"""
 import itertools, sys
 import numpy as np
-from bayes_inerter._kernel import _compiled, cache
+from bayes_inerter.simulate._kernel import _compiled, cache
 kernel = cache.load({TABLES_SOURCE!r}, header={TABLES_HEADER!r})
 A = np.array([[0.0, 1.0], [-4.0, -0.1]])
 F = kernel(A, 1e-3, 3)

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from test_kernel import kernel_arguments
 
-from bayes_inerter._kernel.generate import Shape, expand, kernel_source
-from bayes_inerter.models import NETWORKS
+from bayes_inerter.simulate._kernel.generate import Shape, expand, kernel_source
+from bayes_inerter.networks import NETWORKS
 
 GOLDEN = Path(__file__).parent / "golden"
 REGENERATE = os.environ.get("BAYES_INERTER_REGENERATE_GOLDEN") == "1"

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.friction import Coulomb
-from bayes_inerter.models import NETWORKS, build_network, lead_angle
+from bayes_inerter.networks import NETWORKS, build_network, lead_angle
 from bayes_inerter.network import (
     Deformation,
     Friction,
@@ -170,7 +170,7 @@ def test_bad_network_input():
 
 @pytest.mark.parametrize("name", ["reduced", "rigid", "linear"])
 def test_linear_chain_gives_the_compiled_arrays(name):
-    from bayes_inerter.models import FIELDS, linear_chain
+    from bayes_inerter.networks import FIELDS, linear_chain
 
     chain = linear_chain(name)
     rng = np.random.default_rng(4)
@@ -185,7 +185,7 @@ def test_linear_chain_gives_the_compiled_arrays(name):
 
 
 def test_linear_chain_refuses_a_network_that_is_not_a_sum_of_parameters():
-    from bayes_inerter.models import linear_chain
+    from bayes_inerter.networks import linear_chain
 
     assert linear_chain("full") is None  # its tan(theta) shares of f2
 

@@ -5,7 +5,7 @@ import pytest
 
 from bayes_inerter import paper_parameters, simulate
 from bayes_inerter.network import accel_response
-from bayes_inerter.models import build_network
+from bayes_inerter.networks import build_network
 from bayes_inerter.records import GeneratorSettings, fit_accuracy, generate_record, lowpass, paper_grid
 from bayes_inerter.records.generator import paper_record
 

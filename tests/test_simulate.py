@@ -10,9 +10,9 @@ from scipy import signal
 from scipy.linalg import expm
 
 from bayes_inerter import SimulationError, paper_parameters, simulate, simulate_network
-from bayes_inerter._kernel._compiled import levels, tables
+from bayes_inerter.simulate._kernel._compiled import levels, tables
 from bayes_inerter.friction import make_law, stribeck_knots
-from bayes_inerter.models import NETWORKS, build_network
+from bayes_inerter.networks import NETWORKS, build_network
 from bayes_inerter.network import accel_response, compile_network
 from bayes_inerter.simulate import Drive, mean_acceleration
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _arviz
+from .. import arviz_import
 from .fit import check_output_folder, fit_record
 from .model import MODELS, LikelihoodSettings, refusal
 from .results import HDI_PROB, hdi, loo_data
@@ -104,7 +104,7 @@ def _weights(idatas: dict) -> dict:
     """arviz's stacking weights of the fitted models (one model: weight 1)."""
     if len(idatas) == 1:
         return {m: 1.0 for m in idatas}
-    az = _arviz.module()
+    az = arviz_import.module()
 
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")  # large Pareto k: flagged per fit instead

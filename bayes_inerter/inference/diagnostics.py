@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 
-from .. import _arviz
+from .. import arviz_import
 
 __all__ = ["rhat_ess"]
 
@@ -19,7 +19,7 @@ def rhat_ess(chain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     read R-hat as a check that no walker is stuck apart, and take the autocorrelation
     time from emcee.
     """
-    az = _arviz.module()
+    az = arviz_import.module()
 
     steps, walkers, ndim = chain.shape
     if steps < 4:

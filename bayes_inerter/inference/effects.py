@@ -19,7 +19,7 @@ zone in the nut's spring and damper (:class:`..network.Backlash`).
 from __future__ import annotations
 
 from ..friction import STRIBECK_VELOCITY, make_law
-from ..models import build_network, with_backlash
+from ..networks import build_network, with_backlash
 from ..network import Network
 from .priors import LogUniform, Uniform
 

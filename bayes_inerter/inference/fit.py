@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _arviz
+from .. import arviz_import
 from ..records.drive import resolve_drive, with_drive
 from ..records.record import Record
 from .checkpoint import WRITE_SECONDS
@@ -105,7 +105,7 @@ def check_output_folder(out: Path) -> None:
 
 def versions() -> dict:
     """Versions of the package, Python and the libraries that shape its numbers."""
-    arviz = _arviz.module()
+    arviz = arviz_import.module()
     import emcee
     import numba
     import scipy

@@ -26,7 +26,7 @@ from numba import njit
 from scipy import signal
 
 from ..device import TABLE_I, InerterParameters, apparent_inertance
-from ..models import FIELDS, linear_chain
+from ..networks import FIELDS, linear_chain
 from ..network.compile import chain_state_space
 from ..records.conditioning import lowpass
 from ..masses import resolve_masses
@@ -253,7 +253,7 @@ class PosteriorModel:
 
     def _set_simulation(self) -> None:
         """What every evaluation's simulation starts from: the drive (upsampled where
-        asked), the fixed parameters, and where the sampled ones go in ``models.FIELDS``."""
+        asked), the fixed parameters, and where the sampled ones go in ``networks.FIELDS``."""
         rec = self.record
         q = self.likelihood.upsample
         if q > 1:
@@ -365,7 +365,7 @@ class PosteriorModel:
         return lp
 
     def field_vector(self, theta) -> np.ndarray:
-        """The network's parameters at theta as a vector in ``models.FIELDS`` order (what
+        """The network's parameters at theta as a vector in ``networks.FIELDS`` order (what
         :meth:`parameters` gives, without the dataclass); ValueError where one is not
         finite or out of its range."""
         v = self.to_values(theta)
@@ -384,7 +384,7 @@ class PosteriorModel:
 
     def simulate_raw(self, theta) -> np.ndarray:
         """Simulated acceleration over the whole record (before the low-pass), sampled as
-        the likelihood says. With the network's :class:`~bayes_inerter.models.LinearChain`
+        the likelihood says. With the network's :class:`~bayes_inerter.networks.LinearChain`
         the arrays come straight from :meth:`field_vector` and the exact kernel runs on
         them (``simulate.run_exact``): the same simulation as ``simulate()``, without
         building and compiling a network at every evaluation (about a quarter of a 10 s

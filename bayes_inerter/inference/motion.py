@@ -122,7 +122,7 @@ import numpy as np
 import threadpoolctl
 from numba import njit
 
-from ..models import FIELDS
+from ..networks import FIELDS
 from ..records.record import Record
 from ..simulate import exact_runner
 from .harmonic import HarmonicData, at_times, harmonic_data
@@ -256,10 +256,10 @@ def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogo
                       basis, scale, windows, fine_omega, fine_var)
 
 
-#: The physical parameters in the order the compiled kernels unpack them: ``models.FIELDS``'s.
+#: The physical parameters in the order the compiled kernels unpack them: ``networks.FIELDS``'s.
 ORDER = ("b", "m_s", "m_B", "c_n", "k_n", "c_B", "k_B", "f1_0", "c_f1", "f2_0", "c_f2")
 if ORDER != FIELDS:  # the model hands the kernels its field vector as it is
-    raise ImportError("motion.ORDER must be models.FIELDS")
+    raise ImportError("motion.ORDER must be networks.FIELDS")
 
 
 @njit(cache=True)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _arviz
+from .. import arviz_import
 from .harmonic import at_times
 from .model import PosteriorModel
 
@@ -42,7 +42,7 @@ HDI_PROB = 0.94
 def hdi(x, prob: float = HDI_PROB) -> tuple[float, float]:
     """The ``prob`` highest-density interval of the draws ``x`` (any shape, flattened),
     arviz's, as two floats."""
-    az = _arviz.module()
+    az = arviz_import.module()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         lo, hi = az.hdi(np.ravel(np.asarray(x, dtype=float)), hdi_prob=prob)
@@ -122,7 +122,7 @@ def to_inference_data(model: PosteriorModel, sample: PosteriorSample, *, rng: np
                       max_draws: int = MAX_DRAWS, keep_sims: int = 200):
     """InferenceData of the kept draws; also the full-rate low-passed simulations of up to
     ``keep_sims`` draws (for credible bands), shape (n, K)."""
-    az = _arviz.module()
+    az = arviz_import.module()
 
     idx = _subset(sample, max_draws)
     theta = sample.theta[:, idx]
@@ -219,7 +219,7 @@ def summary_rows(sample: PosteriorSample, kinds: dict | None = None) -> list[dic
     ``kinds``: each name's ``kind`` ("sampled", "derived", ...; empty where not given).
     A derived quantity that is not defined in every draw (NaN: ``b_app``) is summarised
     over the draws where it is, and its kind says in how many."""
-    az = _arviz.module()
+    az = arviz_import.module()
 
     rows = []
     data = sample.as_dict()
@@ -272,7 +272,7 @@ def loo_data(idata):
     draw: what PSIS-LOO reads. A derived quantity defined on some draws only (``b_app``,
     NaN elsewhere) enters arviz's relative efficiency, which ignores it, and made arviz
     log "Array contains NaN-value" for every fit; without it the LOO is the same."""
-    az = _arviz.module()
+    az = arviz_import.module()
 
     post = idata.posterior
     finite = [v for v in post.data_vars if np.all(np.isfinite(np.asarray(post[v])))]
@@ -286,7 +286,7 @@ def loo_summary(idata) -> dict:
     comparison can be rebuilt without it."""
     import warnings
 
-    az = _arviz.module()
+    az = arviz_import.module()
 
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a large Pareto k is reported in the result instead

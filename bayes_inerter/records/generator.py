@@ -20,13 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from .. import _stiff
 from ..device import FREQUENCIES_HZ, SETTINGS, InerterParameters, paper_parameters
 from ..friction import STRIBECK_RATIO, STRIBECK_VELOCITY, make_law
-from ..models import build_network, with_backlash
+from ..networks import build_network, with_backlash
 from ..network import Network, compile_network
-from .._piecewise import applies as piecewise_applies
-from ..simulate import run_piecewise_linear
+from ..simulate import exact_applies, run_piecewise_linear, run_stiff
 from .record import Record
 
 __all__ = ["GeneratorSettings", "generate_record", "paper_grid", "paper_record", "STIFF_RTOL", "CHUNK_SECONDS"]
@@ -180,7 +178,7 @@ def _servo_system(params, s: GeneratorSettings):
     """The device's compiled network with the servo closed around node 0."""
     compiled = compile_network(_truth_network(params, s))
     inv_m0 = 1.0 / compiled.masses[0]
-    exact = compiled.all_coulomb or (s.exact and piecewise_applies(compiled))
+    exact = compiled.all_coulomb or (s.exact and exact_applies(compiled))
     A, B1 = compiled.state_space(viscous=exact, position=True)
     n = A.shape[0]
     pos = n - 1
@@ -209,7 +207,7 @@ def _simulate_servo(params, freq, s: GeneratorSettings, chunk_s: float):
         if exact:
             _, states = run_piecewise_linear(compiled, A, B, inputs, 1.0 / fine, x0=x0, store=True)
         else:  # the general stiff solver runs in one piece
-            _, states = _stiff.run_stiff(compiled, A, B, t, inputs, rtol=STIFF_RTOL)
+            _, states = run_stiff(compiled, A, B, t, inputs, rtol=STIFF_RTOL)
         if lo < a:
             states, x_ref, v_ref = states[1:], x_ref[1:], v_ref[1:]
         x0 = states[-1].copy()

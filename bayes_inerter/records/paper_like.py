@@ -7,7 +7,7 @@ states none of them), sized so that the paper's reduced model, fitted by least s
 reproduces a record about as well as the paper's Table 2 says it reproduced the
 experiments (``studies/paper_like_phi.py`` measures that; ``results/paper-like/``):
 
-- the full network (the nut's sin(theta) friction, :func:`..models.full`);
+- the full network (the nut's sin(theta) friction, :func:`..networks.full`);
 - Stribeck friction on both contacts, break-away ``ratio`` times the Coulomb force,
   falling to it over ``velocity``;
 - a dead zone of half-width ``backlash`` in the nut link;

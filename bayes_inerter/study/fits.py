@@ -9,7 +9,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from .. import _arviz
+from .. import arviz_import
 
 __all__ = ["RecordFit", "collect", "fit_loo"]
 
@@ -61,6 +61,6 @@ def fit_loo(fit: RecordFit) -> dict:
     path = fit.folder / LOO_FILE
     if path.is_file():
         return json.loads(path.read_text())
-    az = _arviz.module()
+    az = arviz_import.module()
 
     return write_loo(fit.folder, az.from_netcdf(str(fit.folder / "posterior.nc")))

@@ -14,8 +14,8 @@ import numpy as np
 from numba import njit
 
 from ._kernel import Net, RichShape
-from .friction import PiecewiseLinear
-from .network import CompiledNetwork
+from ..friction import PiecewiseLinear
+from ..network import CompiledNetwork
 
 __all__ = ["applies", "network_arrays"]
 

@@ -41,9 +41,10 @@ import numpy as np
 from numba import njit
 
 from . import _kernel, _piecewise, _stiff
-from .device import InerterParameters, validate_parameters
-from .models import build_network
-from .network import CompiledNetwork, Network, compile_network
+from ._stiff import run_stiff
+from ..device import InerterParameters, validate_parameters
+from ..networks import build_network
+from ..network import CompiledNetwork, Network, compile_network
 
 __all__ = [
     "simulate",
@@ -51,6 +52,8 @@ __all__ = [
     "check_record",
     "Drive",
     "run_piecewise_linear",
+    "exact_applies",
+    "run_stiff",
     "run_exact",
     "exact_runner",
     "contacts",
@@ -211,11 +214,18 @@ def run_piecewise_linear(
     return _outputs(out, h, max_events, sampling)
 
 
+def exact_applies(compiled: CompiledNetwork) -> bool:
+    """Whether :func:`run_piecewise_linear` runs ``compiled``: every friction law Coulomb
+    or piecewise linear (Stribeck, dead zones). Where not, :func:`run_stiff` does (Radau
+    on the regularised laws)."""
+    return compiled.all_coulomb or _piecewise.applies(compiled)
+
+
 def run_exact(A, B, nodes, f0, mass, inputs, h, *, x0=None, store=False, max_events=MAX_EVENTS_PER_STEP,
               sampling="instant"):
     """:func:`run_piecewise_linear` given the contacts as arrays: their ``nodes`` (int),
     Coulomb bounds ``f0`` (N, > 0) and node masses (kg). The likelihood's entry point,
-    which forms these without building a network (``models.linear_chain``)."""
+    which forms these without building a network (``networks.linear_chain``)."""
     return exact_runner(A, B, nodes, f0, mass, h, max_events=max_events, sampling=sampling)(inputs, x0=x0, store=store)
 
 

@@ -20,8 +20,8 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .friction import Coulomb, FrictionLaw, Smooth, Stribeck
-from .network import CompiledNetwork
+from ..friction import Coulomb, FrictionLaw, Smooth, Stribeck
+from ..network import CompiledNetwork
 
 __all__ = ["simulate_stiff", "run_stiff", "V_EPS", "RTOL", "BACKLASH_RAMP"]
 

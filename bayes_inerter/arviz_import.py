@@ -1,4 +1,4 @@
-"""arviz, imported where processes start at once.
+"""arviz, imported where processes start at once (`module()`).
 
 arviz's import writes a stamp file once a day (the day it last warned of its refactor)
 through a temporary file of one fixed name. Two processes importing it for the day's

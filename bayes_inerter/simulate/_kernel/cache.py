@@ -15,11 +15,12 @@ numba's ``NUMBA_CPU_NAME`` and ``NUMBA_CPU_FEATURES``). So every virtual environ
 every clone of a user has its own folder: none loads machine code another compiled. A
 folder can be deleted at any time (its kernels are compiled again).
 
-Kernel files are named by a hash of their source and of the compiled helpers'
-(``_compiled.py``, ``_rich.py``), so a changed kernel never meets an old cache.
+Kernel files are named by a hash of their source and of the compiled helpers' dotted
+names and source (``_compiled.py``, ``_rich.py``), so a changed kernel, or one whose
+helpers moved, never meets an old cache.
 
 **The helpers are copied into each folder** (``bayes_inerter_compiled_<tag>.py``,
-``bayes_inerter_rich_<tag>.py``, the tag a hash of the helpers' source and of the folder)
+``bayes_inerter_rich_<tag>.py``, the tag a hash of the helpers' names and source and of the folder)
 and the kernels there call those copies, not the package's ``_compiled`` and ``_rich``
 (the in-memory fallback still calls the package's). Why: numba links a compiled callee
 into its caller's machine code and names it, and the *environment* holding the
@@ -58,15 +59,15 @@ __all__ = ["KERNEL_DIR_ENV", "kernel_dirs", "load", "environment", "environment_
 
 KERNEL_DIR_ENV = "BAYES_INERTER_KERNEL_DIR"
 #: Where this package is installed (for an editable install: the clone's folder).
-PACKAGE_DIR = Path(__file__).resolve().parent.parent
+PACKAGE_DIR = Path(__file__).resolve().parents[2]
 
 #: The package's helper modules, which the kernel folders get copies of.
-HELPERS = ("bayes_inerter._kernel._compiled", "bayes_inerter._kernel._rich")
+HELPERS = ("bayes_inerter.simulate._kernel._compiled", "bayes_inerter.simulate._kernel._rich")
 
 HEADER = (
     "import numpy as np\n"
     "from numba import njit\n"
-    "from bayes_inerter._kernel._compiled import (HERMITE_SLACK, STATUS_OK, STATUS_TOO_MANY_EVENTS, cubic_range,\n"
+    "from bayes_inerter.simulate._kernel._compiled import (HERMITE_SLACK, STATUS_OK, STATUS_TOO_MANY_EVENTS, cubic_range,\n"
     "                                             setup, start, switch)\n\n"
 )
 #: The header of a kernel for piecewise-linear laws and dead zones: its setup, start and
@@ -74,8 +75,8 @@ HEADER = (
 RICH_HEADER = (
     "import numpy as np\n"
     "from numba import njit\n"
-    "from bayes_inerter._kernel._compiled import HERMITE_SLACK, STATUS_OK, STATUS_TOO_MANY_EVENTS, cubic_range\n"
-    "from bayes_inerter._kernel._rich import setup, start, switch\n\n"
+    "from bayes_inerter.simulate._kernel._compiled import HERMITE_SLACK, STATUS_OK, STATUS_TOO_MANY_EVENTS, cubic_range\n"
+    "from bayes_inerter.simulate._kernel._rich import setup, start, switch\n\n"
 )
 
 
@@ -125,7 +126,11 @@ def _helper_path(module: str) -> Path:
 
 
 def _helpers() -> bytes:
-    return b"".join(_helper_path(module).read_bytes() for module in HELPERS)
+    """The helpers' dotted names and sources: what the copies' names and the kernels'
+    digests hash. The names count too: numba's cache pickles the types a compiled helper
+    was called with (the kernel's ``Net`` among them) under the module that defines them,
+    and a cache written before the helpers moved could not be read after."""
+    return b"".join(module.encode() + b"\n" + _helper_path(module).read_bytes() for module in HELPERS)
 
 
 def _write(folder: Path, module_name: str, text: str) -> Path:
