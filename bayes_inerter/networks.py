@@ -27,7 +27,7 @@ from .device import DEFAULT_GEOMETRY, InerterParameters, paper_parameters
 from .friction import FrictionLaw, make_law
 from .network import Backlash, Deformation, Friction, Inerter, Mass, Network, cascade, compile_network
 
-__all__ = ["NETWORKS", "build_network", "with_backlash", "lead_angle", "NUT_SHARE", "FIELDS", "LinearChain", "linear_chain"]
+__all__ = ["NETWORKS", "build_network", "with_backlash", "device_network", "lead_angle", "NUT_SHARE", "FIELDS", "LinearChain", "linear_chain"]
 
 #: The parameters in :class:`InerterParameters`' order (the vectors of :class:`LinearChain`).
 FIELDS = tuple(f.name for f in dataclasses.fields(InerterParameters))
@@ -149,6 +149,22 @@ def with_backlash(net: Network, gap: float) -> Network:
     j = max(i for i, b in enumerate(blocks) if isinstance(b, Deformation))
     blocks[j] = dataclasses.replace(blocks[j], backlash=Backlash(gap))
     return Network(tuple(blocks), net.name + "+backlash")
+
+
+def device_network(name: str, params: InerterParameters, friction="coulomb", *, stribeck_ratio: float | None = None,
+                   stribeck_velocity: float | None = None, backlash: float = 0.0) -> Network:
+    """The network ``name`` at ``params`` with the effects a device may have beyond the
+    paper's model: ``friction`` "stribeck" for a Stribeck law on every contact (break-away
+    ``stribeck_ratio`` times the Coulomb force, falling over ``stribeck_velocity``, m/s;
+    :func:`.friction.make_law`), any other law by name or factory as
+    :func:`build_network` takes it, and a dead zone of half-width ``backlash`` (m) in the
+    nut link (none at 0). The one place such a device is built: the generator's truth
+    and the richer models' fits both come here."""
+    if friction == "stribeck":
+        def friction(f0, c):
+            return make_law("stribeck", f0, c, stribeck_ratio=stribeck_ratio, stribeck_velocity=stribeck_velocity)
+    net = build_network(name, params, friction)
+    return with_backlash(net, backlash) if backlash > 0 else net
 
 
 @dataclass(frozen=True)

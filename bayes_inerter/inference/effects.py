@@ -18,8 +18,8 @@ zone in the nut's spring and damper (:class:`..network.Backlash`).
 
 from __future__ import annotations
 
-from ..friction import STRIBECK_VELOCITY, make_law
-from ..networks import build_network, with_backlash
+from ..friction import STRIBECK_VELOCITY
+from ..networks import device_network
 from ..network import Network
 from .priors import LogUniform, Uniform
 
@@ -48,9 +48,5 @@ def effect_network(name: str, params, effects: dict) -> Network:
     """The network ``name`` at ``params`` with the ``effects`` (any of r_s, v_s, gap;
     the others as in :data:`NO_EFFECT`)."""
     e = {**NO_EFFECT, **effects}
-
-    def stribeck(f0, c):
-        return make_law("stribeck", f0, c, stribeck_ratio=e["r_s"], stribeck_velocity=e["v_s"])
-
-    net = build_network(name, params, stribeck if e["r_s"] > 1.0 else "coulomb")
-    return with_backlash(net, e["gap"]) if e["gap"] > 0.0 else net
+    return device_network(name, params, "stribeck" if e["r_s"] > 1.0 else "coulomb", stribeck_ratio=e["r_s"],
+                          stribeck_velocity=e["v_s"], backlash=e["gap"])

@@ -21,8 +21,8 @@ import numpy as np
 from scipy import signal
 
 from ..device import FREQUENCIES_HZ, SETTINGS, InerterParameters, paper_parameters
-from ..friction import STRIBECK_RATIO, STRIBECK_VELOCITY, make_law
-from ..networks import build_network, with_backlash
+from ..friction import STRIBECK_RATIO, STRIBECK_VELOCITY
+from ..networks import device_network
 from ..network import Network, compile_network
 from ..simulate import exact_applies, run_piecewise_linear, run_stiff
 from .record import Record
@@ -156,12 +156,8 @@ def _reference_motion(t, freq, amplitude, ramp):
 
 
 def _truth_network(params: InerterParameters, s: GeneratorSettings) -> Network:
-    friction = s.friction
-    if friction == "stribeck":
-        def friction(f0, c):
-            return make_law("stribeck", f0, c, stribeck_ratio=s.stribeck_ratio, stribeck_velocity=s.stribeck_velocity)
-    net = build_network(s.network, params, friction)
-    return with_backlash(net, s.backlash) if s.backlash > 0 else net
+    return device_network(s.network, params, s.friction, stribeck_ratio=s.stribeck_ratio,
+                          stribeck_velocity=s.stribeck_velocity, backlash=s.backlash)
 
 
 #: Records are simulated and filtered in pieces of this many seconds of internal time,
