@@ -74,7 +74,7 @@ def main():
         move = IndependenceMove.fit(fit_draws, knots=knots or None, dof=adapt.dof, scale=adapt.scale, wide=wide,
                                     wide_scale=adapt.wide_scale)
         t_fit = time.perf_counter() - t0
-        y, _ = move._propose(np.zeros((args.proposals, d)), np.random.RandomState(args.seed))
+        y = move.draw(args.proposals, np.random.RandomState(args.seed))
         t0 = time.perf_counter()
         ly = np.array([target(u)[0] for u in y])
         t_eval = (time.perf_counter() - t0) / len(y)
