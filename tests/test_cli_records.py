@@ -115,6 +115,9 @@ def test_fit_prints_the_masses_and_their_sources_and_device_theory(tmp_path, cap
     assert "c_f1" not in info["priors"] and "c_f" in info["priors"] and "c_f1" in info["derived"]
     assert rows["c_f1"]["kind"] == "derived" and rows["b"]["kind"] == "sampled"
     assert info["masses"]["m_B"] == {"kg": 50.0, "source": f"device file {dev}"}
+    m_s = info["masses"]["m_s"]  # the masses printed before the fit are the ones it used
+    assert (f"masses: m_s = {m_s['kg']:g} kg ({m_s['source']}), m_B = 50 kg (device file {dev})"
+            in text.splitlines())
     assert info["b_theory_device_file"] == pytest.approx((2 * math.pi / 0.02) ** 2 * 0.03)
 
 

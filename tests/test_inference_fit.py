@@ -330,6 +330,20 @@ def test_bad_options_refused_before_sampling(tmp_path, record_file, capsys):
     assert not out.exists()
 
 
+
+def test_masses_resolved_once_are_taken_and_not_given_twice(tmp_path, record_file):
+    """The command line resolves the masses once and hands them over (``masses=``); the
+    same masses given again as numbers is refused before the folder is touched."""
+    from bayes_inerter.masses import resolve_masses
+    from bayes_inerter.records import read_record
+
+    rec = read_record(record_file)
+    masses = resolve_masses(rec, m_B=60.0)
+    out = tmp_path / "never"
+    with pytest.raises(ValueError, match="not both"):
+        fit_record(rec, out, masses=masses, m_s=masses.m_s, steps=2)
+    assert not out.exists()
+
 def _fit(record_file, out, steps, walkers=24):
     return main(["fit", str(record_file), "--out", str(out), "--steps", str(steps), "--walkers", str(walkers),
                  "--processes", "1", "--no-plots"])

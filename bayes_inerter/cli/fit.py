@@ -41,7 +41,7 @@ def cmd_fit(args) -> int:
     print(f"masses: {masses.describe()}", flush=True)
     print(f"drive frequency: {drive.describe()}", flush=True)
     processes = args.processes or min(2, os.cpu_count() or 1)
-    options = dict(m_s=args.m_s, m_B=args.m_b, device=device, walkers=args.walkers, steps=args.steps,
+    options = dict(masses=masses, device=device, walkers=args.walkers, steps=args.steps,
                    seed=args.seed, fresh=args.fresh, processes=processes,
                    likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample, delay_sd=args.delay_sd),
                    coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),

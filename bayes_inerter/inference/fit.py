@@ -24,7 +24,7 @@ from ..records.drive import resolve_drive, with_drive
 from ..records.record import Record
 from .checkpoint import WRITE_SECONDS
 from ..lock import folder_lock
-from ..masses import resolve_masses
+from ..masses import Masses, resolve_masses
 from .coordinates import default_coordinates
 from .coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
 from .end_state import EndWarning, convergence_warning, end_state_warnings
@@ -137,7 +137,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                coordinates: str = "impedance", adaptation: Adaptation | None = Adaptation(),
                checkpoint_seconds: float = WRITE_SECONDS,
                interval: str | IntervalSettings | None = None, freq: float | None = None,
-               name: str | None = None, modal: bool | None = None) -> FitResult:
+               name: str | None = None, modal: bool | None = None, masses: Masses | None = None) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
     ``modal``: the bearing's damper sampled as the plate mode's damping ratio under its
@@ -161,6 +161,9 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     ``m_s``, ``m_B``, ``device`` (a ``device_file.DeviceFile``): the masses, resolved by
     ``masses.resolve_masses`` (option, metadata, device file, paper default); fit.json
     records each with its source, and the device file's theoretical inertance.
+    ``masses``: the masses already resolved (the command line resolves them once, to
+    print them and to refuse a record before anything runs), in place of ``m_s`` and
+    ``m_B``.
 
     ``name``: the record's name in the figures' titles (``fit`` gives its file's name).
 
@@ -180,7 +183,10 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     interval_settings = _interval_settings(interval)
     drive = resolve_drive(record, freq)
     record = with_drive(record, drive)
-    masses = resolve_masses(record, m_s=m_s, m_B=m_B, device=device)
+    if masses is None:
+        masses = resolve_masses(record, m_s=m_s, m_B=m_B, device=device)
+    elif m_s is not None or m_B is not None:
+        raise ValueError("give the masses resolved (masses=) or as m_s and m_B, not both")
     b_theory = device.theoretical_inertance if device is not None else None
     pm = PosteriorModel(record, model, m_s=masses.m_s, m_B=masses.m_B, priors=priors or {},
                         likelihood=likelihood or LikelihoodSettings(), modal=modal)
