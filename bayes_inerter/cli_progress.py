@@ -3,7 +3,7 @@
 On a terminal, tqdm's bar. Elsewhere (a log file, a batch job) a line at most every
 :data:`LINE_SECONDS`, and at the start and end, with the step, the autocorrelation
 estimate, the acceptance and the steps still needed, as the sampler last reported them
-(``inference.sampler.SamplerStatus``). Part of the command line: it prints.
+(``inference.sampling.sampler.SamplerStatus``). Part of the command line: it prints.
 """
 
 from __future__ import annotations

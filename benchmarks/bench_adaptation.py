@@ -38,8 +38,8 @@ VARIANTS = ("adaptive", "ensemble-only", "scores", "blocks")
 def _run(job):
     setting, freq, variant, seed, max_steps, start, folder = job
     from bayes_inerter.inference import Convergence
-    from bayes_inerter.inference.model import PosteriorModel
-    from bayes_inerter.inference.sampler import Adaptation, run_sampler
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.inference.sampling.sampler import Adaptation, run_sampler
     from bayes_inerter.records.generator import paper_record
 
     rec = paper_record(setting, freq, seed=0)
@@ -65,8 +65,8 @@ def _run(job):
 
 
 def _start(item, seed):
-    from bayes_inerter.inference.model import PosteriorModel
-    from bayes_inerter.inference.optimize import find_start
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.inference.sampling.optimize import find_start
     from bayes_inerter.records.generator import paper_record
 
     setting, freq = record_arg(item)

@@ -47,7 +47,7 @@ def _per_step(make_backend, pause: float = 0.0):
 def main():
     from bayes_inerter import paper_parameters
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.checkpoint import WRITE_SECONDS, new_checkpoint
+    from bayes_inerter.inference.sampling.checkpoint import WRITE_SECONDS, new_checkpoint
     from bayes_inerter.records import generate_record
 
     def plain(path):

@@ -46,7 +46,7 @@ def main():
     args = ap.parse_args()
 
     from bayes_inerter import paper_parameters, simulate
-    from bayes_inerter.inference.model import PosteriorModel
+    from bayes_inerter.inference.posterior.model import PosteriorModel
     from bayes_inerter.records import read_record
     from bayes_inerter.records.conditioning import lowpass
 

@@ -30,7 +30,7 @@ import numpy as np
 from _timing import record_row
 
 from bayes_inerter.inference import Convergence, fit_record
-from bayes_inerter.inference.coordinates import COORDINATES
+from bayes_inerter.inference.sampling.coordinates import COORDINATES
 from bayes_inerter.records.paper_like import paper_like_record
 
 

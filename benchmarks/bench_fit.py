@@ -20,12 +20,12 @@ import time
 
 import numpy as np
 
-import bayes_inerter.inference.model as model_module
+import bayes_inerter.inference.posterior.model as model_module
 from _timing import median_time
 
 from bayes_inerter import paper_parameters, simulate
 from bayes_inerter.inference import Convergence, fit_record
-from bayes_inerter.inference.model import PosteriorModel
+from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records import generate_record
 
 TARGET_S = 120.0

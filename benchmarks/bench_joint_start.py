@@ -34,8 +34,8 @@ def main():
     if args.iterations < 1 or args.repeats < 1 or args.processes < 2:
         sys.exit("error: --iterations and --repeats must be positive and --processes at least 2")
 
-    from bayes_inerter.inference.joint import JointModel, pooled_log_prob
-    from bayes_inerter.inference.optimize import local_optimum
+    from bayes_inerter.inference.posterior.joint import JointModel, pooled_log_prob
+    from bayes_inerter.inference.sampling.optimize import local_optimum
     from bayes_inerter.records import paper_grid
     from bayes_inerter.study.analysis import collect
     from bayes_inerter.study.plan import record_name

@@ -23,10 +23,10 @@ import numpy as np
 
 from bayes_inerter.device import paper_parameters
 from bayes_inerter.executor import Executor
-from bayes_inerter.inference.coordinates import default_coordinates
-from bayes_inerter.inference.joint import JointModel
-from bayes_inerter.inference.model import PosteriorModel
-from bayes_inerter.inference.target import Target, log_prob_at
+from bayes_inerter.inference.sampling.coordinates import default_coordinates
+from bayes_inerter.inference.posterior.joint import JointModel
+from bayes_inerter.inference.posterior.model import PosteriorModel
+from bayes_inerter.inference.sampling.target import Target, log_prob_at
 from bayes_inerter.records.generator import paper_grid
 
 _TARGET = None  # the target each worker of this script's pool was given

@@ -40,11 +40,11 @@ def main():
 
     import h5py
 
-    from bayes_inerter.inference.coordinates import default_coordinates
-    from bayes_inerter.inference.joint import JointModel
-    from bayes_inerter.inference.moves import IndependenceMove
-    from bayes_inerter.inference.sampler import Adaptation
-    from bayes_inerter.inference.target import Target
+    from bayes_inerter.inference.sampling.coordinates import default_coordinates
+    from bayes_inerter.inference.posterior.joint import JointModel
+    from bayes_inerter.inference.sampling.moves import IndependenceMove
+    from bayes_inerter.inference.sampling.sampler import Adaptation
+    from bayes_inerter.inference.sampling.target import Target
     from bayes_inerter.records import read_record
 
     study = Path(args.study)

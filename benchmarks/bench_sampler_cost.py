@@ -42,7 +42,7 @@ import numpy as np
 from _timing import record_row
 
 from bayes_inerter.inference import Adaptation, PosteriorModel, fit_record
-from bayes_inerter.inference.convergence import Monitor
+from bayes_inerter.inference.sampling.convergence import Monitor
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 
 TARGET_RATIO = 1.25

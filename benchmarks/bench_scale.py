@@ -72,7 +72,7 @@ def main():
 
     from bayes_inerter import paper_parameters
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.joint import JointModel
+    from bayes_inerter.inference.posterior.joint import JointModel
     from bayes_inerter.records import paper_grid
 
     grid = [rec for _, _, rec in paper_grid(seed=0)]

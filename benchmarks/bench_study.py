@@ -29,7 +29,7 @@ from _timing import median_time
 
 from bayes_inerter import simulate
 from bayes_inerter.inference import Convergence
-from bayes_inerter.inference.model import PosteriorModel
+from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records import read_record
 
 TARGET_S = 30 * 60.0

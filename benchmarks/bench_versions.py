@@ -39,11 +39,11 @@ import json, time, sys, tempfile
 import numpy as np
 from bayes_inerter.device import paper_parameters
 from bayes_inerter.records.generator import paper_grid, paper_record
-from bayes_inerter.inference.model import PosteriorModel
-from bayes_inerter.inference.joint import JointModel
-from bayes_inerter.inference import sampler as S
-from bayes_inerter.inference.target import Target
-from bayes_inerter.inference.coordinates import default_coordinates
+from bayes_inerter.inference.posterior.model import PosteriorModel
+from bayes_inerter.inference.posterior.joint import JointModel
+from bayes_inerter.inference.sampling import sampler as S
+from bayes_inerter.inference.sampling.target import Target
+from bayes_inerter.inference.sampling.coordinates import default_coordinates
 
 def med(fn, xs):
     fn(xs[0])

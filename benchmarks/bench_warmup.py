@@ -39,7 +39,7 @@ def replay(chain, log_prob, conv):
     """(step, check) where ``run_sampler``'s open-ended loop would stop ``chain``
     (steps, walkers, ndim; theta) under ``conv``: its checks at every multiple of
     ``conv.check_every``, each against the one before; (None, last check) if none holds."""
-    from bayes_inerter.inference.convergence import check_chain, is_converged, tau_settled
+    from bayes_inerter.inference.sampling.convergence import check_chain, is_converged, tau_settled
 
     previous, check = None, None
     for step in range(conv.check_every, len(chain) + 1, conv.check_every):
@@ -84,9 +84,9 @@ def rows_for(name, chain, log_prob, names, shares, seconds):
 
 
 def _record_chain(job):
-    from bayes_inerter.inference.model import PosteriorModel
-    from bayes_inerter.inference.optimize import find_start
-    from bayes_inerter.inference.sampler import run_sampler
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.inference.sampling.optimize import find_start
+    from bayes_inerter.inference.sampling.sampler import run_sampler
     from bayes_inerter.records.generator import paper_record
 
     item, steps, seed, folder = job
@@ -99,8 +99,8 @@ def _record_chain(job):
 
 
 def _joint_chain(settings, steps, seed, folder):
-    from bayes_inerter.inference.joint import JointModel
-    from bayes_inerter.inference.sampler import run_sampler
+    from bayes_inerter.inference.posterior.joint import JointModel
+    from bayes_inerter.inference.sampling.sampler import run_sampler
     from bayes_inerter.records import paper_grid
 
     if not START.exists():

@@ -37,7 +37,7 @@ def record_arg(item: str) -> tuple[str, float]:
 def likelihood_changes(text: str) -> dict:
     """``name=value,...`` (values as JSON: 16, false, "plate") as a dict of changes of
     ``LikelihoodSettings``; "" or "default": none. Raises ValueError on a name it lacks."""
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 
     changes = {}
     if text and text != "default":
@@ -64,7 +64,7 @@ def sbc_design_records(seed: int, replicates):
     (``study_calibration.replicate_device``, the motion-in likelihood), replicate k at
     ``FREQUENCIES[k % 3]`` as the calibration fits it. (Imported here: the other
     scripts that share this module need not load the study, about 0.5 s.)"""
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
     from bayes_inerter.study.study_calibration import StudyCalibration, replicate_device
 
     cs = StudyCalibration(seed=seed, single=True, frequencies=FREQUENCIES, steps=None,

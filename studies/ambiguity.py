@@ -5,7 +5,7 @@ parameters they do not identify move.
 
 A record fixes the driving-point impedance of the network's linear part at its drive
 frequency: its inertial part M = Im Z / omega and its resistive part C = Re Z
-(``inference.coordinates``). For every setting and drive frequency of the paper's grid
+(``inference.sampling.coordinates``). For every setting and drive frequency of the paper's grid
 (paper parameters), this holds M and C at the generating values and solves b exactly
 (the impedance coordinates' inverse) while one unidentified parameter moves:
 
@@ -50,7 +50,7 @@ def main():
     from bayes_inerter import paper_parameters
     from bayes_inerter.device import FREQUENCIES_HZ, SETTINGS
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.coordinates import default_coordinates
+    from bayes_inerter.inference.sampling.coordinates import default_coordinates
     from bayes_inerter.records import GeneratorSettings, generate_record
 
     short = GeneratorSettings(duration=1.0, ramp=0.3, force_noise=0, accel_noise=0, disp_noise=0)

@@ -17,7 +17,7 @@ after its first third:
   with their squares and products, beside its own sd;
 - **independence proposals** at equilibrium (``benchmarks/bench_proposal.py``'s
   measure): the t in normal scores that the adaptation fits, and the same t after the
-  triangular map of ``inference.transport`` (each coordinate's quadratic regression on
+  triangular map of ``inference.sampling.transport`` (each coordinate's quadratic regression on
   the less identified ones taken away), each evaluated on ``--pairs`` proposals paired
   with as many draws.
 
@@ -42,12 +42,12 @@ import numpy as np
 
 from _table import git_commit, read_rows, write_rows
 from bayes_inerter.inference import LikelihoodSettings, PosteriorModel, fit_record
-from bayes_inerter.inference.adaptation import Adaptation
-from bayes_inerter.inference.checkpoint import read_chain, stored_identity
-from bayes_inerter.inference.convergence import integrated_time
-from bayes_inerter.inference.coordinates import default_coordinates
-from bayes_inerter.inference.moves import IndependenceMove
-from bayes_inerter.inference.transport import TriangularScores, quadratic_features
+from bayes_inerter.inference.sampling.adaptation import Adaptation
+from bayes_inerter.inference.sampling.checkpoint import read_chain, stored_identity
+from bayes_inerter.inference.sampling.convergence import integrated_time
+from bayes_inerter.inference.sampling.coordinates import default_coordinates
+from bayes_inerter.inference.sampling.moves import IndependenceMove
+from bayes_inerter.inference.sampling.transport import TriangularScores, quadratic_features
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -37,7 +37,7 @@ def main():
     from tqdm import tqdm
 
     from bayes_inerter import paper_parameters
-    from bayes_inerter.inference.checkpoint import read_chain, steps_written
+    from bayes_inerter.inference.sampling.checkpoint import read_chain, steps_written
     from bayes_inerter.records import GeneratorSettings, generate_record, write_record
 
     out = Path(args.out)

@@ -36,9 +36,9 @@ import numpy as np
 
 from _table import git_commit, read_rows, write_rows
 from bayes_inerter.inference import LikelihoodSettings, PosteriorModel
-from bayes_inerter.inference.checkpoint import read_chain, stored_identity
-from bayes_inerter.inference.convergence import integrated_time
-from bayes_inerter.inference.coordinates import default_coordinates
+from bayes_inerter.inference.sampling.checkpoint import read_chain, stored_identity
+from bayes_inerter.inference.sampling.convergence import integrated_time
+from bayes_inerter.inference.sampling.coordinates import default_coordinates
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,7 +12,7 @@ bound), f_share there and b's error. A row is written after every record, and a 
 skips the rows already there. Design seeds only: coverage is measured on others.
 
 ``--joint F1 F2 ...`` records each device at those frequencies and takes the truth's
-place in the joint model's posterior (``inference.joint.JointModel``: one device, its
+place in the joint model's posterior (``inference.posterior.joint.JointModel``: one device, its
 frictions and deformations shared, the likelihood's tau per frequency), as the joint
 calibration (results/coverage-sbc-joint) fits it; ``freq_hz`` then lists them.
 
@@ -33,9 +33,9 @@ import numpy as np
 from scipy.optimize import minimize
 
 from bayes_inerter.inference import PosteriorModel
-from bayes_inerter.inference.joint import JointModel
-from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.inference.optimize import NM_RESTARTS, local_optimum
+from bayes_inerter.inference.posterior.joint import JointModel
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, local_optimum
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
 

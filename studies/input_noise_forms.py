@@ -28,7 +28,7 @@ from scipy.optimize import minimize
 
 from _table import git_commit
 from bayes_inerter.inference import PosteriorModel
-from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -3,7 +3,7 @@
     python studies/joint_mixing.py [--settings A0 A3 B2] [--steps 2500] [--seed 0]
         [--variants default blocks] [--centres results/full] [--out results/joint-mixing]
 
-The joint model (``inference.joint``) of the paper grid's records of ``--settings`` at
+The joint model (``inference.posterior.joint``) of the paper grid's records of ``--settings`` at
 0.5, 1 and 1.5 Hz (generated with seed 0 and the default generator, as the full study
 does) is sampled once per move set from the same start (the joint optimum Nelder-Mead
 reaches from the medians of the records' own optima, or with ``--centres STUDY`` of the
@@ -18,7 +18,7 @@ coordinates (impedance). Move sets:
   2026-11-25 until normal scores and block moves replaced it);
 - ``scores``: the same with the independence proposal's t fitted in the chain's
   normal scores (``Adaptation(knots=200, blocks=0)``,
-  :mod:`bayes_inerter.inference.marginals`);
+  :mod:`bayes_inerter.inference.sampling.marginals`);
 - ``blocks``: the same, half of the fitted share to block moves from a normal in those
   scores (``Adaptation(knots=200, blocks=0.5)``, ``moves.BlockMove``: the default since).
 
@@ -58,9 +58,9 @@ def main():
     import emcee
     from tqdm import tqdm
 
-    from bayes_inerter.inference.joint import JointModel
-    from bayes_inerter.inference.optimize import NM_RESTARTS, find_start, local_optimum
-    from bayes_inerter.inference.sampler import DEFAULT_MOVES, Adaptation, run_sampler
+    from bayes_inerter.inference.posterior.joint import JointModel
+    from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, find_start, local_optimum
+    from bayes_inerter.inference.sampling.sampler import DEFAULT_MOVES, Adaptation, run_sampler
     from bayes_inerter.records import paper_grid
 
     out = Path(args.out)

@@ -27,7 +27,7 @@ def main():
     from tqdm import tqdm
 
     from bayes_inerter.inference.fit import fit_joint
-    from bayes_inerter.inference.model import PosteriorModel
+    from bayes_inerter.inference.posterior.model import PosteriorModel
     from bayes_inerter.records import read_record
     from bayes_inerter.study.analysis import collect
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
-from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -11,11 +11,11 @@ state (converged, longest tau, steps) and the seconds. Candidates:
   off), its interval the posterior's own;
 - ``ar1-honest``: the same chain, its b interval the package's post-hoc "honest" one
   (no second chain: the row is read from the same fit);
-- ``harmonic``: the harmonic likelihood (``inference.harmonic``: force in,
+- ``harmonic``: the harmonic likelihood (``inference.posterior.harmonic``: force in,
   acceleration out at the drive's harmonics, errors in both signals, the discrepancy
   and the channels' gain sampled) with the plate mode's damping ratio under its
   physical prior (``modal``);
-- ``motion``: the motion-in likelihood (``inference.motion``: the measured motion in,
+- ``motion``: the motion-in likelihood (``inference.posterior.motion``: the measured motion in,
   the force out at the drive's harmonics, no simulation; the same noise, discrepancy,
   gain and ``modal``).
 
@@ -46,9 +46,9 @@ import numpy as np
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
-from bayes_inerter.inference.convergence import Convergence
-from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.inference.results import hdi
+from bayes_inerter.inference.sampling.convergence import Convergence
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+from bayes_inerter.inference.summaries.results import hdi
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.paper_like import paper_like_record
 

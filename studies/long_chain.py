@@ -39,8 +39,8 @@ def main():
     from tqdm import tqdm
 
     from bayes_inerter.inference import PosteriorModel, fit_record
-    from bayes_inerter.inference.coordinates import default_coordinates
-    from bayes_inerter.inference.diagnostics import rhat_ess
+    from bayes_inerter.inference.sampling.coordinates import default_coordinates
+    from bayes_inerter.inference.sampling.diagnostics import rhat_ess
     from bayes_inerter.records import read_record
     from bayes_inerter.records.generator import paper_record
 

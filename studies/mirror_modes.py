@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bayes_inerter.inference import PosteriorModel, optimize
+from bayes_inerter.inference import PosteriorModel
+from bayes_inerter.inference.sampling import optimize
 from bayes_inerter.masses import resolve_masses
 from bayes_inerter.records.drive import resolve_drive, with_drive
 from bayes_inerter.records.paper_like import paper_like_record

@@ -21,7 +21,7 @@ optimum the sampler would start from (``optimize.find_start``, then
 94 %; these are approximate posteriors, not MCMC. A method's ``+`` terms add shares to
 the sd: ``+sensors`` the sensors' calibration uncertainty
 (``records.sensitivity.SensorCalibration``'s defaults), ``+discrepancy`` the harmonic
-model discrepancy (``inference.discrepancy``; the other parameters held, decay 1),
+model discrepancy (``inference.posterior.discrepancy``; the other parameters held, decay 1),
 ``+discrepancy_flat`` the same with decay 0, ``+discrepancy_free`` with the other
 parameters free (the Laplace covariance's linear response); ``+guard`` reports b as not identified (the prior's range) where phi is
 below ``end_state.PHI_WARNING`` (for ``setting``: leaves such records out).
@@ -46,13 +46,13 @@ import numpy as np
 
 from bayes_inerter.device import FREQUENCIES_HZ, SETTINGS
 from bayes_inerter.executor import make_executor
-from bayes_inerter.inference.discrepancy import DECAY, harmonic_discrepancy
-from bayes_inerter.inference.end_state import PHI_WARNING
-from bayes_inerter.inference.priors import DEFAULT_PRIORS
-from bayes_inerter.inference.interval import InertanceInterval, combined_interval
-from bayes_inerter.inference.joint import JointModel
-from bayes_inerter.inference.model import PosteriorModel
-from bayes_inerter.inference.optimize import NM_RESTARTS, find_start, laplace_covariance, local_optimum
+from bayes_inerter.inference.posterior.discrepancy import DECAY, harmonic_discrepancy
+from bayes_inerter.inference.summaries.end_state import PHI_WARNING
+from bayes_inerter.inference.posterior.priors import DEFAULT_PRIORS
+from bayes_inerter.inference.summaries.interval import InertanceInterval, combined_interval
+from bayes_inerter.inference.posterior.joint import JointModel
+from bayes_inerter.inference.posterior.model import PosteriorModel
+from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, find_start, laplace_covariance, local_optimum
 from bayes_inerter.records.generator import GeneratorSettings, paper_record
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 from bayes_inerter.records.sensitivity import SensorCalibration

@@ -30,8 +30,8 @@ def _optimum(job):
     import numpy as np
 
     from bayes_inerter.device import apparent_inertance
-    from bayes_inerter.inference.model import PosteriorModel
-    from bayes_inerter.inference.optimize import find_start
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.inference.sampling.optimize import find_start
     from bayes_inerter.records.generator import GeneratorSettings, paper_record
 
     g = GeneratorSettings()

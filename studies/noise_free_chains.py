@@ -37,8 +37,8 @@ from _table import git_commit, grid_case, write_rows
 from bayes_inerter import paper_parameters
 from bayes_inerter.executor import make_executor
 from bayes_inerter.inference import fit_record
-from bayes_inerter.inference.convergence import Convergence
-from bayes_inerter.inference.results import hdi
+from bayes_inerter.inference.sampling.convergence import Convergence
+from bayes_inerter.inference.summaries.results import hdi
 from bayes_inerter.records import GeneratorSettings, generate_record
 
 ROOT = Path(__file__).resolve().parents[1]

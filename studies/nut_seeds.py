@@ -34,8 +34,8 @@ def main():
     from tqdm import tqdm
 
     from bayes_inerter.device import FREQUENCIES_HZ, apparent_inertance, paper_parameters
-    from bayes_inerter.inference.joint import JointModel
-    from bayes_inerter.inference.optimize import NM_RESTARTS, local_optimum
+    from bayes_inerter.inference.posterior.joint import JointModel
+    from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, local_optimum
     from bayes_inerter.records.generator import paper_record
 
     names = [s.strip().upper() for s in args.settings.split(",") if s.strip()]

@@ -51,9 +51,9 @@ import numpy as np
 from _table import FREQUENCIES, git_commit, grid_case, likelihood_changes
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
-from bayes_inerter.inference.convergence import Convergence
-from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.inference.results import hdi
+from bayes_inerter.inference.sampling.convergence import Convergence
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+from bayes_inerter.inference.summaries.results import hdi
 from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]

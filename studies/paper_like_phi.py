@@ -24,7 +24,7 @@ import numpy as np
 from bayes_inerter.device import FREQUENCIES_HZ, SETTINGS
 from bayes_inerter.executor import make_executor
 from bayes_inerter.inference.identify import identify
-from bayes_inerter.inference.model import PosteriorModel
+from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 
 

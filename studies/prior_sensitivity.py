@@ -28,7 +28,7 @@ from pathlib import Path
 
 from bayes_inerter.executor import LocalProcesses
 from bayes_inerter.inference import fit_record
-from bayes_inerter.inference.priors import LogNormal, LogUniform, Uniform
+from bayes_inerter.inference.posterior.priors import LogNormal, LogUniform, Uniform
 from bayes_inerter.records import read_record
 from bayes_inerter.study.analysis import write_csv
 

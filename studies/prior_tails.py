@@ -37,9 +37,9 @@ import numpy as np
 from _table import append_row, git_commit, read_rows
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
-from bayes_inerter.inference.convergence import Convergence
-from bayes_inerter.inference.priors import LogUniform
-from bayes_inerter.inference.results import hdi
+from bayes_inerter.inference.sampling.convergence import Convergence
+from bayes_inerter.inference.posterior.priors import LogUniform
+from bayes_inerter.inference.summaries.results import hdi
 from bayes_inerter.records.paper_like import paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -33,8 +33,8 @@ def main():
     from tqdm import tqdm
 
     from bayes_inerter.device import InerterParameters
-    from bayes_inerter.inference.model import PosteriorModel
-    from bayes_inerter.inference.optimize import NM_RESTARTS, local_optimum
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, local_optimum
     from bayes_inerter.records.generator import paper_record
     from bayes_inerter.study.design import noise_at
 

@@ -37,8 +37,8 @@ def main():
     from tqdm import tqdm
 
     from bayes_inerter.device import apparent_inertance, paper_parameters
-    from bayes_inerter.inference.model import PosteriorModel
-    from bayes_inerter.inference.optimize import NM_RESTARTS, local_optimum
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, local_optimum
     from bayes_inerter.records.generator import GeneratorSettings, paper_record
 
     settings = [s.strip().upper() for s in args.settings.split(",") if s.strip()]

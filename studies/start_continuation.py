@@ -36,7 +36,7 @@ import numpy as np
 from _table import append_row, grid_case, read_rows, sbc_design_records
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
-from bayes_inerter.inference import optimize
+from bayes_inerter.inference.sampling import optimize
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.paper_like import paper_like_record
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS

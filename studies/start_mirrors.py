@@ -32,7 +32,7 @@ import numpy as np
 
 from _table import append_row, read_rows
 from start_continuation import records
-from bayes_inerter.inference import optimize
+from bayes_inerter.inference.sampling import optimize
 
 ROOT = Path(__file__).resolve().parents[1]
 VARIANTS = {"f_share": ("f_share",), "f_share+c_share": ("f_share", "c_share")}

@@ -41,7 +41,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from _table import run_with_bar
-from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.study.study_calibration import (StudyCalibration, finished_replicates, inspect_replicate,
                                                   rank_correlations, raise_cap, run_study_calibration,
                                                   write_coverage_so_far)

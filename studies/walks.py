@@ -2,8 +2,8 @@
 start and seed three ways, side by side:
 
 - ``physical``: in the model's parameters theta, emcee's moves alone;
-- ``physical+ridge``: the same with the nut-ridge move (``inference.moves.NutRidgeMove``);
-- ``impedance``: in the impedance coordinates (``inference.coordinates``, the default).
+- ``physical+ridge``: the same with the nut-ridge move (``inference.sampling.moves.NutRidgeMove``);
+- ``impedance``: in the impedance coordinates (``inference.sampling.coordinates``, the default).
 
     python studies/walks.py [--record A3:1 ...] [--steps 3000] [--seed 0]
         [--processes 2] [--out runs/long-chain/walks.csv]
@@ -38,9 +38,9 @@ def _chain(job):
     setting, freq, walk, steps, seed, folder = job
     import emcee
 
-    from bayes_inerter.inference.diagnostics import rhat_ess
-    from bayes_inerter.inference.model import PosteriorModel
-    from bayes_inerter.inference.sampler import DEFAULT_MOVES, default_moves, run_sampler
+    from bayes_inerter.inference.sampling.diagnostics import rhat_ess
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.inference.sampling.sampler import DEFAULT_MOVES, default_moves, run_sampler
     from bayes_inerter.records.generator import paper_record
 
     rec = paper_record(setting, freq, seed=0)

@@ -32,7 +32,7 @@ TEST_SEARCH = {"DE_MAXITER": 20, "NM_MAXITER": 200, "NM_RESTARTS": 0, "TAU_CONTI
 
 #: The same settings as Python source, for a command run in a process of its own (a fresh
 #: interpreter does not read conftest).
-SEARCH_SOURCE = "from bayes_inerter.inference import optimize; " + "; ".join(
+SEARCH_SOURCE = "from bayes_inerter.inference.sampling import optimize; " + "; ".join(
     f"optimize.{name} = {value!r}" for name, value in TEST_SEARCH.items()) + "; "
 
 
@@ -41,7 +41,7 @@ DEFAULT_SEARCH: dict = {}
 
 
 def pytest_configure(config):
-    from bayes_inerter.inference import optimize
+    from bayes_inerter.inference.sampling import optimize
 
     for name, value in TEST_SEARCH.items():  # each xdist worker runs this in its own process
         DEFAULT_SEARCH.setdefault(name, getattr(optimize, name))
@@ -72,7 +72,7 @@ def _compile_before_the_workers() -> None:
 @pytest.fixture
 def default_search(monkeypatch):
     """The package's own start search, for a test of its stages."""
-    from bayes_inerter.inference import optimize
+    from bayes_inerter.inference.sampling import optimize
 
     for name, value in DEFAULT_SEARCH.items():
         monkeypatch.setattr(optimize, name, value)
@@ -104,7 +104,7 @@ def normal_posterior(duration: float = 1.5, ramp: float = 0.5):
 
     from bayes_inerter import paper_parameters
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
     from bayes_inerter.records import GeneratorSettings, generate_record
 
     rec = generate_record(paper_parameters("A2"), 1.0, settings=GeneratorSettings(duration=duration, ramp=ramp),

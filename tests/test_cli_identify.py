@@ -26,7 +26,7 @@ def test_identify_prints_b_its_interval_and_phi_and_writes_json(record, tmp_path
     asserted here (``tests/test_inference_identify.py`` does, from several starts)."""
     import math
 
-    from bayes_inerter.inference.end_state import PHI_WARNING
+    from bayes_inerter.inference.summaries.end_state import PHI_WARNING
 
     capsys.readouterr()
     out = tmp_path / "fit.json"

@@ -26,7 +26,7 @@ from conftest import SEARCH_SOURCE
 
 from bayes_inerter.cli import main
 from bayes_inerter.executor import caused_by_interrupt, interrupt_raised, interrupts_held
-from bayes_inerter.inference.checkpoint import read_chain, steps_written
+from bayes_inerter.inference.sampling.checkpoint import read_chain, steps_written
 
 
 @pytest.fixture(autouse=True)
@@ -145,7 +145,7 @@ def model():
 
 
 def test_ctrl_c_inside_a_sampler_step_stops_after_the_step_is_stored(model, tmp_path, capsys):
-    from bayes_inerter.inference.sampler import run_sampler
+    from bayes_inerter.inference.sampling.sampler import run_sampler
 
     path = tmp_path / "chain.h5"
     density = model.log_prob
@@ -179,7 +179,7 @@ def test_ctrl_c_inside_a_sampler_step_stops_after_the_step_is_stored(model, tmp_
 
 
 def test_ctrl_c_in_the_start_search_is_a_keyboard_interrupt(model, tmp_path):
-    from bayes_inerter.inference.sampler import run_sampler
+    from bayes_inerter.inference.sampling.sampler import run_sampler
 
     def start():  # the start search's compiled simulation, interrupted
         _ctrl_c_inside_compiled_code()

@@ -11,7 +11,7 @@ import pytest
 from bayes_inerter.cli_progress import StepProgress
 from bayes_inerter.cli import main
 from bayes_inerter.cli.fit import _percent_interval
-from bayes_inerter.inference.sampler import SamplerStatus
+from bayes_inerter.inference.sampling.sampler import SamplerStatus
 from bayes_inerter.lock import folder_lock
 from bayes_inerter.records import read_record
 
@@ -209,7 +209,7 @@ def test_a_daq_file_without_metadata_fits_as_the_readme_says_and_goes_on(tmp_pat
     same chain goes on: 1 Hz and the estimate differ by far less than the record's
     resolution."""
     from bayes_inerter.inference import fit_record
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
     from bayes_inerter.records import read_record as read
 
     p = _daq(tmp_path, metadata=False)

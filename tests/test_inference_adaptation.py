@@ -1,11 +1,11 @@
-"""Tests of the fitted moves' settings and schedule (bayes_inerter.inference.adaptation)."""
+"""Tests of the fitted moves' settings and schedule (bayes_inerter.inference.sampling.adaptation)."""
 
 import numpy as np
 import pytest
 
-from bayes_inerter.inference import adaptation as adaptation_module
-from bayes_inerter.inference.adaptation import FIT_MAX_STEPS, STRETCH, Adaptation, Schedule
-from bayes_inerter.inference.moves import BlockMove
+from bayes_inerter.inference.sampling import adaptation as adaptation_module
+from bayes_inerter.inference.sampling.adaptation import FIT_MAX_STEPS, STRETCH, Adaptation, Schedule
+from bayes_inerter.inference.sampling.moves import BlockMove
 
 
 def test_adaptation_fits_after_the_transient_only():

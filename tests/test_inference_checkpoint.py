@@ -10,9 +10,9 @@ import h5py
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.checkpoint import (IDENTITY_ATTR, CheckpointError, new_checkpoint, open_checkpoint,
+from bayes_inerter.inference.sampling.checkpoint import (IDENTITY_ATTR, CheckpointError, new_checkpoint, open_checkpoint,
                                                 read_chain, twin_path)
-from bayes_inerter.inference.identity import CHECKPOINT_FORMAT
+from bayes_inerter.inference.sampling.identity import CHECKPOINT_FORMAT
 
 IDENTITY = {"format": CHECKPOINT_FORMAT, "model": {"name": "two-port", "parameters": ["b", "sigma"]},
             "priors": {"b": {"law": "LogUniform", "low": 100.0, "high": 1e5}},

@@ -1,9 +1,9 @@
-"""Tests of the convergence rule (bayes_inerter.inference.convergence)."""
+"""Tests of the convergence rule (bayes_inerter.inference.sampling.convergence)."""
 
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.convergence import Convergence, check_chain, is_converged, transient
+from bayes_inerter.inference.sampling.convergence import Convergence, check_chain, is_converged, transient
 
 
 def test_transient_is_none_for_a_chain_in_equilibrium_and_the_climb_for_one_that_is_not():
@@ -66,7 +66,7 @@ def test_integrated_time_is_emcees(steps):
     where a walker never moved, as emcee does."""
     import emcee
 
-    from bayes_inerter.inference.convergence import integrated_time
+    from bayes_inerter.inference.sampling.convergence import integrated_time
 
     rng = np.random.default_rng(steps)
     noise = rng.standard_normal((steps, 8, 3))
@@ -87,7 +87,7 @@ def test_integrated_time_is_emcees(steps):
 
 
 def test_integrated_time_refuses_a_chain_without_walkers():
-    from bayes_inerter.inference.convergence import integrated_time
+    from bayes_inerter.inference.sampling.convergence import integrated_time
 
     with pytest.raises(ValueError, match="steps, walkers, ndim"):
         integrated_time(np.zeros((10, 3)))

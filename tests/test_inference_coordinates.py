@@ -10,12 +10,12 @@ from scipy import stats
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
-from bayes_inerter.inference.coordinates import (COORDINATES, SeriesStiffness, default_coordinates, drive_omega,
+from bayes_inerter.inference.sampling.coordinates import (COORDINATES, SeriesStiffness, default_coordinates, drive_omega,
                                                  driving_point)
-from bayes_inerter.inference.impedance import MAX_SENSITIVITY_CHANGE
-from bayes_inerter.inference.joint import JointModel
-from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.inference.sampler import run_sampler
+from bayes_inerter.inference.posterior.impedance import MAX_SENSITIVITY_CHANGE
+from bayes_inerter.inference.posterior.joint import JointModel
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+from bayes_inerter.inference.sampling.sampler import run_sampler
 from bayes_inerter.networks import build_network
 from bayes_inerter.network import accel_response
 from bayes_inerter.records import GeneratorSettings, generate_record
@@ -215,7 +215,7 @@ def test_compliance_coordinates_round_trip_and_keep_volume(two_port):
     bearing's share: one to one (theta back from u to 1e-9), the log-Jacobian the
     finite-difference determinant's (the three's map adds none: it keeps volume), and the
     series impedance at the drive frequency is the first of the three."""
-    from bayes_inerter.inference.coordinates import SeriesCompliance
+    from bayes_inerter.inference.sampling.coordinates import SeriesCompliance
 
     coords = default_coordinates(two_port, "compliance")
     imp = default_coordinates(two_port, "impedance")
@@ -339,8 +339,8 @@ def test_run_sampler_in_impedance_coordinates_samples_theta(two_port, tmp_path):
 
 
 def test_a_checkpoint_within_the_records_resolution_goes_on_in_its_own_coordinates(two_port):
-    from bayes_inerter.inference.coordinates import continue_at, reference_tolerance
-    from bayes_inerter.inference.identity import _coordinates
+    from bayes_inerter.inference.sampling.coordinates import continue_at, reference_tolerance
+    from bayes_inerter.inference.sampling.identity import _coordinates
 
     coords = default_coordinates(two_port)
     tol = reference_tolerance(two_port)

@@ -1,4 +1,4 @@
-"""Tests of the harmonic model discrepancy (bayes_inerter.inference.discrepancy)."""
+"""Tests of the harmonic model discrepancy (bayes_inerter.inference.posterior.discrepancy)."""
 
 import dataclasses
 import math
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from bayes_inerter.device import paper_parameters
-from bayes_inerter.inference.discrepancy import harmonic_discrepancy
-from bayes_inerter.inference.model import PosteriorModel
+from bayes_inerter.inference.posterior.discrepancy import harmonic_discrepancy
+from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records.generator import GeneratorSettings, paper_record
 
 

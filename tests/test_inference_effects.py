@@ -1,4 +1,4 @@
-"""Tests of the richer models' effects (bayes_inerter.inference.effects) and their models."""
+"""Tests of the richer models' effects (bayes_inerter.inference.posterior.effects) and their models."""
 
 import math
 
@@ -6,9 +6,9 @@ import pytest
 
 from bayes_inerter.device import paper_parameters
 from bayes_inerter.friction import Coulomb, Stribeck
-from bayes_inerter.inference.effects import EFFECT_PRIORS, EFFECTS, effect_network
-from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.inference.model import MODELS, PosteriorModel
+from bayes_inerter.inference.posterior.effects import EFFECT_PRIORS, EFFECTS, effect_network
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.model import MODELS, PosteriorModel
 from bayes_inerter.network import Deformation, Friction
 from bayes_inerter.records.generator import GeneratorSettings, paper_record
 

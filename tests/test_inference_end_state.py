@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.end_state import PHI_WARNING, end_state_warnings
-from bayes_inerter.inference.optimize import laplace_ensemble
-from bayes_inerter.inference.priors import LogUniform, Uniform
-from bayes_inerter.inference.results import PosteriorSample
+from bayes_inerter.inference.summaries.end_state import PHI_WARNING, end_state_warnings
+from bayes_inerter.inference.sampling.optimize import laplace_ensemble
+from bayes_inerter.inference.posterior.priors import LogUniform, Uniform
+from bayes_inerter.inference.summaries.results import PosteriorSample
 
 
 class _Model:

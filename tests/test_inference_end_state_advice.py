@@ -3,8 +3,8 @@ changes the outcome (never a command that repeats the same result)."""
 
 import math
 
-from bayes_inerter.inference.convergence import Convergence
-from bayes_inerter.inference.end_state import CAP_FACTOR, NOT_CONVERGED, convergence_warning
+from bayes_inerter.inference.sampling.convergence import Convergence
+from bayes_inerter.inference.summaries.end_state import CAP_FACTOR, NOT_CONVERGED, convergence_warning
 
 CONV = Convergence()
 

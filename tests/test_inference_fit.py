@@ -16,7 +16,7 @@ from conftest import SEARCH_SOURCE
 from bayes_inerter import paper_parameters
 from bayes_inerter.cli import main
 from bayes_inerter.inference import fit_record
-from bayes_inerter.inference.checkpoint import read_chain, steps_written
+from bayes_inerter.inference.sampling.checkpoint import read_chain, steps_written
 from bayes_inerter.records import GeneratorSettings, generate_record, write_record
 
 SHORT = GeneratorSettings(duration=2.5, ramp=0.8)
@@ -451,8 +451,8 @@ def test_intact_checkpoint_continues(tmp_path, record_file, ten_steps):
 
 
 def test_steps_held_between_writes_are_counted_read_and_lost_only_to_a_kill(tmp_path):
-    from bayes_inerter.inference.checkpoint import new_checkpoint, open_checkpoint
-    from bayes_inerter.inference.identity import CHECKPOINT_FORMAT
+    from bayes_inerter.inference.sampling.checkpoint import new_checkpoint, open_checkpoint
+    from bayes_inerter.inference.sampling.identity import CHECKPOINT_FORMAT
 
     path = tmp_path / "chain.h5"
     identity = {"format": CHECKPOINT_FORMAT, "nwalkers": 4, "ndim": 2}
@@ -489,7 +489,7 @@ def test_steps_held_between_writes_are_counted_read_and_lost_only_to_a_kill(tmp_
 
 def test_checkpoint_interval_option(tmp_path, record_file, capsys):
     from bayes_inerter.cli import CHECKPOINT_SECONDS
-    from bayes_inerter.inference.checkpoint import WRITE_SECONDS
+    from bayes_inerter.inference.sampling.checkpoint import WRITE_SECONDS
 
     assert CHECKPOINT_SECONDS == WRITE_SECONDS  # written out in the CLI so that parsing imports no emcee
     with pytest.raises(SystemExit) as info:

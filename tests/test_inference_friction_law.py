@@ -1,10 +1,10 @@
-"""The friction law's marginalised shape (``inference.friction_law``)."""
+"""The friction law's marginalised shape (``inference.posterior.friction_law``)."""
 
 import math
 
 import numpy as np
 
-from bayes_inerter.inference.friction_law import WIDTHS, beyond, law_basis
+from bayes_inerter.inference.posterior.friction_law import WIDTHS, beyond, law_basis
 
 
 def test_the_laws_deviations_are_in_phase_with_a_sinusoidal_velocity_never_with_the_acceleration():

@@ -1,4 +1,4 @@
-"""The harmonic likelihood (``inference.harmonic``): amplitudes, noise, transfer, density."""
+"""The harmonic likelihood (``inference.posterior.harmonic``): amplitudes, noise, transfer, density."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bayes_inerter.inference.harmonic import (harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer,
+from bayes_inerter.inference.posterior.harmonic import (harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer,
                                              whole_sample_periods)
 from bayes_inerter.network.compile import chain_state_space
 from bayes_inerter.records.record import Record
@@ -125,7 +125,7 @@ def test_loglik_is_the_complex_normal_density_with_both_noises():
 def harmonic_model():
     from bayes_inerter import paper_parameters
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
     from bayes_inerter.records import generate_record
 
     rec = generate_record(paper_parameters("A3"), 1.0, rng=0, setting_name="A3")
@@ -159,7 +159,7 @@ def test_model_log_prob_is_prior_plus_harmonic_terms_and_peaks_near_the_truth(ha
 
 
 def test_settings_refuse_unknown_values():
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 
     with pytest.raises(ValueError, match="residual"):
         LikelihoodSettings(residual="spectral")
@@ -174,14 +174,14 @@ def test_settings_refuse_unknown_values():
 
 def test_the_command_lines_likelihoods_are_the_librarys():
     from bayes_inerter.cli import DEFAULT_RESIDUAL, FIT_RESIDUALS
-    from bayes_inerter.inference.likelihood import RESIDUALS, LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import RESIDUALS, LikelihoodSettings
 
     assert FIT_RESIDUALS == RESIDUALS
     assert DEFAULT_RESIDUAL == LikelihoodSettings().residual
 
 
 def test_at_times_sums_the_harmonics_back_to_a_signal():
-    from bayes_inerter.inference.harmonic import at_times
+    from bayes_inerter.inference.posterior.harmonic import at_times
 
     omega = 2 * np.pi * np.array([1.0, 3.0])
     t = np.array([0.0, 0.25, 1 / 12])

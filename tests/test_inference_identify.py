@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bayes_inerter.inference.identify import LEAST_SQUARES, identify
-from bayes_inerter.inference.model import PosteriorModel
+from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records.generator import GeneratorSettings, paper_record
 
 

@@ -9,11 +9,11 @@ import pytest
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import LikelihoodSettings, LogUniform, PosteriorModel
-from bayes_inerter.inference.coordinates import Coordinates, default_coordinates
-from bayes_inerter.inference.identity import CHECKPOINT_FORMAT, mismatch, run_identity
-from bayes_inerter.inference.joint import JointModel
-from bayes_inerter.inference.priors import LogNormal, Uniform
-from bayes_inerter.inference.sampler import Adaptation, default_moves
+from bayes_inerter.inference.sampling.coordinates import Coordinates, default_coordinates
+from bayes_inerter.inference.sampling.identity import CHECKPOINT_FORMAT, mismatch, run_identity
+from bayes_inerter.inference.posterior.joint import JointModel
+from bayes_inerter.inference.posterior.priors import LogNormal, Uniform
+from bayes_inerter.inference.sampling.sampler import Adaptation, default_moves
 from bayes_inerter.records import GeneratorSettings, generate_record
 
 #: 5.5 s: three steady drive periods after the first at 1 Hz, as the default likelihood
@@ -114,7 +114,7 @@ def test_a_difference_is_named_by_its_field(records):
 def test_another_basis_of_the_deviations_is_refused(records, monkeypatch):
     """A checkpoint written with other reversal polynomials (or any other basis of the
     marginalised deviations) samples another posterior: it is not continued."""
-    from bayes_inerter.inference import reversals
+    from bayes_inerter.inference.posterior import reversals
 
     stored = _stored(_identity(PosteriorModel(records[0])))
     assert mismatch(stored, _identity(PosteriorModel(records[0]))) is None

@@ -1,4 +1,4 @@
-"""Tests of b's reported interval (bayes_inerter.inference.interval)."""
+"""Tests of b's reported interval (bayes_inerter.inference.summaries.interval)."""
 
 import math
 
@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from bayes_inerter.device import paper_parameters
-from bayes_inerter.inference.discrepancy import harmonic_discrepancy
-from bayes_inerter.inference.interval import (INTERVALS, InertanceInterval, IntervalSettings, combined_interval,
+from bayes_inerter.inference.posterior.discrepancy import harmonic_discrepancy
+from bayes_inerter.inference.summaries.interval import (INTERVALS, InertanceInterval, IntervalSettings, combined_interval,
                                               inertance_interval, widened_interval)
-from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.inference.model import PosteriorModel
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records.generator import GeneratorSettings, paper_record
 from bayes_inerter.records.sensitivity import SensorCalibration
 

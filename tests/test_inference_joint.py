@@ -10,11 +10,11 @@ from scipy import integrate
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
-from bayes_inerter.inference.coordinates import default_coordinates
+from bayes_inerter.inference.sampling.coordinates import default_coordinates
 from bayes_inerter.inference.fit import ALL_DRAWS_FILE, fit_joint
-from bayes_inerter.inference.joint import JointModel, ar1_marginal
-from bayes_inerter.inference.identity import run_identity
-from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.joint import JointModel, ar1_marginal
+from bayes_inerter.inference.sampling.identity import run_identity
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings, generate_record
 
 SHORT = GeneratorSettings(duration=2.0, ramp=0.6)
@@ -71,8 +71,8 @@ def test_names_and_each_records_parameters(records):
 
 
 def test_pooled_log_prob_is_the_log_prob_bit_for_bit(records):
-    from bayes_inerter.inference.joint import pooled_log_prob
-    from bayes_inerter.inference.optimize import local_optimum
+    from bayes_inerter.inference.posterior.joint import pooled_log_prob
+    from bayes_inerter.inference.sampling.optimize import local_optimum
 
     jm = JointModel(records, likelihood=AR1)
     parts = [PosteriorModel(r, likelihood=AR1) for r in records]
@@ -169,7 +169,7 @@ def _centres(records, shares):
 
 
 def test_start_candidates_one_per_record_up_to_record_starts(records):
-    from bayes_inerter.inference import joint
+    from bayes_inerter.inference.posterior import joint
 
     assert len(records) <= joint.RECORD_STARTS
     jm = JointModel(records, likelihood=AR1)
@@ -189,7 +189,7 @@ def test_start_candidates_one_per_record_up_to_record_starts(records):
 
 
 def test_start_candidates_beyond_record_starts_one_per_group_of_the_friction_split(records, monkeypatch):
-    from bayes_inerter.inference import joint
+    from bayes_inerter.inference.posterior import joint
 
     monkeypatch.setattr(joint, "RECORD_STARTS", len(records) - 1)
     jm = JointModel(records, likelihood=AR1)
@@ -210,7 +210,7 @@ def test_start_candidates_beyond_record_starts_one_per_group_of_the_friction_spl
 
 @pytest.mark.slow
 def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_path, monkeypatch):
-    from bayes_inerter.inference import optimize
+    from bayes_inerter.inference.sampling import optimize
 
     centres = []
     for rec in records:
@@ -235,7 +235,7 @@ def test_fit_joint_starts_at_the_polished_optimum_and_only_once(records, tmp_pat
 
 @pytest.mark.slow
 def test_fit_joint_polishes_the_best_of_one_pass_from_each_candidate(records, tmp_path, monkeypatch):
-    from bayes_inerter.inference import optimize
+    from bayes_inerter.inference.sampling import optimize
 
     centres = _centres(records, (0.7, 0.2, 0.25))
     jm = JointModel(records, likelihood=AR1)
@@ -301,7 +301,7 @@ def test_the_motion_likelihoods_reference_is_each_records_part_of_the_joint_one(
 def test_the_joint_fit_takes_the_input_noises_draws_by_default():
     """``LikelihoodSettings.input_noise`` None: each record of a joint fit takes the
     default's draws, as a record fitted alone does; a number given holds for both."""
-    from bayes_inerter.inference.likelihood import INPUT_NOISE_DRAWS
+    from bayes_inerter.inference.posterior.likelihood import INPUT_NOISE_DRAWS
 
     settings = GeneratorSettings(duration=5.5, ramp=0.5)
     recs = [generate_record(paper_parameters(s), f, settings=settings, rng=seed, setting_name=s)
@@ -315,7 +315,7 @@ def test_the_joint_fit_takes_the_input_noises_draws_by_default():
 
 
 def test_fit_joint_under_the_motion_likelihood_keeps_its_reference_and_continues(tmp_path):
-    from bayes_inerter.inference.checkpoint import stored_identity
+    from bayes_inerter.inference.sampling.checkpoint import stored_identity
 
     settings = GeneratorSettings(duration=5.5, ramp=0.5)
     recs = [generate_record(paper_parameters(s), f, settings=settings, rng=seed, setting_name=s)

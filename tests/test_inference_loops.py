@@ -1,4 +1,4 @@
-"""Force loops over a steady period (``inference.loops``) and their figure."""
+"""Force loops over a steady period (``inference.summaries.loops``) and their figure."""
 
 import dataclasses
 import math
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from bayes_inerter import paper_parameters
-from bayes_inerter.inference.likelihood import LikelihoodSettings
-from bayes_inerter.inference.loops import period_loops
-from bayes_inerter.inference.model import PosteriorModel
-from bayes_inerter.inference.plots import plot_loops
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+from bayes_inerter.inference.summaries.loops import period_loops
+from bayes_inerter.inference.posterior.model import PosteriorModel
+from bayes_inerter.inference.summaries.plots import plot_loops
 from bayes_inerter.records import GeneratorSettings, generate_record
 
 FREQ = 1.0

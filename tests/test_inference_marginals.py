@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bayes_inerter.inference.marginals import NormalScores
+from bayes_inerter.inference.sampling.marginals import NormalScores
 
 
 def _skewed(n=20000, seed=0):

@@ -122,7 +122,7 @@ def test_priors():
 
 
 def test_the_normal_prior_is_truncated_at_its_width():
-    from bayes_inerter.inference.priors import Normal, delay_prior
+    from bayes_inerter.inference.posterior.priors import Normal, delay_prior
 
     q = Normal(0.0, 2e-4, width=4.0)
     assert q.bounds == pytest.approx((-8e-4, 8e-4))
@@ -136,7 +136,7 @@ def test_the_normal_prior_is_truncated_at_its_width():
 
 
 def test_contraction_of_prior_draws_is_zero_and_of_a_point_is_one(record):
-    from bayes_inerter.inference.results import PosteriorSample, contraction
+    from bayes_inerter.inference.summaries.results import PosteriorSample, contraction
 
     m = PosteriorModel(record, likelihood=AR1)
     rng = np.random.default_rng(2)
@@ -162,7 +162,7 @@ def test_convergence_settings_checked():
 
 
 def test_start_guess_finds_the_basin(record):
-    from bayes_inerter.inference.optimize import rigid_guess, velocity_estimate
+    from bayes_inerter.inference.sampling.optimize import rigid_guess, velocity_estimate
 
     m = PosteriorModel(record, likelihood=AR1)
     bare = PosteriorModel(Record(record.time, record.force, record.accel, None, record.metadata), likelihood=AR1)

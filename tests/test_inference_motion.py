@@ -1,4 +1,4 @@
-"""Motion in, force out (``inference.motion``): the model's force at the harmonics."""
+"""Motion in, force out (``inference.posterior.motion``): the model's force at the harmonics."""
 
 import dataclasses
 import math
@@ -10,8 +10,8 @@ import threadpoolctl
 from scipy import optimize, stats
 
 from bayes_inerter import paper_parameters
-from bayes_inerter.inference import friction_law
-from bayes_inerter.inference.motion import (bearing_force, motion_data, motion_loglik, motion_variance,
+from bayes_inerter.inference.posterior import friction_law
+from bayes_inerter.inference.posterior.motion import (bearing_force, motion_data, motion_loglik, motion_variance,
                                             predicted_force)
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.record import Record
@@ -145,7 +145,7 @@ def test_the_drivetrain_is_simulated_until_it_settles(monkeypatch):
     that sticks: one settling period leaves the bearing's force up to 3.8 N from its
     periodic value at some harmonic; simulated until two periods agree
     (``DRIVE_TOL``) it comes within 0.1 N of a 40-period run."""
-    import bayes_inerter.inference.motion as motion
+    import bayes_inerter.inference.posterior.motion as motion
 
     p = dataclasses.replace(paper_parameters("A3"), b=18467.0, f1_0=780.0, f2_0=2990.0, c_f1=570.0,
                             c_f2=12900.0, k_n=5.5e4, c_n=1.9e6, k_B=1.05e7, c_B=2 * 0.042 * math.sqrt(1.05e7 * 57.2))
@@ -166,7 +166,7 @@ def test_the_drivetrain_is_simulated_until_it_settles(monkeypatch):
 def _count_periods(monkeypatch) -> list:
     """A list whose last entry counts the drivetrain's simulated periods: append 0 before
     each bearing_force call to count that call's."""
-    import bayes_inerter.inference.motion as motion
+    import bayes_inerter.inference.posterior.motion as motion
 
     periods = []
     runner = motion.exact_runner
@@ -199,7 +199,7 @@ def test_the_newton_steps_find_the_periodic_drivetrain_that_plain_periods_approa
     """Eight plain periods leave the bearing's force of a ringing drivetrain more than 1 N
     from its periodic value (a 400-period run); with the Newton steps it comes within
     0.01 N, in fewer periods."""
-    import bayes_inerter.inference.motion as motion
+    import bayes_inerter.inference.posterior.motion as motion
 
     data, x = _ringing_drivetrain()
     periods = _count_periods(monkeypatch)
@@ -223,7 +223,7 @@ def test_a_drivetrain_the_monodromy_finds_settled_is_taken_after_two_periods(mon
     second period's start within DRIVE_TOL / 2 of the periodic state, so that period is
     taken (plain periods would need a third to show it), and its bearing force lies within
     DRIVE_TOL of a 200-period run's."""
-    import bayes_inerter.inference.motion as motion
+    import bayes_inerter.inference.posterior.motion as motion
 
     data, _ = _ringing_drivetrain()
     p = paper_parameters("A3")
@@ -247,7 +247,7 @@ def test_a_newton_step_that_does_not_help_is_undone(monkeypatch):
     """A first Newton step that lands far from the periodic state (a wrong monodromy, as a
     nearly defective A could give) is undone: the periods go on from before it, and the
     bearing's force still comes within DRIVE_TOL of the periodic one."""
-    import bayes_inerter.inference.motion as motion
+    import bayes_inerter.inference.posterior.motion as motion
 
     data, _ = _ringing_drivetrain()
     p = paper_parameters("A3")
@@ -279,7 +279,7 @@ def test_the_monodromy_is_the_period_maps_derivative():
     more than 5 %."""
     import scipy.linalg
 
-    import bayes_inerter.inference.motion as motion
+    import bayes_inerter.inference.posterior.motion as motion
 
     data, x = _ringing_drivetrain()
     b, f2_0 = x["b"], x["f2_0"]
@@ -308,9 +308,9 @@ def test_b_is_not_identified_where_the_fit_misses_the_fundamentals_inertial_forc
     import dataclasses
 
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.interval import INTERVALS, inertance_interval
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
-    from bayes_inerter.inference.motion import FUNDAMENTAL_MAX
+    from bayes_inerter.inference.summaries.interval import INTERVALS, inertance_interval
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.motion import FUNDAMENTAL_MAX
 
     p = paper_parameters("A3")
     rec = generate_record(p, 1.5, rng=0, setting_name="A3")
@@ -436,7 +436,7 @@ def test_the_deviations_prior_sd_is_taken_at_the_point_asked():
     assert motion_loglik(data, x, 1.0, 0.0, deviation_at=x)[0] == own
     assert motion_loglik(data, more, 1.0, 0.0, deviation_at=x)[0] != motion_loglik(data, more, 1.0, 0.0)[0]
     with pytest.raises(ValueError, match="deviation_scale must be one of"):
-        from bayes_inerter.inference.likelihood import LikelihoodSettings
+        from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
         LikelihoodSettings(deviation_scale="walker")
 
 
@@ -459,7 +459,7 @@ def test_the_reversals_scale_with_the_total_coulomb_force_whatever_its_split():
     assert got["total"][1] == pytest.approx(got["total"][0], rel=1e-12, abs=1e-9)
     assert got["plate"][1] < got["plate"][0] - 10.0
     with pytest.raises(ValueError, match="reversal_scale must be"):
-        from bayes_inerter.inference.likelihood import LikelihoodSettings
+        from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
         LikelihoodSettings(reversal_scale="rotation")
 
 
@@ -470,7 +470,7 @@ def test_a_sampled_delay_finds_the_load_cells_latency():
     sqrt(2) / (2 pi f_c) at low frequency: 2 kHz against 5 kHz, 0.068 ms), and there it
     is decisively above its value with the channels taken as simultaneous."""
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 
     p = paper_parameters("A3")
     rec = generate_record(p, 1.5, settings=GeneratorSettings(force_delay=5e-4), rng=1, setting_name="A3")
@@ -487,7 +487,7 @@ def test_a_sampled_delay_finds_the_load_cells_latency():
 
 
 def test_a_delay_needs_the_motion_likelihood_and_a_sane_sd():
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 
     with pytest.raises(ValueError, match="delay_sd must lie in"):
         LikelihoodSettings(delay_sd=0.05)
@@ -518,8 +518,8 @@ def test_the_motions_noise_through_a_sticking_rotation_is_counted_beyond_the_lin
     out larger, and the extra is positive. The same seed gives the same variance, and a
     posterior model asked for it adds it to every harmonic's variance at its reference."""
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
-    from bayes_inerter.inference.motion import input_noise_variance
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.motion import input_noise_variance
 
     p = dataclasses.replace(paper_parameters("A3"), f1_0=100.0, f2_0=2000.0, c_n=2.0e5)
     rec = generate_record(p, 0.5, settings=GeneratorSettings(accel_noise=0.05), rng=0, setting_name="A3")
@@ -543,7 +543,7 @@ def test_the_motions_noise_through_a_sticking_rotation_is_counted_beyond_the_lin
 
 
 def test_input_noise_needs_whole_draws_and_the_reference():
-    from bayes_inerter.inference.likelihood import INPUT_NOISE_DRAWS, LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import INPUT_NOISE_DRAWS, LikelihoodSettings
 
     with pytest.raises(ValueError, match="whole number"):
         LikelihoodSettings(input_noise=-1)
@@ -555,7 +555,7 @@ def test_input_noise_needs_whole_draws_and_the_reference():
 
 
 def test_input_noise_default_is_sixteen_draws_kept_as_shapes():
-    from bayes_inerter.inference.likelihood import INPUT_NOISE_DRAWS, LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import INPUT_NOISE_DRAWS, LikelihoodSettings
 
     default = LikelihoodSettings()
     assert default.input_noise is None and default.input_noise_form == "shapes"
@@ -579,8 +579,8 @@ def test_the_motions_noise_kept_as_shapes_marginalises_its_draws_across_the_harm
     posterior model asked for shapes appends them to its deviations with a prior sd of
     1 N, leaves each harmonic's variance as it was, and its log-likelihood changes."""
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.likelihood import LikelihoodSettings
-    from bayes_inerter.inference.motion import input_noise_shapes, input_noise_variance
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+    from bayes_inerter.inference.posterior.motion import input_noise_shapes, input_noise_variance
 
     p = dataclasses.replace(paper_parameters("A3"), f1_0=100.0, f2_0=2000.0, c_n=2.0e5)
     rec = generate_record(p, 0.5, settings=GeneratorSettings(accel_noise=0.05), rng=0, setting_name="A3")

@@ -1,4 +1,4 @@
-"""The moves of ``inference.moves``. The nut-ridge move: it must leave the target
+"""The moves of ``inference.sampling.moves``. The nut-ridge move: it must leave the target
 invariant (its Jacobian matters), keep 1 / b - k_n / c_n^2 where it is, and be used only
 where a model has the ridge. The independence move: invariant whatever proposal it is
 given (its Hastings factor matters, and in normal scores the map's Jacobian), and fitted
@@ -11,9 +11,9 @@ import pytest
 from scipy import stats
 from scipy.special import ndtri
 
-from bayes_inerter.inference.marginals import NormalScores
-from bayes_inerter.inference.moves import BlockMove, IndependenceMove, NutRidgeMove, ridge_indices
-from bayes_inerter.inference.sampler import DEFAULT_MOVES, default_moves
+from bayes_inerter.inference.sampling.marginals import NormalScores
+from bayes_inerter.inference.sampling.moves import BlockMove, IndependenceMove, NutRidgeMove, ridge_indices
+from bayes_inerter.inference.sampling.sampler import DEFAULT_MOVES, default_moves
 
 # A target in (log b, log k_n, log c_n) where the Jacobian b'/b is far from 1: c_n near
 # 1 and k_n spread over e^-2..e^2, so k_n / c_n^2 is as large as 1 / b.

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.optimize import (RESTART_GAIN, laplace_covariance, laplace_ensemble, local_optimum,
+from bayes_inerter.inference.sampling.optimize import (RESTART_GAIN, laplace_covariance, laplace_ensemble, local_optimum,
                                               mirrored_modes)
 
 #: These tests measure the search itself: the package's settings, not the lighter ones the
@@ -83,7 +83,7 @@ def test_restarts_reach_further_along_a_curved_valley():
 
 
 def test_restarts_stop_once_a_pass_gains_little(monkeypatch):
-    from bayes_inerter.inference import optimize
+    from bayes_inerter.inference.sampling import optimize
 
     calls = []
     real = optimize.minimize
@@ -114,7 +114,7 @@ def test_profiled_misfit_is_the_likelihood_at_its_best_sigma():
     import math
 
     from bayes_inerter import paper_parameters
-    from bayes_inerter.inference.optimize import profiled_misfit
+    from bayes_inerter.inference.sampling.optimize import profiled_misfit
 
     pm = _short_record_model()
     theta = pm.to_theta(paper_parameters("A3"), 0.003, 0.0)
@@ -133,7 +133,7 @@ def test_profiled_misfit_is_the_likelihood_at_its_best_sigma():
 
 def test_profiled_misfit_of_iid_residual_ranks_like_the_sum_of_squares():
     from bayes_inerter import paper_parameters
-    from bayes_inerter.inference.optimize import profiled_misfit, sse
+    from bayes_inerter.inference.sampling.optimize import profiled_misfit, sse
 
     pm = _short_record_model("iid")
     theta = pm.to_theta(paper_parameters("A3"), 0.003)
@@ -144,7 +144,7 @@ def test_profiled_misfit_of_iid_residual_ranks_like_the_sum_of_squares():
 
 @pytest.mark.slow
 def test_start_is_the_best_of_its_objectives():
-    from bayes_inerter.inference.optimize import find_start
+    from bayes_inerter.inference.sampling.optimize import find_start
 
     pm = _short_record_model()
     _, lp_sse = find_start(pm, np.random.default_rng(3), objectives=("sse",), popsize=4, maxiter=10)
@@ -154,7 +154,7 @@ def test_start_is_the_best_of_its_objectives():
 
 
 def test_start_refuses_unknown_objectives():
-    from bayes_inerter.inference.optimize import find_start
+    from bayes_inerter.inference.sampling.optimize import find_start
 
     with pytest.raises(ValueError, match="start objectives"):
         find_start(object(), np.random.default_rng(0), objectives=("least-squares",))
@@ -168,7 +168,7 @@ def test_the_rigid_guess_polished_rescues_a_start_in_another_basin(monkeypatch):
     polished too the start lies in the truth's basin, without it it does not."""
     from bayes_inerter import paper_parameters
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference import optimize
+    from bayes_inerter.inference.sampling import optimize
     from bayes_inerter.records.paper_like import paper_like_record
 
     model = PosteriorModel(paper_like_record("B1", 1.5, seed=1016))
@@ -258,7 +258,7 @@ class NoisyLine:
 
 
 def test_tau_continuation_holds_tau_at_each_level_then_frees_it():
-    from bayes_inerter.inference.optimize import tau_continued
+    from bayes_inerter.inference.sampling.optimize import tau_continued
 
     model = NoisyLine()
     start = np.array([-3.0, np.log(0.5)])
@@ -277,7 +277,7 @@ def test_tau_continuation_holds_tau_at_each_level_then_frees_it():
 
 
 def test_tau_continuation_needs_a_tau_and_factors():
-    from bayes_inerter.inference.optimize import tau_continued
+    from bayes_inerter.inference.sampling.optimize import tau_continued
 
     assert tau_continued(NoisyLine(), np.array([0.0, 0.0]), factors=()) is None
     assert tau_continued(TwoEnds(), np.array([1.0, 0.05]), factors=(10.0,)) is None
@@ -290,7 +290,7 @@ def test_the_tau_continuation_rescues_a_noise_free_start_in_another_basin():
     the continued start, which puts b within 0.1 %."""
     from bayes_inerter import paper_parameters
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference import optimize
+    from bayes_inerter.inference.sampling import optimize
     from bayes_inerter.records import GeneratorSettings, generate_record
 
     p = paper_parameters("A3")

@@ -1,4 +1,4 @@
-"""The map between sampled and physical parameters (``inference.parameters``)."""
+"""The map between sampled and physical parameters (``inference.posterior.parameters``)."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bayes_inerter import paper_parameters
-from bayes_inerter.inference.parameters import ParameterMap
+from bayes_inerter.inference.posterior.parameters import ParameterMap
 
 FREE = ("b", "f1_0", "c_f1", "f2_0", "c_f2", "c_n", "k_n", "c_B", "k_B")
 

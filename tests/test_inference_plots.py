@@ -8,7 +8,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from bayes_inerter.inference.plots import plot_bands, plot_corner, plot_phi, plot_trace  # noqa: E402
+from bayes_inerter.inference.summaries.plots import plot_bands, plot_corner, plot_phi, plot_trace  # noqa: E402
 
 NAMES = ["b", "f_0", "f_share", "sigma", "rho"]
 

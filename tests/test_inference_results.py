@@ -1,10 +1,10 @@
-"""Tests of what a fit's draws are summarised into (bayes_inerter.inference.results)."""
+"""Tests of what a fit's draws are summarised into (bayes_inerter.inference.summaries.results)."""
 
 import arviz as az
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.results import every_nth, loo_data, loo_summary
+from bayes_inerter.inference.summaries.results import every_nth, loo_data, loo_summary
 
 
 def _idata(with_nan: bool, seed: int = 0):

@@ -1,4 +1,4 @@
-"""The plate's reversals (``inference.reversals``): windows, the ramped sign, the marginal."""
+"""The plate's reversals (``inference.posterior.reversals``): windows, the ramped sign, the marginal."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bayes_inerter.inference.reversals import (DEGREES, DWELL, MIN_HALF_WIDTH, WIDEN, deviations_mean,
+from bayes_inerter.inference.posterior.reversals import (DEGREES, DWELL, MIN_HALF_WIDTH, WIDEN, deviations_mean,
                                                reversal_correction, reversal_windows, switched_sign, window_basis)
 
 N, T = 4096, 2.0

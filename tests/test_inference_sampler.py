@@ -8,8 +8,8 @@ import pytest
 from conftest import normal_posterior
 
 from bayes_inerter.inference import Convergence
-from bayes_inerter.inference.moves import BlockMove
-from bayes_inerter.inference.sampler import Adaptation, run_sampler, transient
+from bayes_inerter.inference.sampling.moves import BlockMove
+from bayes_inerter.inference.sampling.sampler import Adaptation, run_sampler, transient
 
 CONV = Convergence(check_every=40, n_tau=20, min_ess=200, max_steps=2000)
 
@@ -60,7 +60,7 @@ def test_a_converged_chain_run_again_comes_back_as_it_is(model, tmp_path):
 
 
 def test_a_run_keeps_its_draws_after_the_warm_up(model, tmp_path):
-    from bayes_inerter.inference.results import posterior_sample
+    from bayes_inerter.inference.summaries.results import posterior_sample
 
     run = run_sampler(model, tmp_path / "c.h5", nwalkers=24, seed=3, steps=300, start=model.test_start,
                       convergence=Convergence(warmup=0.4))
@@ -90,7 +90,7 @@ def test_a_run_stopped_between_refits_continues_to_the_uninterrupted_chain(model
 def test_a_checkpoint_continues_only_with_the_kernel_it_was_sampled_with(model, tmp_path):
     import h5py
 
-    from bayes_inerter.inference.checkpoint import IDENTITY_ATTR, CheckpointError, twin_path
+    from bayes_inerter.inference.sampling.checkpoint import IDENTITY_ATTR, CheckpointError, twin_path
 
     path = tmp_path / "c.h5"
     short = run_sampler(model, path, nwalkers=24, seed=5, steps=20, start=model.test_start, adaptation=Adaptation())
@@ -121,7 +121,7 @@ def test_a_chain_keeps_its_likelihoods_reference_point_when_continued(tmp_path):
 
     from bayes_inerter import paper_parameters
     from bayes_inerter.inference import PosteriorModel
-    from bayes_inerter.inference.checkpoint import stored_identity
+    from bayes_inerter.inference.sampling.checkpoint import stored_identity
     from bayes_inerter.records import generate_record
 
     pm = PosteriorModel(generate_record(paper_parameters("A3"), 1.5, rng=0, setting_name="A3"))
@@ -151,7 +151,7 @@ def test_a_searched_start_puts_half_the_walkers_in_the_splits_mirrored_mode(tmp_
     a start the caller gives is left as it is."""
     from scipy import stats
 
-    import bayes_inerter.inference.sampler as sampler
+    import bayes_inerter.inference.sampling.sampler as sampler
 
     pm = normal_posterior(duration=1.5, ramp=0.5)
     centre = pm.test_start[0].copy()

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bayes_inerter.inference.adaptation import Adaptation
-from bayes_inerter.inference.marginals import NormalScores
-from bayes_inerter.inference.moves import BlockMove, IndependenceMove
-from bayes_inerter.inference.transport import TriangularScores, quadratic_features
+from bayes_inerter.inference.sampling.adaptation import Adaptation
+from bayes_inerter.inference.sampling.marginals import NormalScores
+from bayes_inerter.inference.sampling.moves import BlockMove, IndependenceMove
+from bayes_inerter.inference.sampling.transport import TriangularScores, quadratic_features
 
 BEND = 0.8  # y = BEND x^2 + noise: a ridge a linear fit cannot follow
 NOISE = 0.15
@@ -135,7 +135,7 @@ def test_adaptation_with_transport_fits_the_map_for_its_t_and_normal_scores_for_
 
 
 def test_checkpoints_without_transport_keep_their_identity():
-    from bayes_inerter.inference.identity import _adaptation
+    from bayes_inerter.inference.sampling.identity import _adaptation
 
     assert "transport" not in _adaptation(Adaptation())
     assert _adaptation(Adaptation(transport=True))["transport"] is True

@@ -2,7 +2,7 @@
 upgrade that changes one of them fails here with a message naming it. (The back end's
 own behaviour, kills and damaged files: tests/test_inference_fit.py.)
 
-What ``inference/twin_backend.py`` takes from emcee's ``backends.HDFBackend``: ``open``
+What ``inference/sampling/twin_backend.py`` takes from emcee's ``backends.HDFBackend``: ``open``
 (copied, without HDF5's lock), the attributes it reads (``filename``, ``name``,
 ``read_only``, ``dtype``, ``dtype_set``), ``reset``'s layout (group attributes
 ``nwalkers``, ``ndim``, ``has_blobs``, ``iteration``; datasets ``accepted``, ``chain``,
@@ -20,13 +20,13 @@ import h5py
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.twin_backend import GROUP, SEAL, _Backend, write_empty
+from bayes_inerter.inference.sampling.twin_backend import GROUP, SEAL, _Backend, write_empty
 
 HDF = emcee.backends.HDFBackend
 
 
 def _changed(what: str) -> str:
-    return (f"emcee {emcee.__version__}: {what} changed; bayes_inerter/inference/twin_backend.py relies on it: "
+    return (f"emcee {emcee.__version__}: {what} changed; bayes_inerter/inference/sampling/twin_backend.py relies on it: "
             "review the back end there, then this pin")
 
 

@@ -88,6 +88,8 @@ def imports(sources: dict[str, tuple[str, bool]]):
                         aliases[a.asname or a.name] = full
                         if not _may_use_module(m, full, modules):
                             bad.append(f"{m} imports the private module {full}")
+                    elif target == PACKAGE and a.name == "__version__":
+                        continue  # metadata, not a layer's code
                     elif target in modules:  # a name of a module
                         graph[m].add(target)
                         if not _may_use_module(m, target, modules):
@@ -162,6 +164,47 @@ def script_violations(path: Path) -> list[str]:
     return bad
 
 
+#: The package's layers, lowest first: a module imports only from its own layer and the
+#: ones below (docs/development.md, "Layout"). A group is a top-level module or folder of
+#: the package, inference/ split into its three layers and its entry points above them.
+LAYERS = (
+    ("device", "friction", "executor", "lock", "arviz_import"),
+    ("network",),
+    ("networks",),
+    ("simulate",),
+    ("records",),
+    ("masses", "device_file", "plots"),
+    ("inference.posterior",),
+    ("inference.sampling",),
+    ("inference.summaries",),
+    ("inference",),
+    ("study",),
+    ("demo", "cli_progress"),
+    ("cli",),
+    ("",),  # the package's own __init__, which gathers the public names
+)
+
+
+def group(module: str) -> str:
+    """The layer group of a package module (see :data:`LAYERS`)."""
+    parts = module.split(".")[1:]
+    if parts[:1] == ["inference"] and len(parts) > 1 and parts[1] in ("posterior", "sampling", "summaries"):
+        return ".".join(parts[:2])
+    return parts[0] if parts else ""
+
+
+def upward(graph: dict[str, set[str]]) -> list[str]:
+    """Imports that reach a higher layer, or a group no layer names."""
+    rank = {g: i for i, layer in enumerate(LAYERS) for g in layer}
+    bad = [f"{group(m)} is in no layer" for m in graph if group(m) not in rank]
+    for m, deps in graph.items():
+        for d in deps:
+            a, b = group(m), group(d)
+            if a in rank and b in rank and a != b and rank[a] < rank[b]:
+                bad.append(f"{m} ({a}) imports {d} ({b}), a layer above it")
+    return sorted(set(bad))
+
+
 # --- the checks, each tried on a planted violation first ---------------------------------
 
 PLANTED = {
@@ -190,6 +233,17 @@ def test_the_package_has_no_import_cycle():
     graph, _ = imports(sources)
     assert len(sources) > 50 and sum(map(len, graph.values())) > 150  # it read the package
     assert cycles(graph) == []
+
+
+def test_the_layers_point_down():
+    planted = {"bayes_inerter.records.io": {"bayes_inerter.inference.posterior.model"},
+               "bayes_inerter.inference.posterior.model": {"bayes_inerter.records.io"},
+               "bayes_inerter.newcomer": set()}
+    assert upward(planted) == ["bayes_inerter.records.io (records) imports bayes_inerter.inference.posterior.model "
+                               "(inference.posterior), a layer above it", "newcomer is in no layer"]
+    graph, _ = imports(package_sources())
+    assert {group(m) for m in graph} >= {"inference.posterior", "inference.sampling", "simulate", "cli"}
+    assert upward(graph) == []
 
 
 def test_no_private_name_is_used_outside_its_owner():

@@ -132,7 +132,7 @@ def test_skip_names_a_check_and_require_physical_names_the_override():
 
 def test_check_names_and_bounds_match_their_sources():
     from bayes_inerter.cli import RECORD_CHECKS
-    from bayes_inerter.inference.priors import DEFAULT_PRIORS
+    from bayes_inerter.inference.posterior.priors import DEFAULT_PRIORS
 
     assert RECORD_CHECKS == CHECKS
     assert B_RANGE == (DEFAULT_PRIORS["b"].low, DEFAULT_PRIORS["b"].high)

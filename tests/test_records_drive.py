@@ -44,7 +44,7 @@ def test_precedence_option_then_metadata_then_estimate():
     assert est.hz == pytest.approx(1.0, rel=1e-5) and est.hz != 1.0
     # the checks and the sampler's coordinates see the same number
     assert drive_frequency(_bare(rec)) == est.hz
-    from bayes_inerter.inference.coordinates import drive_omega
+    from bayes_inerter.inference.sampling.coordinates import drive_omega
 
     assert drive_omega(_bare(rec)) == pytest.approx(2 * np.pi * est.hz, rel=1e-15)
 
@@ -74,7 +74,7 @@ def test_a_record_with_no_drive_is_refused_with_the_fix():
 
 
 def test_the_model_settles_it_once():
-    from bayes_inerter.inference.model import PosteriorModel
+    from bayes_inerter.inference.posterior.model import PosteriorModel
 
     # 4 s: three steady drive periods after the first, as the default likelihood needs
     rec = generate_record(paper_parameters("A3"), 1.5, settings=GeneratorSettings(duration=4.0, ramp=0.5), rng=3,

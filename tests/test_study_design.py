@@ -7,7 +7,7 @@ import pytest
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
-from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.study.design import Design, design_contraction, noise_at, richer_truth_shift, run_design
 

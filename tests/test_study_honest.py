@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from bayes_inerter.inference.interval import InertanceInterval, combined_interval
+from bayes_inerter.inference.summaries.interval import InertanceInterval, combined_interval
 from bayes_inerter.records.sensitivity import SensorCalibration
 from bayes_inerter.study.fits import RecordFit
 from bayes_inerter.study.honest import honest_columns, record_interval

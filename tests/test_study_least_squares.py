@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from bayes_inerter.device import SETTINGS
-from bayes_inerter.inference.interval import InertanceInterval
+from bayes_inerter.inference.summaries.interval import InertanceInterval
 from bayes_inerter.study import least_squares as ls_mod
 from bayes_inerter.study.fits import RecordFit
 from bayes_inerter.study.least_squares import least_squares_section, least_squares_table, run_least_squares

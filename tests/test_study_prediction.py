@@ -5,7 +5,7 @@ import pytest
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
-from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records.generator import GeneratorSettings, paper_record
 from bayes_inerter.study.prediction import predict_record
 

@@ -11,7 +11,7 @@ import pytest
 
 from bayes_inerter.cli import main
 from bayes_inerter.device import setting as get_setting
-from bayes_inerter.inference import optimize
+from bayes_inerter.inference.sampling import optimize
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study import FitJob, quick_plan, run_jobs, run_study
 from bayes_inerter.study import least_squares as least_squares_module

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
                                                   coverage_rows, coverage_so_far, finished_replicates,

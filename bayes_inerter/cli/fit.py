@@ -25,10 +25,10 @@ def cmd_fit(args) -> int:
 
     from ..cli_progress import StepProgress
     from ..inference import fit_record
-    from ..inference.convergence import Convergence
-    from ..inference.model import LikelihoodSettings
-    from ..inference.results import every_nth
-    from ..inference.sampler import Adaptation
+    from ..inference.sampling.convergence import Convergence
+    from ..inference.posterior.model import LikelihoodSettings
+    from ..inference.summaries.results import every_nth
+    from ..inference.sampling.sampler import Adaptation
     from .status import EXIT_OK, CliError, check_interrupt
     from .records import load_record
 

@@ -10,10 +10,10 @@ __all__ = ["cmd_identify"]
 
 
 def cmd_identify(args) -> int:
-    from ..inference.end_state import PHI_WARNING
+    from ..inference.summaries.end_state import PHI_WARNING
     from ..inference.identify import LEAST_SQUARES, identify
-    from ..inference.model import PosteriorModel
-    from ..inference.plots import UNITS
+    from ..inference.posterior.model import PosteriorModel
+    from ..inference.summaries.plots import UNITS
     from .status import EXIT_OK, CliError
     from .records import load_record
 

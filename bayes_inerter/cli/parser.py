@@ -31,13 +31,13 @@ _positive_float = _number_type(float, lambda v: 0 < v < float("inf"), "a positiv
 _non_negative_float = _number_type(float, lambda v: 0 <= v < float("inf"), "a non-negative number")
 _positive_int = _number_type(int, lambda v: v >= 1, "at least 1", "whole number")
 _non_negative_int = _number_type(int, lambda v: v >= 0, "0 or more", "whole number")
-#: ``inference.checkpoint.WRITE_SECONDS``, written out for the same reason as the
+#: ``inference.sampling.checkpoint.WRITE_SECONDS``, written out for the same reason as the
 #: coordinates below; a test keeps the two equal.
 CHECKPOINT_SECONDS = 2.0
-#: ``inference.coordinates.COORDINATES``, written out so that the parser does not import
+#: ``inference.sampling.coordinates.COORDINATES``, written out so that the parser does not import
 #: the inference package (emcee, arviz) before it is needed; a test keeps the two equal.
 FIT_COORDINATES = ("impedance", "unconstrained", "physical", "series", "compliance")
-#: ``inference.likelihood.RESIDUALS`` and its default, written out likewise.
+#: ``inference.posterior.likelihood.RESIDUALS`` and its default, written out likewise.
 FIT_RESIDUALS = ("ar1", "iid", "harmonic", "motion")
 DEFAULT_RESIDUAL = "motion"
 
@@ -66,11 +66,11 @@ def _add_generator_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--seed", type=int, default=0, help="noise seed (%(default)s)")
 
 
-#: ``inference.model.MODELS``, written out so that the parser does not import numpy's
+#: ``inference.posterior.model.MODELS``, written out so that the parser does not import numpy's
 #: world before it is needed; a test keeps the two equal.
 FIT_MODELS = ("two-port", "rigid", "linear", "two-port-stribeck", "two-port-backlash", "two-port-rich")
 
-#: ``inference.interval.INTERVALS``, written out likewise; a test keeps the two equal.
+#: ``inference.summaries.interval.INTERVALS``, written out likewise; a test keeps the two equal.
 FIT_INTERVALS = ("honest", "posterior")
 
 #: ``records.checks.CHECKS``, written out so that the parser does not import numpy's

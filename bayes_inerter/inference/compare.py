@@ -28,8 +28,8 @@ import numpy as np
 
 from .. import arviz_import
 from .fit import check_output_folder, fit_record
-from .model import MODELS, LikelihoodSettings, refusal
-from .results import HDI_PROB, hdi, loo_data
+from .posterior.model import MODELS, LikelihoodSettings, refusal
+from .summaries.results import HDI_PROB, hdi, loo_data
 
 __all__ = ["ModelFit", "Comparison", "compare_models", "stack_draws", "COMPARED", "PARETO_K_LIMIT", "COMPARE_FILE"]
 

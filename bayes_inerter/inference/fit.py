@@ -22,17 +22,17 @@ import numpy as np
 from .. import arviz_import
 from ..records.drive import resolve_drive, with_drive
 from ..records.record import Record
-from .checkpoint import WRITE_SECONDS
+from .sampling.checkpoint import WRITE_SECONDS
 from ..lock import folder_lock
 from ..masses import Masses, resolve_masses
-from .coordinates import default_coordinates
-from .coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
-from .end_state import EndWarning, convergence_warning, end_state_warnings
-from .interval import DEFAULT_INTERVAL, INTERVALS, IntervalSettings, inertance_interval
-from .model import LikelihoodSettings, PosteriorModel
-from .optimize import laplace_covariance
-from .results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
-from .sampler import Adaptation, Convergence, check_run_options, run_sampler
+from .sampling.coordinates import default_coordinates
+from .sampling.coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
+from .summaries.end_state import EndWarning, convergence_warning, end_state_warnings
+from .summaries.interval import DEFAULT_INTERVAL, INTERVALS, IntervalSettings, inertance_interval
+from .posterior.model import LikelihoodSettings, PosteriorModel
+from .sampling.optimize import laplace_covariance
+from .summaries.results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
+from .sampling.sampler import Adaptation, Convergence, check_run_options, run_sampler
 
 __all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions", "DRAWS_FILE",
            "ALL_DRAWS_FILE"]
@@ -259,8 +259,8 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
     below where the chain settles on the 27 records of the full study), so the walkers
     would otherwise spend their first hundreds of steps getting there.
     """
-    from .joint import JointModel, pooled_log_prob
-    from .optimize import NM_RESTARTS, find_start, local_optimum
+    from .posterior.joint import JointModel, pooled_log_prob
+    from .sampling.optimize import NM_RESTARTS, find_start, local_optimum
 
     out = Path(out)
     jm = JointModel(tuple(records), priors=priors or {}, likelihood=likelihood or LikelihoodSettings(), model=model)
@@ -394,8 +394,8 @@ def _write_joint_plots(out: Path, jm, sample, warmup: int) -> None:
     and for the motion-in likelihood loops.png (two panels per record, as a single fit's)."""
     import matplotlib.pyplot as plt
 
-    from .loops import period_loops
-    from .plots import plot_corner, plot_loops, plot_trace
+    from .summaries.loops import period_loops
+    from .summaries.plots import plot_corner, plot_loops, plot_trace
 
     nb = len(jm.settings)
     flat = sample.values.reshape(-1, jm.ndim)
@@ -497,8 +497,8 @@ def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, war
     and velocity over a steady period, measured and predicted, ``loops``)."""
     import matplotlib.pyplot as plt
 
-    from .loops import period_loops
-    from .plots import plot_bands, plot_corner, plot_loops, plot_phi, plot_trace, reference_values
+    from .summaries.loops import period_loops
+    from .summaries.plots import plot_bands, plot_corner, plot_loops, plot_phi, plot_trace, reference_values
 
     meta = pm.record.metadata
     flat = sample.values.reshape(-1, len(sample.names))

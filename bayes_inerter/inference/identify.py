@@ -38,9 +38,9 @@ import numpy as np
 from scipy import optimize
 from scipy.stats import qmc
 
-from .likelihood import LikelihoodSettings
-from .model import PosteriorModel
-from .optimize import find_start
+from .posterior.likelihood import LikelihoodSettings
+from .posterior.model import PosteriorModel
+from .sampling.optimize import find_start
 
 __all__ = ["Identification", "identify", "STARTS", "LEVEL", "BOOTSTRAP_LEVEL", "INTERVALS", "LEAST_SQUARES"]
 

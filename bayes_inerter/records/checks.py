@@ -22,7 +22,7 @@ and names the likely cause and the fix in one line:
 - ``apparent-mass``: the in-phase (inertial) part of F / a at the drive frequency, M
   (kg), must be one that a device within the priors gives:
   ``m_B + (m_s + b_lo) / 2 <= M <= m_B + 3 (m_s + b_hi) / 2``. **Assumption** (the
-  impedance coordinates' domain, :mod:`..inference.coordinates`): the nut and bearing
+  impedance coordinates' domain, :mod:`..inference.sampling.coordinates`): the nut and bearing
   pass the inertance on to the drive within a factor 1/2 to 3/2. Coulomb friction's
   fundamental is in phase with the velocity, so it does not enter M. Where b is
   expected (the record names one of the paper's settings, or a device file gives a
@@ -69,7 +69,7 @@ CLIP_PILE = 4
 ACCEL_DISP_RATIO = (0.5, 2.0)
 #: Accepted phase between a and -omega^2 d, degrees.
 ACCEL_DISP_PHASE_DEG = 30.0
-#: The default prior's bounds on b, kg (``inference.priors.DEFAULT_PRIORS["b"]``; a test
+#: The default prior's bounds on b, kg (``inference.posterior.priors.DEFAULT_PRIORS["b"]``; a test
 #: keeps them equal, without the records importing the inference package).
 B_RANGE = (100.0, 1e5)
 #: Where the inertance is expected (the paper's Table 2 for a record that names one of

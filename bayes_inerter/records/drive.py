@@ -19,7 +19,7 @@ spectral peak alone is off by up to 0.8 %.
 
 Its :attr:`DriveFrequency.resolution_hz` is the spectrum's: half a bin of the steady
 part, 1 / (2 T). Two frequencies closer than that are one drive to this record; a
-checkpoint written at one is continued at the other (``inference.coordinates``).
+checkpoint written at one is continued at the other (``inference.sampling.coordinates``).
 """
 
 from __future__ import annotations

@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from ..device import DEFAULT_GEOMETRY, SETTINGS, theoretical_inertance
-from ..inference.results import hdi
+from ..inference.summaries.results import hdi
 from ..records.sensitivity import SensorCalibration
 from .fits import RecordFit, collect, fit_loo  # the tables' input, named here as before
 

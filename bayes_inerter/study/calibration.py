@@ -40,10 +40,10 @@ import numpy as np
 
 from ..device import TABLE_I, paper_parameters
 from ..executor import make_executor
-from ..inference.model import LikelihoodSettings, PosteriorModel
-from ..inference.priors import LogNormal, LogUniform, Uniform
-from ..inference.results import ar1_noise, posterior_sample
-from ..inference.sampler import run_sampler
+from ..inference.posterior.model import LikelihoodSettings, PosteriorModel
+from ..inference.posterior.priors import LogNormal, LogUniform, Uniform
+from ..inference.summaries.results import ar1_noise, posterior_sample
+from ..inference.sampling.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 

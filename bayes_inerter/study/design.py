@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from ..device import paper_parameters
-from ..inference.model import LikelihoodSettings, PosteriorModel
-from ..inference.optimize import NM_MAXITER, laplace_covariance, local_optimum
+from ..inference.posterior.model import LikelihoodSettings, PosteriorModel
+from ..inference.sampling.optimize import NM_MAXITER, laplace_covariance, local_optimum
 from ..records.generator import GeneratorSettings, generate_record
 
 __all__ = ["Design", "DEFAULT_DESIGNS", "DEFAULT_RICHER", "design_contraction", "richer_truth_shift", "noise_at",

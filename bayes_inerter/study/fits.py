@@ -54,9 +54,9 @@ def collect(fits_dir: Path) -> list[RecordFit]:
 
 
 def fit_loo(fit: RecordFit) -> dict:
-    """A fit's PSIS-LOO (``inference.results.loo_summary``): from its ``loo.json``, or
+    """A fit's PSIS-LOO (``inference.summaries.results.loo_summary``): from its ``loo.json``, or
     computed from its ``posterior.nc`` and kept in ``loo.json`` for next time."""
-    from ..inference.results import LOO_FILE, write_loo
+    from ..inference.summaries.results import LOO_FILE, write_loo
 
     path = fit.folder / LOO_FILE
     if path.is_file():

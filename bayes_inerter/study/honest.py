@@ -1,4 +1,4 @@
-"""Each setting's inertance with the honest interval (``inference.interval``).
+"""Each setting's inertance with the honest interval (``inference.summaries.interval``).
 
 Every record's fit reports b with its honest interval (fit.json ``b_interval``: the
 posterior widened by the model discrepancy the record shows and the sensors'
@@ -10,7 +10,7 @@ frequencies disagree, and the sensors' share added once.
 
 from __future__ import annotations
 
-from ..inference.interval import LEVEL, InertanceInterval, combined_interval
+from ..inference.summaries.interval import LEVEL, InertanceInterval, combined_interval
 from ..records.sensitivity import SensorCalibration
 from .fits import RecordFit
 

@@ -31,7 +31,7 @@ def identify_one(record: str, out: str, starts: int = STARTS, seed: int = 0) -> 
     """Eq. (4)'s fit of the CSV ``record`` (two-port model, the record's masses), written
     to ``out`` (JSON) and returned."""
     from ..inference.identify import identify
-    from ..inference.model import PosteriorModel
+    from ..inference.posterior.model import PosteriorModel
     from ..masses import resolve_masses
     from ..records import read_record
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..device import FREQUENCIES_HZ, SETTINGS
-from ..inference.model import MODELS
+from ..inference.posterior.model import MODELS
 
 #: The models the study's comparison fits beside the two-port model: the paper's nested
 #: ones (the richer models are a choice: ``compare_models``).
@@ -69,7 +69,7 @@ class StudyPlan:
         ``compare_models``.
     compare_models : the models fitted beside the two-port one in the comparison
         (default :data:`COMPARE_MODELS`, the paper's nested rigid and linear models; any
-        of ``inference.model.MODELS``).
+        of ``inference.posterior.model.MODELS``).
     walkers : walkers per chain (None: the package's default).
     joint : also sample the joint model (shared frictions and deformations, one b per
         setting) on all the two-port records, started from their single-record

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..inference.model import PosteriorModel
+from ..inference.posterior.model import PosteriorModel
 
 __all__ = ["Prediction", "predict_record", "residual_sd", "LEVEL"]
 

@@ -10,7 +10,7 @@ import dataclasses
 import os
 from pathlib import Path
 
-from ..inference.sampler import Convergence
+from ..inference.sampling.sampler import Convergence
 from .analysis import is_joint
 from .least_squares import least_squares_section
 from .markdown import table

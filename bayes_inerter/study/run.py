@@ -89,7 +89,7 @@ def run_joint(plan: StudyPlan, out: Path, fits: list, records: dict, *, processe
     joint model has one b per setting). Returns the FitResult, or None with fewer than
     two such records."""
     from ..inference.fit import fit_joint
-    from ..inference.model import PosteriorModel
+    from ..inference.posterior.model import PosteriorModel
 
     # in the records' name order: the checkpoint's digest depends on the order of the records
     chosen = sorted((f for f in fits if f.model == "two-port" and f.name in records and records[f.name][1] in SETTINGS),
@@ -115,7 +115,7 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
     import csv
 
     from ..inference.fit import DRAWS_FILE, FitResult, joint_records
-    from ..inference.joint import JointModel
+    from ..inference.posterior.joint import JointModel
 
     try:
         info = json.loads((folder / "fit.json").read_text())

@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from ..executor import Dask, Executor, LocalProcesses, WorkerDied
-from ..inference.results import LOO_FILE
+from ..inference.summaries.results import LOO_FILE
 from .plan import FitJob
 
 __all__ = ["run_job", "run_jobs", "finished", "DONE_FILE"]

@@ -57,12 +57,12 @@ from pathlib import Path
 import numpy as np
 
 from ..device import TABLE_I, paper_parameters
-from ..inference.convergence import Convergence
+from ..inference.sampling.convergence import Convergence
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
-from ..inference.likelihood import LikelihoodSettings
-from ..inference.model import PosteriorModel
-from ..inference.priors import LogUniform, Uniform
-from ..inference.results import hdi
+from ..inference.posterior.likelihood import LikelihoodSettings
+from ..inference.posterior.model import PosteriorModel
+from ..inference.posterior.priors import LogUniform, Uniform
+from ..inference.summaries.results import hdi
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
@@ -451,8 +451,8 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     point, where it takes one, read from the checkpoint). The same seed
     gives the same device, records and start as :func:`study_replicate`; a single-record
     calibration (``cs.single``) is inspected under its one record's model."""
-    from ..inference.checkpoint import stored_identity
-    from ..inference.joint import JointModel
+    from ..inference.sampling.checkpoint import stored_identity
+    from ..inference.posterior.joint import JointModel
 
     _, truth, records, _, res, kept = _fit_replicate(cs, k, Path(out))
     if cs.single:

@@ -31,9 +31,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..simulate import SimulationError
-from .harmonic import at_times
-from .motion import predicted_force
+from ...simulate import SimulationError
+from ..posterior.harmonic import at_times
+from ..posterior.motion import predicted_force
 
 __all__ = ["PeriodLoops", "period_loops", "POINTS"]
 

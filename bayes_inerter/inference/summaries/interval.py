@@ -8,7 +8,7 @@ posterior's, in log b, as independent normal terms (a GUM type-B evaluation):
 
 - **the sensors' calibration** (``records.sensitivity.SensorCalibration``): the ratio of
   the two sensitivities scales the identified b + m (m the moving mass);
-- **the model discrepancy** (``inference.discrepancy``): the misfit the record shows at
+- **the model discrepancy** (``inference.posterior.discrepancy``): the misfit the record shows at
   the drive's harmonics, carried to the fundamental, where it would move b.
 
 The reported interval is the equal-tailed one of log b's posterior draws, each with a
@@ -35,10 +35,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..records.sensitivity import SensorCalibration
-from .discrepancy import DECAY, HARMONICS, harmonic_discrepancy
+from ...records.sensitivity import SensorCalibration
+from ..posterior.discrepancy import DECAY, HARMONICS, harmonic_discrepancy
 from .end_state import PHI_WARNING
-from .motion import FUNDAMENTAL_MAX
+from ..posterior.motion import FUNDAMENTAL_MAX
 
 __all__ = ["IntervalSettings", "InertanceInterval", "INTERVALS", "DEFAULT_INTERVAL", "inertance_interval",
            "widened_interval", "combined_interval"]
@@ -52,7 +52,7 @@ class IntervalSettings:
 
     calibration : the sensors' calibration uncertainties, or None (taken as exact).
     discrepancy : add the harmonic model discrepancy's share.
-    decay, harmonics : the discrepancy's assumptions (``inference.discrepancy``).
+    decay, harmonics : the discrepancy's assumptions (``inference.posterior.discrepancy``).
     others : "held" (default): the discrepancy is carried to b with the other parameters
         held; "free": by the posterior's linear response (given ``cov``), which is wild
         where the posterior has flat directions (results/model-error).

@@ -10,9 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..records.conditioning import LOWPASS_HZ
-from ..records.sensitivity import SensorCalibration
-from ..simulate import SAMPLINGS
+from ...records.conditioning import LOWPASS_HZ
+from ...records.sensitivity import SensorCalibration
+from ...simulate import SAMPLINGS
 
 __all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "DEVIATION_SCALES", "DELAY_SD", "INPUT_NOISE_DRAWS", "INPUT_NOISE_FORMS", "ar1_pointwise",
            "ar1_marginal"]

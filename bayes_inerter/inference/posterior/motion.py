@@ -122,9 +122,9 @@ import numpy as np
 import threadpoolctl
 from numba import njit
 
-from ..networks import FIELDS
-from ..records.record import Record
-from ..simulate import exact_runner
+from ...networks import FIELDS
+from ...records.record import Record
+from ...simulate import exact_runner
 from .harmonic import HarmonicData, at_times, harmonic_data
 from .likelihood import REVERSAL_SCALES
 from . import friction_law

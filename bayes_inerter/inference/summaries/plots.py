@@ -15,7 +15,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..device import TABLE_I  # noqa: E402
+from ...device import TABLE_I  # noqa: E402
 from .results import every_nth  # noqa: E402
 
 __all__ = ["plot_corner", "plot_bands", "plot_trace", "plot_phi", "plot_loops", "reference_values"]
@@ -59,7 +59,7 @@ def reference_values(model, metadata: dict):
     are sampled. In the rigid model f1_0 and c_f1 are totals: the truth is summed, the
     paper's split values are not marked.
     """
-    from ..device import SETTINGS
+    from ...device import SETTINGS
 
     truth = dict(metadata.get("true_parameters") or {})
     setting = metadata.get("setting")

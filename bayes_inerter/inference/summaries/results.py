@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import arviz_import
-from .harmonic import at_times
-from .model import PosteriorModel
+from ... import arviz_import
+from ..posterior.harmonic import at_times
+from ..posterior.model import PosteriorModel
 
 __all__ = ["PosteriorSample", "ar1_noise", "loo_data", "posterior_sample", "contraction", "to_inference_data",
            "summary_rows", "write_summary", "loo_summary", "write_loo", "LOO_FILE", "SUMMARY_COLUMNS", "NUMBER_COLUMNS",

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .convergence import steps_for
+from ..sampling.convergence import steps_for
 from .results import hdi
 
 __all__ = ["EndWarning", "end_state_warnings", "prior_limited_warning", "convergence_warning", "BOUND_LOG_TOL",

@@ -49,11 +49,11 @@ import warnings
 import numpy as np
 from scipy.optimize import differential_evolution, minimize
 
-from ..records.conditioning import lowpass
-from ..simulate import SimulationError
-from .model import PosteriorModel
-from .motion import predicted_force
-from .priors import RHO_BOUNDS
+from ...records.conditioning import lowpass
+from ...simulate import SimulationError
+from ..posterior.model import PosteriorModel
+from ..posterior.motion import predicted_force
+from ..posterior.priors import RHO_BOUNDS
 
 __all__ = ["find_start", "local_optimum", "laplace_ensemble", "laplace_covariance", "sse", "profiled_misfit",
            "rigid_guess", "velocity_estimate", "OBJECTIVES", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER",

@@ -25,14 +25,14 @@ import numpy as np
 from numba import njit
 from scipy import signal
 
-from ..device import TABLE_I, InerterParameters, apparent_inertance
-from ..networks import FIELDS, linear_chain
-from ..network.compile import chain_state_space
-from ..records.conditioning import lowpass
-from ..masses import resolve_masses
-from ..records.drive import resolve_drive, with_drive
-from ..records.record import Record
-from ..simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate, simulate_network
+from ...device import TABLE_I, InerterParameters, apparent_inertance
+from ...networks import FIELDS, linear_chain
+from ...network.compile import chain_state_space
+from ...records.conditioning import lowpass
+from ...masses import resolve_masses
+from ...records.drive import resolve_drive, with_drive
+from ...records.record import Record
+from ...simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate, simulate_network
 from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
 from .harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
 from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise

@@ -34,14 +34,14 @@ from typing import Iterator
 import emcee
 import numpy as np
 
-from ..executor import Executor, interrupt_raised, interrupts_held, make_executor
+from ...executor import Executor, interrupt_raised, interrupts_held, make_executor
 from .adaptation import Adaptation, Schedule
 from .checkpoint import WRITE_SECONDS, CheckpointError, new_checkpoint, open_checkpoint, stored_identity
 from .convergence import (WARMUP, Check, Convergence, Monitor, check_chain, is_converged, steps_for, transient,
                           why_not)
 from .coordinates import Coordinates, continue_at, default_coordinates, reference_tolerance
 from .identity import run_identity
-from .model import PosteriorModel
+from ..posterior.model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, mirrored_modes
 from .target import Target, objective_at

@@ -18,9 +18,9 @@ zone in the nut's spring and damper (:class:`..network.Backlash`).
 
 from __future__ import annotations
 
-from ..friction import STRIBECK_VELOCITY
-from ..networks import device_network
-from ..network import Network
+from ...friction import STRIBECK_VELOCITY
+from ...networks import device_network
+from ...network import Network
 from .priors import LogUniform, Uniform
 
 __all__ = ["EFFECTS", "EFFECT_PRIORS", "NO_EFFECT", "effect_network"]

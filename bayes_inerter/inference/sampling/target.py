@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..executor import Executor, Serial
+from ...executor import Executor, Serial
 from .coordinates import Coordinates
-from .model import PosteriorModel
+from ..posterior.model import PosteriorModel
 from .optimize import OBJECTIVES
 
 __all__ = ["Target", "log_prob_at", "objective_at"]

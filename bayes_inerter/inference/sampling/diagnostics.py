@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 
-from .. import arviz_import
+from ... import arviz_import
 
 __all__ = ["rhat_ess"]
 

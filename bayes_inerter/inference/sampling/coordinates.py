@@ -68,7 +68,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .impedance import EDGE_WARNING, MAX_SENSITIVITY_CHANGE, ImpedanceMap, driving_point
+from ..posterior.impedance import EDGE_WARNING, MAX_SENSITIVITY_CHANGE, ImpedanceMap, driving_point
 
 __all__ = ["Coordinates", "ImpedanceMap", "SeriesStiffness", "SeriesCompliance", "driving_point", "default_coordinates", "COORDINATES",
            "drive_omega", "reference_tolerance", "continue_at",
@@ -282,7 +282,7 @@ class SeriesCompliance:
 def drive_omega(record) -> float:
     """Angular drive frequency of a record, rad/s: its metadata's, or else the record's
     own estimate (``records.drive.resolve_drive``, the same everywhere in a fit)."""
-    from ..records.drive import resolve_drive
+    from ...records.drive import resolve_drive
 
     return 2.0 * math.pi * resolve_drive(record).hz
 

@@ -61,8 +61,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..records.drive import steady_periods
-from ..records.record import Record
+from ...records.drive import steady_periods
+from ...records.record import Record
 
 __all__ = ["HarmonicData", "harmonic_data", "linear_transfer", "harmonic_variance", "harmonic_loglik", "at_times",
            "whole_sample_periods", "MAX_SPAN_PERIODS"]

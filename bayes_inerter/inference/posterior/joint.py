@@ -32,8 +32,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..device import SETTINGS, apparent_inertance
-from ..executor import make_executor
+from ...device import SETTINGS, apparent_inertance
+from ...executor import make_executor
 from .likelihood import ar1_marginal
 from .model import LikelihoodSettings, PosteriorModel
 
