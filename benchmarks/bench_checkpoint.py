@@ -19,7 +19,7 @@ from pathlib import Path
 import emcee
 import numpy as np
 
-from _timing import median_time
+from _timing import median_time, record_row, supported_theta
 
 WALKERS, NDIM, STEPS = 24, 11, 300
 
@@ -65,7 +65,7 @@ def main():
 
     rec = generate_record(paper_parameters("A3"), 1.0, rng=0, setting_name="A3")
     model = PosteriorModel(rec)
-    theta = model.to_theta(paper_parameters("A3"), 3e-3, 0.5)
+    theta = supported_theta(model, paper_parameters("A3"))
     evaluation = median_time(lambda: model.log_prob(theta), repeats=30)
     step = WALKERS * evaluation
     single, single_mean = _per_step(plain)
@@ -80,6 +80,14 @@ def main():
     print("checkpoint share of a step (means): " + ", ".join(
         f"{name} {m / (m + step):.1%}" for name, m in (("every step", double_mean), ("default", batched_mean),
                                                         ("emcee's own backend", single_mean))))
+    path = record_row("checkpoint", {
+        "emcee_median_ms": round(1e3 * single, 3), "emcee_mean_ms": round(1e3 * single_mean, 3),
+        "twin_every_step_median_ms": round(1e3 * double, 3), "twin_every_step_mean_ms": round(1e3 * double_mean, 3),
+        "twin_default_median_ms": round(1e3 * batched, 3), "twin_default_mean_ms": round(1e3 * batched_mean, 3),
+        "write_seconds": WRITE_SECONDS, "step_evaluations_ms": round(1e3 * step, 3),
+        "twin_every_step_over_emcee": round(double_mean / single_mean, 3),
+        "default_share_of_step": round(batched_mean / (batched_mean + step), 4)})
+    print(f"wrote a row to {path}")
 
 
 if __name__ == "__main__":

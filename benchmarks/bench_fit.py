@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 import bayes_inerter.inference.posterior.model as model_module
-from _timing import median_time
+from _timing import median_time, record_row, supported_theta
 
 from bayes_inerter import paper_parameters, simulate
 from bayes_inerter.inference import Convergence, fit_record
@@ -47,7 +47,7 @@ def main():
     print(f"record {args.setting} {args.freq:g} Hz, {rec.time[-1]:g} s at {rec.fs:g} Hz")
 
     model = PosteriorModel(rec)
-    theta = model.to_theta(truth, 0.003, 0.1)
+    theta = supported_theta(model, truth, 0.003, 0.1)
     params = model.parameters(theta)
     t_lp = median_time(lambda: model.log_prob(theta))
     t_sim = median_time(lambda: simulate(params, rec.time, rec.force, sampling="mean"))
@@ -90,6 +90,15 @@ def main():
           f"{res.timings['posterior_draws']:.0f} s, outputs and plots "
           f"{res.timings['total'] - res.timings['sampling'] - res.timings['posterior_draws']:.0f} s")
     print(f"  b: {b['mean']:.1f} kg, 94 % HDI {b['hdi_3%']:.1f}-{b['hdi_97%']:.1f} (truth {truth.b:g})")
+    path = record_row("fit", {
+        "setting": args.setting, "freq_hz": args.freq, "seed": args.seed, "processes": args.processes,
+        "log_prob_ms": round(t_lp * 1e3, 3), "simulation_ms": round(t_sim * 1e3, 3),
+        "profile_steps": args.profile_steps, "profile_sampling_s": round(t_short, 2),
+        "profile_simulator_share": round(spent["simulate"] / t_short, 4), "wall_s": round(wall, 1),
+        "converged": bool(res.converged), "steps": res.iterations, "tau_max": round(float(np.max(res.tau)), 1),
+        "b_mean": round(b["mean"], 2), "b_hdi_3": round(b["hdi_3%"], 2), "b_hdi_97": round(b["hdi_97%"], 2),
+        "b_true": truth.b})
+    print(f"wrote a row to {path}")
 
 
 if __name__ == "__main__":

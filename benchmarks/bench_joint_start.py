@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _timing import record_row
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -68,6 +69,10 @@ def main():
     same = np.array_equal(*(e[0] for e in ends.values()))
     print(f"ratio one / pooled: {a / b:.2f}; same end point: {same}; log posterior there "
           f"{next(iter(ends.values()))[1]:.3f}")
+    path = record_row("joint_start", {"processes": args.processes, "iterations": args.iterations,
+                                      "repeats": args.repeats, "one_process_s": round(a, 3),
+                                      "pooled_s": round(b, 3), "ratio": round(a / b, 3), "same_end_point": bool(same)})
+    print(f"wrote a row to {path}")
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ import statistics
 import time
 
 import numpy as np
+from _timing import record_row, supported_theta
 
 from bayes_inerter.device import paper_parameters
 from bayes_inerter.executor import Executor
@@ -64,7 +65,7 @@ def main():
     medians = []
     for r in records:
         pm = PosteriorModel(r)
-        t = pm.to_theta(paper_parameters(r.metadata["setting"]), 0.003, 0.3)
+        t = supported_theta(pm, paper_parameters(r.metadata["setting"]), 0.003, 0.3)
         medians.append(dict(zip(pm.names, pm.to_values(t))))
     theta = jm.start(medians)
     coords = default_coordinates(jm)
@@ -89,6 +90,10 @@ def main():
         o = statistics.median(times[(n, "one")])
         print(f"batch of {n} walkers on {args.processes} processes: default chunks {d * 1e3:.1f} ms, "
               f"one walker per task {o * 1e3:.1f} ms, ratio {d / o:.2f} (medians of {args.repeats})")
+        path = record_row("pool_chunks", {"walkers": n, "processes": args.processes, "repeats": args.repeats,
+                                          "default_chunks_ms": round(d * 1e3, 2), "one_per_task_ms": round(o * 1e3, 2),
+                                          "ratio": round(d / o, 3)})
+    print(f"wrote rows to {path}")
 
 
 if __name__ == "__main__":
