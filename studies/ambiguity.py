@@ -20,15 +20,13 @@ parameters are not identified. No sampling; seconds.
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _table import write_rows
 
-from _table import write_rows  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _solved_b(pm, coords, u, name, value):

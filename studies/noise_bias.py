@@ -14,13 +14,11 @@ generating values, and prints them.
 
 import argparse
 import dataclasses
-import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _table import map_rows, write_rows
 
-from _table import map_rows, write_rows  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 CASES = ("both", "load cell only", "accelerometer only")
 

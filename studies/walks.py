@@ -18,17 +18,15 @@ three quarters), R-hat and bulk ESS of the last three quarters, b's and log10 k_
 """
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _table import map_rows, record_arg, write_rows
 
-from _table import map_rows, record_arg, write_rows  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 WALKS = ("physical", "physical+ridge", "impedance")

@@ -147,6 +147,9 @@ def test_running_again_reuses_finished_fits(study, tmp_path):
     assert runs[:-1] == first["runs"]
     assert runs[-1]["reused"] == 4 and runs[-1]["sampled"] == 0
     assert first["runs"][-1]["sampled"] == 4 and first["runs"][-1]["seconds"] == first["seconds"]
+    from bayes_inerter.study.manifest import source_commit
+
+    assert runs[-1]["commit"] == source_commit()  # which source made the numbers
 
 
 def test_a_study_given_by_another_path_to_its_folder_reuses_its_fits(study, tmp_path, monkeypatch):

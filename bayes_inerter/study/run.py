@@ -33,6 +33,7 @@ from .analysis import (
 )
 from .honest import honest_columns
 from .least_squares import least_squares_table, run_least_squares
+from .manifest import source_commit
 from .plan import StudyPlan, record_name
 from .runner import run_jobs
 
@@ -267,9 +268,10 @@ def _write_figures(out: Path, tables: dict) -> None:
 
 def _write_study_json(out: Path, plan: StudyPlan, versions: dict, seconds: dict, processes, scheduler,
                       outcomes: list) -> None:
-    """study.json: the plan, versions, timings and outcomes, and every run into the folder."""
-    this_run = _run_entry(datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), seconds,
-                          processes, outcomes)
+    """study.json: the plan, versions, timings and outcomes, and every run into the folder
+    with the commit of the source it ran (``manifest.source_commit``: None outside a clone)."""
+    this_run = {**_run_entry(datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), seconds,
+                             processes, outcomes), "commit": source_commit()}
     plan_dict = dataclasses.asdict(plan)
     if plan.records_dir:  # no machine's path in a file that may be committed: relative to the working folder
         plan_dict["records_dir"] = _portable(plan.records_dir)

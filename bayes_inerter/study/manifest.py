@@ -1,0 +1,69 @@
+"""What made a results folder: the commit, the command, the package versions, the machine.
+
+A study's run adds one entry to ``manifest.json`` in the folder it writes (a study run
+in chunks, over several sessions, adds one a chunk): the source's commit (``-dirty``
+where tracked files had changes, None outside a git clone), the configuration it was
+given, the versions of the package and the libraries that shape its numbers
+(:func:`..inference.fit.versions`), the machine's processor and cores, and the date.
+One process adds one entry however many times it writes into the folder.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import subprocess
+from pathlib import Path
+
+from ..inference.fit import versions
+
+__all__ = ["MANIFEST", "source_commit", "manifest_entry", "write_manifest"]
+
+#: The file's name in a results folder.
+MANIFEST = "manifest.json"
+
+_SOURCE = Path(__file__).resolve().parents[2]
+
+
+def source_commit(folder: Path = _SOURCE) -> str | None:
+    """The short commit of the clone ``folder`` lies in, ``-dirty`` where tracked files
+    differ from it; None outside a clone (an installed package) or without git."""
+    def git(*args):
+        return subprocess.run(["git", *args], cwd=folder, capture_output=True, text=True)
+
+    try:
+        head = git("rev-parse", "--short", "HEAD")
+        if head.returncode != 0:
+            return None
+        dirty = git("status", "--porcelain", "--untracked-files=no").stdout.strip()
+    except OSError:
+        return None
+    return head.stdout.strip() + ("-dirty" if dirty else "")
+
+
+def manifest_entry(configuration: dict) -> dict:
+    """This run's entry: ``configuration`` (anything JSON can hold) with the commit,
+    versions, machine and date (UTC)."""
+    return {"commit": source_commit(), "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "configuration": configuration, "versions": versions(), "cores": os.cpu_count(), "process": os.getpid()}
+
+
+def write_manifest(folder, configuration: dict) -> Path:
+    """Add this run's entry to ``folder``/manifest.json (made where it is new; an entry of
+    this process already there is left as it is). Returns the file's path."""
+    path = Path(folder) / MANIFEST
+    runs = []
+    if path.exists():
+        try:
+            runs = json.loads(path.read_text())["runs"]
+        except (ValueError, KeyError, TypeError):
+            raise ValueError(f"{path} is not a manifest this package wrote; move it aside") from None
+    if runs and runs[-1].get("process") == os.getpid() and runs[-1].get("configuration") == configuration:
+        return path
+    runs.append(manifest_entry(configuration))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{MANIFEST}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps({"runs": runs}, indent=1) + "\n")
+    os.replace(tmp, path)
+    return path
