@@ -3,7 +3,12 @@ time, and compared with the same fit never interrupted.
 
     python studies/faults.py [--kills 30] [--steps 150] [--seed 0] [--out results/faults]
 
-Each round starts ``bayes-inerter fit`` on a short generated record, waits until the
+Each round starts ``bayes-inerter fit`` on a short generated record, with the
+time-domain likelihood (``--residual ar1``: it simulates the record at every evaluation,
+so a step takes long enough to be killed within it; the default likelihood needs three
+steady periods and takes milliseconds a step) and the checkpoint written at every step
+(``--checkpoint-seconds 0``: each write is a moment to be killed in; the default holds
+steps for up to 2 s and writes them together, through the same code), waits until the
 run has written a new step, sleeps a seeded random 0-0.3 s and kills it. After every kill it records how many steps a continued run would keep and whether a file was
 damaged (moved aside as ``*.damaged``); at the end it finishes the run and checks the
 chain equals an uninterrupted run's, bit for bit. Writes ``kills.csv`` and ``REPORT.md``
@@ -50,7 +55,8 @@ def main():
         record, _ = write_record(tmp / "a4.csv", rec)
         fit = tmp / "killed"
         cmd = [sys.executable, "-m", "bayes_inerter.cli", "fit", str(record), "--out", str(fit), "--steps",
-               str(args.steps), "--walkers", "24", "--processes", "1", "--seed", "3"]
+               str(args.steps), "--walkers", "24", "--processes", "1", "--seed", "3", "--residual", "ar1",
+               "--checkpoint-seconds", "0"]
         chain_file = fit / "chain.h5"
         rows, before, problems = [], None, []
         for k in tqdm(range(args.kills), desc="kills", unit="kill", file=sys.stderr):
@@ -90,7 +96,8 @@ def main():
         w.writeheader()
         w.writerows(rows)
     lines = ["# Fault injection: killed fits", "",
-             f"A {args.steps}-step fit (24 walkers, a 2.5 s A4 record at 1.5 Hz) killed with SIGKILL {len(rows)} "
+             f"A {args.steps}-step fit (24 walkers, a 2.5 s A4 record at 1.5 Hz, the time-domain likelihood, the "
+             f"checkpoint written at every step) killed with SIGKILL {len(rows)} "
              f"times at seeded random moments (seed {args.seed}: 0-0.3 s after the run wrote a new step), run "
              "again each time.", "",
              f"- Files found damaged and moved aside over all kills: {len(damaged)} ({', '.join(damaged) or 'none'}).",
