@@ -29,7 +29,7 @@ def on_sigint(signum, frame):
     a fit on two processes, interrupted there, once ran on to its last step and exit
     status 0. The commands' per-step callbacks raise it again (:func:`check_interrupt`).
     Raised where a compiled function has called back into Python, numba reports it as a
-    SystemError (:func:`...executor.interrupt_raised`): :func:`..cli.main` takes that for
+    SystemError (:func:`..executor.interrupt_raised`): :func:`..cli.main` takes that for
     the interruption it is."""
     global _interrupted
     _interrupted = True

@@ -7,7 +7,7 @@ one (eq. 4) and report how well it does as
 
 on the record as measured. :func:`identify` does the same by machine: least squares on
 the **unfiltered** record (the likelihood's window: the record less its ``edge`` at each
-end), from the optimiser's start (:func:`.optimize.find_start`) and ``starts - 1``
+end), from the optimiser's start (:func:`.sampling.optimize.find_start`) and ``starts - 1``
 scrambled Sobol points in the prior's box, each polished by
 :func:`scipy.optimize.least_squares` in the sampled parameters; the best is kept. phi is
 the fraction, not a percentage.

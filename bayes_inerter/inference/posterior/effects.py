@@ -11,9 +11,9 @@ the two-port model with some of these parameters added:
 
 These priors are **assumptions** (what is physically plausible for a ball-screw
 inerter, not measured), options like every prior (``priors=``). The friction law is
-:class:`..friction.Stribeck` with shape exponent 2, simulated by the exact kernel in its
+:class:`...friction.Stribeck` with shape exponent 2, simulated by the exact kernel in its
 piecewise-linear form (``friction.STRIBECK_SEGMENTS`` segments); the backlash is a dead
-zone in the nut's spring and damper (:class:`..network.Backlash`).
+zone in the nut's spring and damper (:class:`...network.Backlash`).
 """
 
 from __future__ import annotations

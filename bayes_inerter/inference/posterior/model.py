@@ -108,7 +108,7 @@ B_APP_VALIDITY = 0.1
 
 def record_masses(record: Record, m_s: float | None = None, m_B: float | None = None) -> tuple[float, float]:
     """m_s and m_B (kg) from the options, else the record's metadata (m_s, or setting),
-    else (m_B) the paper's; :func:`..masses.resolve_masses` says where each came from."""
+    else (m_B) the paper's; :func:`...masses.resolve_masses` says where each came from."""
     found = resolve_masses(record, m_s=m_s, m_B=m_B)
     return found.m_s, found.m_B
 

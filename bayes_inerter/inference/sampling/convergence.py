@@ -13,7 +13,7 @@ with the chain is underestimated), and, after discarding 2 tau more, R-hat <
 ``max_rhat`` and bulk ESS >= ``min_ess`` (arviz, treating walkers as chains: they are
 not independent, so R-hat here is a check that no walker is stuck apart from the
 others, not a proof). Or stops at ``max_steps``. The draws kept for the posterior
-(:func:`.results.posterior_sample`) are the same: after the warm-up and 2 tau more.
+(:func:`..summaries.results.posterior_sample`) are the same: after the warm-up and 2 tau more.
 
 :class:`Monitor` applies the rule along one run: it remembers the last check's tau.
 """

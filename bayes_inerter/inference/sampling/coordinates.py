@@ -9,7 +9,7 @@ its target there is the same posterior carried over with its Jacobian,
 
 so the choice changes how fast a chain mixes, not what it converges to, within the
 coordinates' domain (the impedance coordinates restrict the prior to it:
-:mod:`.impedance`). Two changes from theta, used together by default
+:mod:`..posterior.impedance`). Two changes from theta, used together by default
 (:func:`default_coordinates`):
 
 - **impedance**: a record fixes the driving-point impedance Z = F / v of the network's
@@ -57,7 +57,7 @@ seed and moves): the largest integrated autocorrelation time (in theta) fell fro
 steps in theta (with the nut-ridge move) to 108 with the impedance coordinates and 94
 with both; R-hat of the last three quarters from 1.97 to 1.09 and 1.06.
 
-The impedance map, and the domain it restricts the prior to: :mod:`.impedance`.
+The impedance map, and the domain it restricts the prior to: :mod:`..posterior.impedance`.
 """
 
 from __future__ import annotations

@@ -168,7 +168,7 @@ def sample(target: Target, backend, state: emcee.State, *, schedule: Schedule, i
     which goes on with the state's random state; the checkpoint's twin is brought up to
     date at the end of each stretch. ``executor``: where the walkers are evaluated (made
     with ``target`` as its state; None: here). Ctrl-C comes out between steps, after the
-    step it came in is stored (:func:`..executor.interrupts_held`)."""
+    step it came in is stored (:func:`...executor.interrupts_held`)."""
     nwalkers, ndim = np.shape(state.coords)
     log_prob = functools.partial(target.batch, executor=executor)
     until = backend.iteration + iterations

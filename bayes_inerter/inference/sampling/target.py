@@ -2,7 +2,7 @@
 
 :class:`Target` is picklable (a posterior model and its coordinates), so that worker
 processes or Dask workers are given it once, when they start
-(:func:`..executor.make_executor`'s ``state``), and only parameter vectors travel at
+(:func:`...executor.make_executor`'s ``state``), and only parameter vectors travel at
 each step.
 """
 
@@ -23,7 +23,7 @@ __all__ = ["Target", "log_prob_at", "objective_at"]
 @dataclass(frozen=True)
 class Target:
     """``model``'s posterior in the coordinates ``coords``; :meth:`batch` evaluates it
-    for many walkers on an :class:`..executor.Executor` made with this target as its
+    for many walkers on an :class:`...executor.Executor` made with this target as its
     state."""
 
     model: PosteriorModel

@@ -92,7 +92,7 @@ def _derived(model: PosteriorModel, values: np.ndarray) -> dict:
 
 
 def posterior_sample(model: PosteriorModel, run) -> PosteriorSample:
-    """Kept draws of a finished :class:`.sampler.SamplerRun` (in theta, whatever
+    """Kept draws of a finished :class:`..sampling.sampler.SamplerRun` (in theta, whatever
     coordinates its walkers moved in)."""
     sampler, tau = run.sampler, run.tau
     n, skip = sampler.iteration, run.warmup

@@ -1,7 +1,7 @@
 """The numeric kernel: exact, event-driven simulation of a piecewise-linear network.
 
 Private. A pure function of flat float arrays (cheap to pickle to workers); the only
-place where speed tricks live. See ``simulate.py`` for the public entry point.
+place where speed tricks live. See :mod:`bayes_inerter.simulate` for the public entry points.
 
 Method
 ------

@@ -7,9 +7,9 @@ import arviz as az
 import h5py
 import numpy as np
 from bayes_inerter.records.io import read_record
-from bayes_inerter.inference.model import LikelihoodSettings, PosteriorModel
-from bayes_inerter.inference.coordinates import default_coordinates
-from bayes_inerter.inference.checkpoint import read_chain
+from bayes_inerter.inference.posterior.model import LikelihoodSettings, PosteriorModel
+from bayes_inerter.inference.sampling.coordinates import default_coordinates
+from bayes_inerter.inference.sampling.checkpoint import read_chain
 
 rec_path, out_csv = sys.argv[1], sys.argv[2]
 record = read_record(rec_path)
