@@ -1,11 +1,10 @@
 """Tests of a results folder's manifest (bayes_inerter.study.manifest)."""
 
 import json
-import os
 
 import pytest
 
-from bayes_inerter.study.manifest import MANIFEST, source_commit, write_manifest
+from bayes_inerter.study.manifest import MANIFEST, RUN, source_commit, write_manifest
 
 
 def test_a_run_adds_one_entry_and_a_second_run_another(tmp_path):
@@ -15,10 +14,11 @@ def test_a_run_adds_one_entry_and_a_second_run_another(tmp_path):
     assert path.name == MANIFEST and len(runs) == 1
     entry = runs[0]
     assert entry["configuration"] == {"script": "x.py", "arguments": ["--seed", "1"]}
-    assert entry["process"] == os.getpid() and entry["cores"] >= 1
+    assert entry["run"] == RUN and entry["cores"] >= 1
     assert {"bayes_inerter", "numpy", "emcee", "cpu"} <= set(entry["versions"])
     assert entry["commit"] == source_commit()
     write_manifest(tmp_path, {"script": "x.py", "arguments": ["--seed", "2"]})  # another configuration
+    write_manifest(tmp_path, {"script": "x.py", "arguments": ["--seed", "1"]})  # the first again: kept once
     assert len(json.loads(path.read_text())["runs"]) == 2
 
 

@@ -5,7 +5,8 @@ in chunks, over several sessions, adds one a chunk): the source's commit (``-dir
 where tracked files had changes, None outside a git clone), the configuration it was
 given, the versions of the package and the libraries that shape its numbers
 (:func:`..inference.fit.versions`), the machine's processor and cores, and the date.
-One process adds one entry however many times it writes into the folder.
+A run (one process, named by a token drawn when the module is imported) adds one entry
+however many times it writes into the folder with the same configuration.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import datetime
 import json
 import os
 import subprocess
+import uuid
 from pathlib import Path
 
 from ..inference.fit import versions
@@ -24,6 +26,8 @@ __all__ = ["MANIFEST", "source_commit", "manifest_entry", "write_manifest"]
 MANIFEST = "manifest.json"
 
 _SOURCE = Path(__file__).resolve().parents[2]
+#: This process's run: a pid may come again in a later session, a token does not.
+RUN = uuid.uuid4().hex
 
 
 def source_commit(folder: Path = _SOURCE) -> str | None:
@@ -33,6 +37,10 @@ def source_commit(folder: Path = _SOURCE) -> str | None:
         return subprocess.run(["git", *args], cwd=folder, capture_output=True, text=True)
 
     try:
+        top = git("rev-parse", "--show-toplevel")
+        # a clone's own source, not a package installed into a folder inside some clone
+        if top.returncode != 0 or Path(top.stdout.strip()).resolve() != Path(folder).resolve():
+            return None
         head = git("rev-parse", "--short", "HEAD")
         if head.returncode != 0:
             return None
@@ -46,12 +54,13 @@ def manifest_entry(configuration: dict) -> dict:
     """This run's entry: ``configuration`` (anything JSON can hold) with the commit,
     versions, machine and date (UTC)."""
     return {"commit": source_commit(), "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-            "configuration": configuration, "versions": versions(), "cores": os.cpu_count(), "process": os.getpid()}
+            "configuration": configuration, "versions": versions(), "cores": os.cpu_count(), "run": RUN}
 
 
 def write_manifest(folder, configuration: dict) -> Path:
-    """Add this run's entry to ``folder``/manifest.json (made where it is new; an entry of
-    this process already there is left as it is). Returns the file's path."""
+    """Add this run's entry to ``folder``/manifest.json (made where it is new; this run's
+    entry with the same configuration already there is left as it is). Returns the
+    file's path."""
     path = Path(folder) / MANIFEST
     runs = []
     if path.exists():
@@ -59,7 +68,7 @@ def write_manifest(folder, configuration: dict) -> Path:
             runs = json.loads(path.read_text())["runs"]
         except (ValueError, KeyError, TypeError):
             raise ValueError(f"{path} is not a manifest this package wrote; move it aside") from None
-    if runs and runs[-1].get("process") == os.getpid() and runs[-1].get("configuration") == configuration:
+    if any(r.get("run") == RUN and r.get("configuration") == configuration for r in runs):
         return path
     runs.append(manifest_entry(configuration))
     path.parent.mkdir(parents=True, exist_ok=True)

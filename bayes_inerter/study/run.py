@@ -168,6 +168,7 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
     from ..inference.fit import versions as fit_versions  # one list of versions for fits and studies
     from .report import write_report
 
+    commit = source_commit()  # of the source this run loaded, before its outputs change the tree
     t0 = time.perf_counter()
     records = prepare_records(plan, out)
     jobs = plan.jobs(records, out)
@@ -195,7 +196,7 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
     t3 = time.perf_counter()
     seconds = {"records": t1 - t0, "fits": t2 - t1, "joint": t_joint - t2, "least_squares": t_ls - t_joint,
                "analysis_and_report": t3 - t_ls, "total": t3 - t0}
-    _write_study_json(out, plan, versions, seconds, processes, scheduler, outcomes)
+    _write_study_json(out, plan, versions, seconds, processes, scheduler, outcomes, commit)
     return StudyResult(out, outcomes, tables, report, seconds)
 
 
@@ -267,11 +268,12 @@ def _write_figures(out: Path, tables: dict) -> None:
 
 
 def _write_study_json(out: Path, plan: StudyPlan, versions: dict, seconds: dict, processes, scheduler,
-                      outcomes: list) -> None:
+                      outcomes: list, commit: str | None) -> None:
     """study.json: the plan, versions, timings and outcomes, and every run into the folder
-    with the commit of the source it ran (``manifest.source_commit``: None outside a clone)."""
+    with the commit of the source it ran (``manifest.source_commit`` when the run began:
+    None outside a clone)."""
     this_run = {**_run_entry(datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), seconds,
-                             processes, outcomes), "commit": source_commit()}
+                             processes, outcomes), "commit": commit}
     plan_dict = dataclasses.asdict(plan)
     if plan.records_dir:  # no machine's path in a file that may be committed: relative to the working folder
         plan_dict["records_dir"] = _portable(plan.records_dir)
