@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from .device import DEFAULT_GEOMETRY, InerterParameters, paper_parameters
-from .friction import FrictionLaw, make_law
+from .friction import STRIBECK_RATIO, STRIBECK_VELOCITY, FrictionLaw, make_law
 from .network import Backlash, Deformation, Friction, Inerter, Mass, Network, cascade, compile_network
 
 __all__ = ["NETWORKS", "build_network", "with_backlash", "device_network", "lead_angle", "NUT_SHARE", "FIELDS", "LinearChain", "linear_chain"]
@@ -151,8 +151,9 @@ def with_backlash(net: Network, gap: float) -> Network:
     return Network(tuple(blocks), net.name + "+backlash")
 
 
-def device_network(name: str, params: InerterParameters, friction="coulomb", *, stribeck_ratio: float | None = None,
-                   stribeck_velocity: float | None = None, backlash: float = 0.0) -> Network:
+def device_network(name: str, params: InerterParameters, friction="coulomb", *,
+                   stribeck_ratio: float = STRIBECK_RATIO, stribeck_velocity: float = STRIBECK_VELOCITY,
+                   backlash: float = 0.0) -> Network:
     """The network ``name`` at ``params`` with the effects a device may have beyond the
     paper's model: ``friction`` "stribeck" for a Stribeck law on every contact (break-away
     ``stribeck_ratio`` times the Coulomb force, falling over ``stribeck_velocity``, m/s;
