@@ -44,19 +44,29 @@ def median_time(fn, repeats=30):
     return float(np.median(times))
 
 
-def provenance() -> dict:
-    """The commit (``-dirty`` with uncommitted changes), the machine and the date (UTC)."""
+def _commit() -> str:
+    """The checkout's short commit, ``-dirty`` where tracked files have uncommitted changes."""
     def git(*args):
         return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True).stdout.strip()
 
-    commit = git("rev-parse", "--short", "HEAD") + ("-dirty" if git("status", "--porcelain", "--untracked-files=no")
-                                                     else "")
+    return git("rev-parse", "--short", "HEAD") + ("-dirty" if git("status", "--porcelain", "--untracked-files=no")
+                                                  else "")
+
+
+#: Read when the benchmark starts: its own rows, appended to tracked CSVs, must not make
+#: its later rows ``-dirty``, nor a commit made while it runs change what they name.
+START_COMMIT = _commit()
+
+
+def provenance() -> dict:
+    """The commit the run started from (:data:`START_COMMIT`), the machine and the date (UTC)."""
     import os
 
     from bayes_inerter.inference.fit import versions
 
     v = versions()
     machine = f"{v['machine']} {v['cpu']}, {os.cpu_count()} cores"
+    commit = START_COMMIT
     return {"commit": commit, "machine": machine, "date": datetime.datetime.now(datetime.timezone.utc).date().isoformat()}
 
 

@@ -1,7 +1,7 @@
 """Fault injection: a fit killed (SIGKILL) many times at random moments, run again each
 time, and compared with the same fit never interrupted.
 
-    python studies/faults.py [--kills 30] [--steps 150] [--seed 0] [--out results/faults]
+    python studies/faults.py [--kills 30] [--steps 400] [--seed 0] [--out results/faults]
 
 Each round starts ``bayes-inerter fit`` on a short generated record, with the
 time-domain likelihood (``--residual ar1``: it simulates the record at every evaluation,
@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--kills", type=int, default=30)
-    ap.add_argument("--steps", type=int, default=150)
+    ap.add_argument("--steps", type=int, default=400)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default=str(ROOT / "results" / "faults"))
     args = ap.parse_args()
@@ -82,6 +82,8 @@ def main():
             rows.append({"kill": k, "delay_s": round(delay, 4), "steps_kept": len(now),
                          "damaged_files_so_far": len(damaged), "earlier_steps_intact": kept})
             before = now
+        if len(rows) < args.kills and not problems:
+            problems.append(f"the run finished after {len(rows)} of {args.kills} kills: give more --steps")
         done = subprocess.run(cmd, capture_output=True, text=True)
         ref = tmp / "uninterrupted"
         clean = subprocess.run(cmd[:6] + [str(ref)] + cmd[7:], capture_output=True, text=True)
