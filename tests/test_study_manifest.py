@@ -33,3 +33,14 @@ def test_a_file_it_did_not_write_is_refused(tmp_path):
     (tmp_path / MANIFEST).write_text("[1, 2]")
     with pytest.raises(ValueError, match="move it aside"):
         write_manifest(tmp_path, {})
+
+
+def test_what_json_cannot_hold_is_kept_by_its_repr(tmp_path):
+    class Settings:
+        def __repr__(self):
+            return "Settings(seed=3)"
+
+    path = write_manifest(tmp_path, {"settings": Settings(), "replicates": 4})
+    write_manifest(tmp_path, {"settings": Settings(), "replicates": 4})  # the same run and configuration
+    runs = json.loads(path.read_text())["runs"]
+    assert [r["configuration"] for r in runs] == [{"settings": "Settings(seed=3)", "replicates": 4}]

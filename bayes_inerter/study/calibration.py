@@ -212,6 +212,7 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
     k's fit in ``work``/<k> (None: ``out``/:data:`RUNNING`), continued there by the next
     run if this one stops."""
     from ..inference.fit import check_output_folder
+    from .manifest import write_manifest
 
     out = Path(out)
     check_output_folder(out)
@@ -222,6 +223,7 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
     if settings_file.exists() and _with_defaults(json.loads(settings_file.read_text()), defaults) != mine:
         raise ValueError(f"{out} holds replicates of other calibration settings; choose another output folder")
     settings_file.write_text(json.dumps(mine, indent=2) + "\n")
+    write_manifest(out, {"settings": mine, "replicates": replicates, "processes": processes})
     todo = [k for k in range(replicates) if not _replicate_file(out, k).exists()]
     done = replicates - len(todo)
     if progress:

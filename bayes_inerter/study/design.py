@@ -166,6 +166,7 @@ def run_design(out, *, settings=("A0", "A3", "B2"), designs=DEFAULT_DESIGNS, ric
     from .analysis import write_csv
     from .plots import plot_design
     from .design_report import design_report
+    from .manifest import write_manifest
 
     out = Path(out)
     check_output_folder(out)
@@ -179,6 +180,8 @@ def run_design(out, *, settings=("A0", "A3", "B2"), designs=DEFAULT_DESIGNS, ric
     if settings_file.exists() and json.loads(settings_file.read_text()) != json.loads(json.dumps(mine)):
         raise ValueError(f"{out} holds cases of other settings (seed, generator, maxiter); choose another folder")
     settings_file.write_text(json.dumps(mine, indent=2) + "\n")
+    write_manifest(out, {**mine, "settings": list(settings), "designs": [d.label for d in designs],
+                         "richer": [dict(t) for t in richer], "richer_settings": list(richer_settings)})
     rows, shifts = [], []
     for done, (kind, s, what) in enumerate(cases, 1):
         label = what.label if kind == "design" else (",".join(f"{k}={v}" for k, v in what.items()) or "own")

@@ -51,7 +51,7 @@ def source_commit(folder: Path = _SOURCE) -> str | None:
 
 
 def manifest_entry(configuration: dict) -> dict:
-    """This run's entry: ``configuration`` (anything JSON can hold) with the commit,
+    """This run's entry: ``configuration`` (what JSON cannot hold, by its repr) with the commit,
     versions, machine and date (UTC)."""
     return {"commit": source_commit(), "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "configuration": configuration, "versions": versions(), "cores": os.cpu_count(), "run": RUN}
@@ -62,6 +62,7 @@ def write_manifest(folder, configuration: dict) -> Path:
     entry with the same configuration already there is left as it is). Returns the
     file's path."""
     path = Path(folder) / MANIFEST
+    configuration = json.loads(json.dumps(configuration, default=repr))  # as the file will hold it
     runs = []
     if path.exists():
         try:
