@@ -12,7 +12,7 @@ from pathlib import Path
 
 from bayes_inerter import SETTINGS
 from bayes_inerter.executor import make_executor
-from bayes_inerter.study.manifest import write_manifest
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 #: The paper's drive frequencies, Hz.
 FREQUENCIES = (0.5, 1.0, 1.5)
@@ -94,18 +94,13 @@ def map_rows(func, jobs: list, processes: int) -> list[dict]:
         sys.exit(f"error: {exc}")
 
 
-def run_configuration() -> dict:
-    """What a script's run was given: the script and its arguments."""
-    return {"script": Path(sys.argv[0]).name, "arguments": sys.argv[1:]}
-
-
 def write_rows(path, rows: list[dict]) -> Path:
     """Write ``rows`` (dicts with the same keys) to the CSV file ``path`` (its folder made
     if needed, the run's entry added to its manifest.json), print each as
     ``key value, ...``, and return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_manifest(path.parent, run_configuration())
+    write_manifest(path.parent, script_configuration())
     with open(path, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
@@ -130,7 +125,7 @@ def append_row(path, row: dict, fields) -> None:
     keeps every row it finished."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_manifest(path.parent, run_configuration())
+    write_manifest(path.parent, script_configuration())
     new = not path.exists()
     with open(path, "a", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(fields))

@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bayes_inerter.study.manifest import script_configuration, write_manifest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -47,6 +49,7 @@ def main():
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    write_manifest(out, script_configuration())
     rng = np.random.default_rng(args.seed)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

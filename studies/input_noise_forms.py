@@ -30,6 +30,7 @@ from _table import git_commit
 from bayes_inerter.inference import PosteriorModel
 from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 VARIANTS = {"none": dict(input_noise=0), "variance": dict(input_noise=16, input_noise_form="variance"),
@@ -83,6 +84,7 @@ def main() -> None:
     ap.add_argument("--single", action="store_true", help="single-record calibration: replicate k has one record")
     ap.add_argument("--out", type=Path, default=ROOT / "results" / "likelihood-candidates" / "input_noise_forms.csv")
     args = ap.parse_args()
+    write_manifest(Path(args.out).parent, script_configuration())
     commit = git_commit(ROOT)
     cs = replace(StudyCalibration(), seed=args.seed, single=args.single, frequencies=tuple(args.frequencies),
                  likelihood=LikelihoodSettings(residual="motion"))

@@ -40,6 +40,8 @@ from pathlib import Path
 import numpy as np
 from _table import ADAPTATIONS
 
+from bayes_inerter.study.manifest import script_configuration, write_manifest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 VARIANTS = ("default", "adaptive", "scores", "blocks")
@@ -54,6 +56,7 @@ def main():
     ap.add_argument("--centres", default=None, help="a study folder whose two-port fits give the start's centres")
     ap.add_argument("--out", default=str(ROOT / "results" / "joint-mixing"))
     args = ap.parse_args()
+    write_manifest(Path(args.out), script_configuration())
 
     import emcee
     from tqdm import tqdm

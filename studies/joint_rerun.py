@@ -16,6 +16,8 @@ import sys
 import time
 from pathlib import Path
 
+from bayes_inerter.study.manifest import script_configuration, write_manifest
+
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -23,6 +25,7 @@ def main():
     ap.add_argument("--out", default="results/joint-rerun")
     ap.add_argument("--processes", type=int, default=2)
     args = ap.parse_args()
+    write_manifest(Path(args.out), script_configuration())
 
     from tqdm import tqdm
 

@@ -32,6 +32,7 @@ from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("A3@0.5", "B1@0.5", "A3@1", "A6@1", "B1@1.5", "A0@1.5")
@@ -80,6 +81,7 @@ def main() -> None:
     ap.add_argument("--accel-delay", type=float, default=0.0, help="s")
     ap.add_argument("--out", default=str(ROOT / "results" / "likelihood-candidates" / "law_viscous.csv"))
     args = ap.parse_args()
+    write_manifest(Path(args.out).parent, script_configuration())
     out = Path(args.out)
     device = PaperLike(force_delay=args.force_delay, accel_delay=args.accel_delay)
     rows = list(csv.DictReader(out.open())) if out.exists() else []

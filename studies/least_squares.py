@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from bayes_inerter.study.analysis import write_csv
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = {"control": ROOT / "results" / "full" / "least_squares.csv",
@@ -66,6 +67,7 @@ def main() -> int:
         for f in sorted({r["freq_hz"] for r in rows}):
             table.append(_summary(device, [r for r in rows if r["freq_hz"] == f], f"{f:g}"))
         table.append(_summary(device, rows, "all"))
+    write_manifest(OUT, script_configuration())
     write_csv(OUT / "summary.csv", table)
     import matplotlib
 

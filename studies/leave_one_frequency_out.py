@@ -28,6 +28,7 @@ from bayes_inerter.masses import resolve_masses
 from bayes_inerter.records import read_record
 from bayes_inerter.study.analysis import write_csv
 from bayes_inerter.study.prediction import predict_record
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "leave-one-frequency-out"
@@ -98,6 +99,7 @@ def main() -> int:
     ap.add_argument("--settings", nargs="+", default=["A3", "B2"])
     ap.add_argument("--out", default=str(ROOT / "runs" / "lofo"))
     args = ap.parse_args()
+    write_manifest(Path(args.out), script_configuration())
     for device, folder in SOURCES.items():
         missing = [s for s in args.settings for f in FREQS if not (folder / "records" / f"{s}_{f:g}Hz.csv").is_file()]
         if missing:

@@ -46,6 +46,7 @@ from scipy import linalg, optimize
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
 from bayes_inerter.records import GeneratorSettings, generate_record, lowpass
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 #: the fitted physical parameters (log scale), as in the two-port model
 NAMES = ("b", "f1_0", "c_f1", "f2_0", "c_f2", "c_n", "k_n", "c_B", "k_B")
@@ -257,6 +258,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    write_manifest(out, script_configuration())
     rows = []
     grid = [(s, f) for s in args.settings for f in args.freqs]
     path = out / "noise_free_bias.csv"

@@ -51,6 +51,7 @@ from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.inference.summaries.results import hdi
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.paper_like import paper_like_record
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 FIELDS = ("kind", "setting", "freq_hz", "seed", "candidate", "b_true", "b_median", "hdi94_lo", "hdi94_hi",
@@ -119,6 +120,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    write_manifest(out, script_configuration())
     path = out / "fits.csv"
     done = set()
     if path.exists():

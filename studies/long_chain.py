@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bayes_inerter.study.manifest import script_configuration, write_manifest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -33,6 +35,7 @@ def main():
     ap.add_argument("--processes", type=int, default=1)
     ap.add_argument("--out", default=str(ROOT / "runs" / "long-chain"))
     args = ap.parse_args()
+    write_manifest(Path(args.out), script_configuration())
 
     import emcee
     import h5py

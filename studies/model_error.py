@@ -56,6 +56,7 @@ from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, find_start, l
 from bayes_inerter.records.generator import GeneratorSettings, paper_record
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 from bayes_inerter.records.sensitivity import SensorCalibration
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 Z50, Z94 = 0.6744897501960817, 1.8807936081512509  # normal quantiles of 0.75 and 0.97
 #: What the script measures unless told: today's posterior, each share alone and the
@@ -326,6 +327,7 @@ def main() -> None:
         sys.exit(f"error: unknown methods {', '.join(sorted(unknown))}; choose from {', '.join(METHODS)}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    write_manifest(out, script_configuration())
     partial = out / "replicates.partial.csv"  # each replicate's rows as it ends: a rerun goes on from them
     rows = _read(partial)
     done = {int(r["replicate"]) for r in rows}

@@ -55,6 +55,7 @@ from bayes_inerter.inference.sampling.convergence import Convergence
 from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.inference.summaries.results import hdi
 from bayes_inerter.records.paper_like import PaperLike, laboratory, paper_like_record
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 LEVELS = (0.94, 0.5)
@@ -181,6 +182,7 @@ def main(argv=None) -> int:
     ap.add_argument("--freq", type=float, default=None, help="only the replicates driven at this frequency, Hz")
     ap.add_argument("--summarise", action="store_true", help="only write the tables from the replicates there")
     args = ap.parse_args(argv)
+    write_manifest(Path(args.out), script_configuration())
     try:
         likelihood_changes(args.likelihood)
     except (ValueError, TypeError) as exc:

@@ -26,6 +26,7 @@ from bayes_inerter.executor import make_executor
 from bayes_inerter.inference.identify import identify
 from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 
 def one(job) -> dict:
@@ -65,6 +66,7 @@ def main() -> None:
             print(f"{n}/{len(jobs)} records ({time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    write_manifest(out, script_configuration())
     with open(out / "phi.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()

@@ -31,6 +31,7 @@ from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.posterior.priors import LogNormal, LogUniform, Uniform
 from bayes_inerter.records import read_record
 from bayes_inerter.study.analysis import write_csv
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "prior-sensitivity"
@@ -76,6 +77,7 @@ def main() -> int:
     ap.add_argument("--report-only", action="store_true",
                     help="write the figure and SECTION.md again from sensitivity.csv, fitting nothing")
     args = ap.parse_args()
+    write_manifest(Path(args.out), script_configuration())
     if args.report_only:
         text = (RESULTS / "sensitivity.csv").read_text().splitlines()
         rows = [{k: _value(v) for k, v in r.items()} for r in csv.DictReader(text)]

@@ -11,6 +11,7 @@ from pathlib import Path
 from bayes_inerter import paper_parameters
 from bayes_inerter.plots import plot_records
 from bayes_inerter.records import generate_record, write_record
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "records"
 
@@ -22,6 +23,7 @@ def main():
     ap.add_argument("--records", default=None, help="a folder to write the two records into (default: none)")
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
+    write_manifest(OUT, script_configuration())
     records, labels = [], []
     for seed, (name, freq) in enumerate((("A0", 0.5), ("B2", 1.5))):
         rec = generate_record(paper_parameters(name), freq, rng=seed, setting_name=name)

@@ -18,6 +18,7 @@ from pathlib import Path
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import Convergence, fit_record
 from bayes_inerter.records import generate_record
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "recovery"
 CASES = (("A1", 1.0), ("A2", 1.0), ("A0", 0.5), ("B2", 1.5))
@@ -32,6 +33,7 @@ def main():
     ap.add_argument("--processes", type=int, default=2)
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
+    write_manifest(OUT, script_configuration())
     rows, shrink_rows = [], []
     for seed, (name, freq) in enumerate(CASES):
         truth = paper_parameters(name)

@@ -44,6 +44,7 @@ from bayes_inerter.study.structure import (
     IDENTIFICATION_SD,
     COMMON_SD,
 )
+from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 FULL = ROOT / "results" / "full"
@@ -87,6 +88,7 @@ def main() -> int:
             print(f"error: {need} is missing; run python studies/study.py first", file=sys.stderr)
             return 1
     OUT.mkdir(parents=True, exist_ok=True)
+    write_manifest(OUT, script_configuration())
     priors = StructurePriors()
     with np.load(FULL / "joint" / "b_draws.npz") as npz:
         draws = {k: npz[k] for k in npz.files}

@@ -15,12 +15,13 @@ import datetime
 import json
 import os
 import subprocess
+import sys
 import uuid
 from pathlib import Path
 
 from ..inference.fit import versions
 
-__all__ = ["MANIFEST", "source_commit", "manifest_entry", "write_manifest"]
+__all__ = ["MANIFEST", "RUN", "source_commit", "manifest_entry", "write_manifest", "script_configuration"]
 
 #: The file's name in a results folder.
 MANIFEST = "manifest.json"
@@ -77,3 +78,8 @@ def write_manifest(folder, configuration: dict) -> Path:
     tmp.write_text(json.dumps({"runs": runs}, indent=1) + "\n")
     os.replace(tmp, path)
     return path
+
+
+def script_configuration() -> dict:
+    """A script's configuration as its command line gave it: the script and its arguments."""
+    return {"script": Path(sys.argv[0]).name, "arguments": sys.argv[1:]}
