@@ -18,6 +18,7 @@ __all__ = [
     "TABLE_I",
     "FREQUENCIES_HZ",
     "setting",
+    "setting_and_frequency",
     "paper_parameters",
     "theoretical_inertance",
     "apparent_inertance",
@@ -146,6 +147,20 @@ def setting(name: str) -> FlywheelSetting:
     except KeyError:
         known = ", ".join(SETTINGS)
         raise ValueError(f"unknown flywheel setting {name!r}; known settings: {known}") from None
+
+
+def setting_and_frequency(text: str) -> tuple[str, float]:
+    """(setting, drive frequency in Hz) from ``SETTING:FREQUENCY`` ("A3:1"), the form the
+    studies' and benchmarks' ``--record`` take (an argparse ``type``: its ValueError is
+    a usage error there). The setting is upper-cased, not looked up."""
+    try:
+        name, freq = text.split(":")
+        value = float(freq)
+    except ValueError:
+        raise ValueError(f"expected SETTING:FREQUENCY such as A3:1, got {text!r}") from None
+    if not name or not value > 0:
+        raise ValueError(f"expected SETTING:FREQUENCY with a positive frequency in Hz, got {text!r}")
+    return name.upper(), value
 
 
 def _disc_inertia(mass: float, diameter: float) -> float:

@@ -27,10 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "studies"))
+from bayes_inerter.device import setting_and_frequency
+from bayes_inerter.inference.sampling.adaptation import NAMED
+from bayes_inerter.study.analysis import write_csv
 
-from _table import ADAPTATIONS, record_arg, write_rows  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 VARIANTS = ("adaptive", "ensemble-only", "scores", "blocks")
 
@@ -47,7 +48,7 @@ def _run(job):
     t0 = time.perf_counter()
     run = run_sampler(pm, Path(folder) / f"{setting}_{freq:g}_{variant}.h5", seed=seed, start=start, fresh=True,
                       convergence=Convergence(max_steps=max_steps),
-                      adaptation=Adaptation(**ADAPTATIONS[variant]) if variant in ADAPTATIONS else None)
+                      adaptation=Adaptation(**NAMED[variant]) if variant in NAMED else None)
     seconds = time.perf_counter() - t0
     burn = run.warmup + int(2 * np.max(run.tau))
     b = np.percentile(np.exp(run.chain(discard=burn)[..., pm.names.index("b")]), [3, 50, 97])
@@ -69,8 +70,8 @@ def _start(item, seed):
     from bayes_inerter.inference.sampling.optimize import find_start
     from bayes_inerter.records.generator import paper_record
 
-    setting, freq = record_arg(item)
     try:
+        setting, freq = setting_and_frequency(item)
         rec = paper_record(setting, freq, seed=0)
     except ValueError as exc:
         sys.exit(f"error: --record {item!r} is not a record of the paper grid ({exc})")
@@ -92,7 +93,8 @@ def main():
         for setting, freq, start in starts:
             jobs = [(setting, freq, v, args.seed, args.max_steps, start, folder) for v in args.variants]
             rows += pool.map(_run, jobs)
-    write_rows(args.out, rows)
+    write_csv(Path(args.out), rows)
+    print(f"wrote {args.out}")
     for i in range(0, len(rows), 2):
         a, e = rows[i], rows[i + 1]
         print(f"{a['record']}: {e['variant']} / {a['variant']} = {e['steps'] / a['steps']:.2f} x the steps, "

@@ -27,10 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "studies"))
+from bayes_inerter.device import setting_and_frequency
+from bayes_inerter.study.analysis import write_csv
 
-from _table import record_arg, write_rows  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 START = ROOT / "results" / "joint-mixing" / "blocks" / "start.npy"
 
@@ -90,7 +90,7 @@ def _record_chain(job):
     from bayes_inerter.records.generator import paper_record
 
     item, steps, seed, folder = job
-    setting, freq = record_arg(item)
+    setting, freq = setting_and_frequency(item)
     pm = PosteriorModel(paper_record(setting, freq, seed=0))  # checked in main() before any sampling
     start = find_start(pm, np.random.default_rng(seed))
     t0 = time.perf_counter()
@@ -138,7 +138,7 @@ def main():
 
     for item in items:  # a bad name ends here, before any sampling
         try:
-            paper_record(*record_arg(item), seed=0)
+            paper_record(*setting_and_frequency(item), seed=0)
         except ValueError as exc:
             sys.exit(f"error: --record {item!r} is not a record of the paper grid ({exc})")
     rows = []
@@ -149,7 +149,8 @@ def main():
             chains.append(_joint_chain(args.joint, args.steps, args.seed, folder))
         for name, chain, log_prob, names, seconds in chains:
             rows += rows_for(name, chain, log_prob, [str(n) for n in names], args.shares, seconds)
-    write_rows(args.out, rows)
+    write_csv(Path(args.out), rows)
+    print(f"wrote {args.out}")
     base = args.shares[0]
     for name in dict.fromkeys(r["chain"] for r in rows):
         mine = {r["warmup_share"]: r["stop"] for r in rows if r["chain"] == name}

@@ -11,29 +11,25 @@ import sys
 from pathlib import Path
 
 from bayes_inerter import SETTINGS
+from bayes_inerter.device import setting_and_frequency
 from bayes_inerter.executor import make_executor
+from bayes_inerter.inference.sampling.adaptation import NAMED
 from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 #: The paper's drive frequencies, Hz.
 FREQUENCIES = (0.5, 1.0, 1.5)
 
-#: The adaptive samplers compared side by side, by name: keyword arguments of
-#: ``sampler.Adaptation`` (``adaptive``: one t in the sampler's coordinates, the default
-#: until 2026-11-25; ``scores``: the t in normal scores; ``blocks``: that and block
-#: moves, the default since).
-ADAPTATIONS = {"adaptive": {"knots": None, "blocks": 0.0},  # one t: the default until 2026-11-25
-               "scores": {"knots": 200, "blocks": 0.0},
-               "blocks": {"knots": 200, "blocks": 0.5}}  # the default since
+#: The adaptive samplers compared side by side, by name (``adaptation.NAMED``).
+ADAPTATIONS = NAMED
 
 
 def record_arg(item: str) -> tuple[str, float]:
     """(setting, frequency in Hz) from a ``--record`` value SETTING:FREQUENCY ("A3:1");
     anything else ends the script with a one-line error."""
     try:
-        setting, freq = item.split(":")
-        return setting.upper(), float(freq)
-    except ValueError:
-        sys.exit(f"error: --record takes SETTING:FREQUENCY, got {item!r}")
+        return setting_and_frequency(item)
+    except ValueError as exc:
+        sys.exit(f"error: --record: {exc}")
 
 
 def likelihood_changes(text: str) -> dict:

@@ -95,3 +95,12 @@ def test_apparent_inertance_is_what_the_nut_and_inerter_show_together(name, k_n)
     # to first order in k_n / (omega c_n): the neglected part is its square, 0.02 at 1e6
     np.testing.assert_allclose(app - b, seen - b, rtol=0.03)
     np.testing.assert_allclose(app, seen, rtol=1e-4)
+
+
+def test_a_record_named_setting_colon_frequency_is_read_and_a_bad_one_refused():
+    from bayes_inerter.device import setting_and_frequency
+
+    assert setting_and_frequency("a3:1") == ("A3", 1.0) and setting_and_frequency("B2:1.5") == ("B2", 1.5)
+    for bad in ("A3", "A3:x", ":1", "A3:0", "A3:1:2"):
+        with pytest.raises(ValueError, match="SETTING:FREQUENCY"):
+            setting_and_frequency(bad)

@@ -25,7 +25,15 @@ from .marginals import KNOTS
 from .moves import BlockMove, IndependenceMove
 from .transport import TriangularScores
 
-__all__ = ["Adaptation", "Schedule", "STRETCH", "FIT_MAX_STEPS"]
+__all__ = ["Adaptation", "Schedule", "STRETCH", "FIT_MAX_STEPS", "NAMED"]
+
+#: The adaptive samplers that studies and benchmarks compare side by side, by name:
+#: keyword arguments of :class:`Adaptation` (``adaptive``: one t in the sampler's
+#: coordinates; ``scores``: the t in normal scores; ``blocks``: that and block moves,
+#: the default).
+NAMED = {"adaptive": {"knots": None, "blocks": 0.0},
+         "scores": {"knots": 200, "blocks": 0.0},
+         "blocks": {"knots": 200, "blocks": 0.5}}
 
 #: The fitted moves learn from at most this many of the chain's steps after its
 #: transient: a longer chain is thinned evenly to them (every ceil(n / FIT_MAX_STEPS)-th
