@@ -9,7 +9,7 @@ import pytest
 from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
-                                                  coverage_rows, coverage_so_far, finished_replicates,
+                                                  coverage_by_frequency, coverage_rows, coverage_so_far, finished_replicates,
                                                   inspect_replicate, raise_cap, rank_correlations, replicate_device,
                                                   study_replicate, write_coverage_so_far, write_study_calibration)
 
@@ -67,6 +67,23 @@ def test_coverage_so_far_counts_every_chain_and_the_converged_apart(tmp_path):
     assert [r["replicate"] for r in finished_replicates(tmp_path)] == [0, 1, 2, 3]
     assert write_coverage_so_far(tmp_path) == coverage_so_far(results)
     assert (tmp_path / "coverage_so_far.csv").read_text().count("\n") == 1 + len(rows)
+    assert not (tmp_path / "coverage_by_frequency.csv").exists()  # not a single-record calibration's folder
+
+
+def test_coverage_by_frequency_splits_the_replicates_as_they_were_fitted(tmp_path):
+    """Replicate k of a single-record calibration is fitted at frequencies[k % 3]."""
+    results = [_fake(k, k % 3 != 1) for k in range(6)]  # the 1 Hz ones miss
+    for r in results:
+        r["converged"] = True
+    rows = {(r["freq_hz"], r["chains"], r["parameter"]): r for r in coverage_by_frequency(results, (0.5, 1, 1.5))}
+    assert [rows[f, "all", "b"]["held_94"] for f in (0.5, 1.0, 1.5)] == [2, 0, 2]
+    assert rows[1.0, "all", "b"]["replicates"] == 2
+    (tmp_path / "replicates").mkdir()
+    for r in results:
+        (tmp_path / "replicates" / f"{r['replicate']:04d}.json").write_text(json.dumps(r))
+    (tmp_path / "settings.json").write_text(json.dumps({"single": True, "frequencies": [0.5, 1.0, 1.5]}))
+    write_coverage_so_far(tmp_path)
+    assert (tmp_path / "coverage_by_frequency.csv").read_text().count("\n") == 1 + len(rows)
 
 
 def test_rank_correlations_finds_parameters_whose_ranks_move_together(tmp_path):

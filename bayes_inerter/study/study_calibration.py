@@ -68,7 +68,7 @@ from ..simulate import SimulationError
 
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
-           "finished_replicates", "coverage_so_far", "write_coverage_so_far", "rank_correlations",
+           "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
            "RANK_CORRELATION"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
@@ -378,16 +378,35 @@ def rank_correlations(results: list[dict], threshold: float = RANK_CORRELATION) 
     return sorted(rows, key=lambda row: -abs(row["r"]))
 
 
+def coverage_by_frequency(results: list[dict], frequencies) -> list[dict]:
+    """:func:`coverage_so_far` of a single-record calibration split by drive frequency
+    (replicate k is fitted at ``frequencies[k % len(frequencies)]``): each row of it with
+    ``freq_hz`` in front. Where the coverage departs from nominal only at some
+    frequencies, the pooled count hides it."""
+    frequencies = tuple(float(f) for f in frequencies)
+    rows = []
+    for i, f in enumerate(frequencies):
+        group = [r for r in results if int(r["replicate"]) % len(frequencies) == i]
+        rows += [{"freq_hz": f, **row} for row in coverage_so_far(group)]
+    return rows
+
+
 def write_coverage_so_far(out) -> list[dict]:
     """``out``/coverage_so_far.csv from :func:`coverage_so_far` of the replicates
     finished in ``out``, and ``out``/rank_correlations.csv from
-    :func:`rank_correlations`; the coverage rows."""
+    :func:`rank_correlations`; for a single-record calibration (its settings.json says
+    ``single``) also ``out``/coverage_by_frequency.csv (:func:`coverage_by_frequency`).
+    Returns the coverage rows."""
     from .analysis import write_csv
 
     finished = finished_replicates(out)
     rows = coverage_so_far(finished)
     write_csv(Path(out) / "coverage_so_far.csv", rows)
     write_csv(Path(out) / "rank_correlations.csv", rank_correlations(finished), fields=_RANK_FIELDS)
+    settings_file = Path(out) / "settings.json"
+    saved = json.loads(settings_file.read_text()) if settings_file.exists() else {}
+    if saved.get("single") and saved.get("frequencies"):
+        write_csv(Path(out) / "coverage_by_frequency.csv", coverage_by_frequency(finished, saved["frequencies"]))
     return rows
 
 
