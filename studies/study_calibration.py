@@ -16,7 +16,8 @@ again (``study_calibration.raise_cap``; the others' chains are the same under an
 
 ``--summarise`` writes coverage_so_far.csv from the replicates finished in ``--out``
 (counts over every chain and over the converged ones), for a run still in chunks, and
-rank_correlations.csv: the parameters whose truths' ranks move together.
+rank_correlations.csv: the parameters whose truths' ranks move together; a single-record
+calibration's coverage_by_frequency.csv: the same counts at each drive frequency.
 ``--single`` fits each replicate's one record alone (its frequency ``freqs[k % n]``),
 ``--residual`` chooses the likelihood, ``--input-noise N`` takes N draws of the
 drivetrain's input noise (``LikelihoodSettings.input_noise``; 0 turns it off), ``--converge``
@@ -85,7 +86,8 @@ if __name__ == "__main__":
         for pair in rank_correlations(finished_replicates(args.out)):
             print(f"ranks of {pair['parameter']} and {pair['with']} move together (r {pair['r']:+.2f}): "
                   "their counts are not independent tests")
-        print(f"wrote {Path(args.out) / 'coverage_so_far.csv'} and rank_correlations.csv")
+        print(f"wrote {Path(args.out) / 'coverage_so_far.csv'} and rank_correlations.csv"
+              + (" and coverage_by_frequency.csv" if (Path(args.out) / "coverage_by_frequency.csv").exists() else ""))
         sys.exit(0)
     try:
         if args.replicates < 1:
