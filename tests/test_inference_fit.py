@@ -64,6 +64,8 @@ def test_fit_writes_every_output(tmp_path, ar1_record_file, capsys):
                  "phi.png", "fit.json"):
         assert (out / name).exists(), name
     assert not (out / "loops.png").exists()  # the time-domain likelihoods predict no force
+    assert (f"wrote {out}/summary.csv, posterior.nc, loo.json, chain.h5 (and its twin), corner.png, bands.png, "
+            "trace.png, phi.png, fit.json") in text.splitlines()
     header = (out / "summary.csv").read_text().splitlines()[0]
     assert header == "name,kind,mean,sd,hdi_3%,hdi_97%,r_hat,ess_bulk,ess_tail,flag"
     import arviz as az
@@ -97,6 +99,16 @@ def test_fit_writes_every_output(tmp_path, ar1_record_file, capsys):
     assert f"{iv['lo']:.6g} to {iv['hi']:.6g}" in text and "the posterior alone" in text
 
 
+
+
+def test_fit_names_the_figures_it_drew_not_those_the_folder_holds(tmp_path, ar1_record_file, capsys):
+    out = tmp_path / "fit"
+    out.mkdir()
+    (out / "corner.png").write_bytes(b"an earlier run's")
+    assert main(["fit", str(ar1_record_file), "--out", str(out), "--steps", "4", "--walkers", "24",
+                 "--processes", "1", "--no-plots", *AR1]) == 0
+    wrote = [line for line in capsys.readouterr().out.splitlines() if line.startswith("wrote ")]
+    assert wrote == [f"wrote {out}/summary.csv, posterior.nc, loo.json, chain.h5 (and its twin), fit.json"]
 
 def test_the_default_likelihoods_fit_writes_every_output(tmp_path, record_file, capsys):
     """The default likelihood, motion in, force out: its own parameters and the bearing's

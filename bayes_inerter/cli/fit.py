@@ -6,11 +6,6 @@ from pathlib import Path
 
 __all__ = ["cmd_fit"]
 
-#: The figures a fit may draw, in the order ``fit`` names those it drew (loops.png for
-#: the motion-in likelihood only).
-FIGURES = ("corner.png", "bands.png", "trace.png", "phi.png", "loops.png")
-
-
 def _percent_interval(lo: float, hi: float) -> str:
     """'lo % to hi %' with the fewest decimals (2 to 8) that tell the two apart."""
     for d in range(2, 9):
@@ -73,8 +68,7 @@ def cmd_fit(args) -> int:
         print(f"warning: {w.message}")
     if result.converged:
         print("converged")
-    drawn = [] if args.no_plots else [n for n in FIGURES if (Path(args.out) / n).exists()]
-    figures = "".join(f"{n}, " for n in drawn)
+    figures = "".join(f"{n}, " for n in result.figures)  # what this fit drew, not what the folder holds
     print(f"wrote {args.out}/summary.csv, posterior.nc, loo.json, chain.h5 (and its twin), {figures}fit.json")
     return EXIT_OK
 

@@ -86,6 +86,8 @@ class FitResult:
     tau_by_parameter: dict = field(default_factory=dict)
     #: the sampler's coordinates, described (fit.json's "coordinates")
     coordinates: str = ""
+    #: the figures this fit drew into ``out``, by file name (none with ``plots=False``)
+    figures: tuple = ()
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -210,9 +212,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                                         else None, phi=float(np.median(sample.phi)),
                                         settings=interval_settings, rng=np.random.default_rng(seed + 2))
         got = _finish(out, pm, got, steps, convergence, b_identified=b_interval.identified)
-        if plots:
-            _write_plots(out, pm, sample, sims, label=_label(pm, name), warmup=int(run.warmup),
-                         b_interval=b_interval, b_theory=b_theory)
+        figures = _write_plots(out, pm, sample, sims, label=_label(pm, name), warmup=int(run.warmup),
+                               b_interval=b_interval, b_theory=b_theory) if plots else ()
         info = _run_info(model, pm, got, seed, {
             "m_s": pm.m_s, "m_B": pm.m_B, "masses": masses.as_dict(), "b_theory_device_file": b_theory,
             "drive_frequency": drive.as_dict(),
@@ -225,7 +226,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                          info["timings_s"], got.shrink, run.recovered, warnings=got.ended, masses=masses,
                          b_theory=b_theory, b_interval=b_interval, drive=drive, burn_in=sample.burn,
                          warmup=int(run.warmup), thin=sample.thin, loo=loo, tau_by_parameter=info["tau"],
-                         coordinates=info["coordinates"])
+                         coordinates=info["coordinates"], figures=figures)
 
 
 def _interval_settings(interval) -> IntervalSettings:
@@ -490,11 +491,12 @@ def _loop_draws(theta: np.ndarray, ndim: int) -> np.ndarray:
 
 
 def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, warmup: int, b_interval=None,
-                 b_theory: float | None = None) -> None:
+                 b_theory: float | None = None) -> tuple:
     """corner.png (with b's reported interval, where it identifies b, and the device
     file's theoretical b), bands.png, trace.png (naming the burn-in as ``fit`` prints it),
     phi.png, and for the motion-in likelihood loops.png (the force against displacement
-    and velocity over a steady period, measured and predicted, ``loops``)."""
+    and velocity over a steady period, measured and predicted, ``loops``). Returns the
+    names of the figures drawn."""
     import matplotlib.pyplot as plt
 
     from .summaries.loops import period_loops
@@ -525,3 +527,4 @@ def _write_plots(out: Path, pm: PosteriorModel, sample, sims, *, label: str, war
     for name, fig in figs.items():
         fig.savefig(out / name, dpi=100)
         plt.close(fig)
+    return tuple(figs)
