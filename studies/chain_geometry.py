@@ -44,7 +44,6 @@ from _table import git_commit, read_rows, write_rows
 from bayes_inerter.inference import LikelihoodSettings, PosteriorModel, fit_record
 from bayes_inerter.inference.sampling.adaptation import Adaptation
 from bayes_inerter.inference.sampling.checkpoint import read_chain, stored_identity
-from bayes_inerter.inference.sampling.convergence import integrated_time
 from bayes_inerter.inference.sampling.coordinates import default_coordinates
 from bayes_inerter.inference.sampling.moves import IndependenceMove
 from bayes_inerter.inference.sampling.transport import TriangularScores, quadratic_features

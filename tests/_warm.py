@@ -9,8 +9,6 @@ itself, both at once; with a warm cache each takes about two seconds."""
 
 import sys
 
-import numpy as np
-
 
 def records():
     """A short record, then the default likelihood's log-probability of it (motion in,

@@ -543,7 +543,7 @@ def test_the_motions_noise_through_a_sticking_rotation_is_counted_beyond_the_lin
 
 
 def test_input_noise_needs_whole_draws_and_the_reference():
-    from bayes_inerter.inference.posterior.likelihood import INPUT_NOISE_DRAWS, LikelihoodSettings
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 
     with pytest.raises(ValueError, match="whole number"):
         LikelihoodSettings(input_noise=-1)

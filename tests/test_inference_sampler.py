@@ -8,8 +8,7 @@ import pytest
 from conftest import normal_posterior
 
 from bayes_inerter.inference import Convergence
-from bayes_inerter.inference.sampling.moves import BlockMove
-from bayes_inerter.inference.sampling.sampler import Adaptation, run_sampler, transient
+from bayes_inerter.inference.sampling.sampler import Adaptation, run_sampler
 
 CONV = Convergence(check_every=40, n_tau=20, min_ess=200, max_steps=2000)
 

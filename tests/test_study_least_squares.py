@@ -5,8 +5,6 @@ import json
 import math
 from pathlib import Path
 
-import pytest
-
 from bayes_inerter.device import SETTINGS
 from bayes_inerter.inference.summaries.interval import InertanceInterval
 from bayes_inerter.study import least_squares as ls_mod
