@@ -29,6 +29,8 @@ MANIFEST = "manifest.json"
 _SOURCE = Path(__file__).resolve().parents[2]
 #: This process's run: a pid may come again in a later session, a token does not.
 RUN = uuid.uuid4().hex
+#: (manifest path, configuration) this run has written its entry for.
+_WRITTEN: set = set()
 
 
 def source_commit(folder: Path = _SOURCE) -> str | None:
@@ -64,6 +66,9 @@ def write_manifest(folder, configuration: dict) -> Path:
     file's path."""
     path = Path(folder) / MANIFEST
     configuration = json.loads(json.dumps(configuration, default=repr))  # as the file will hold it
+    key = (str(path.resolve()), json.dumps(configuration, sort_keys=True))
+    if key in _WRITTEN and path.exists():  # a study writing row by row reads the file once
+        return path
     runs = []
     if path.exists():
         try:
@@ -71,12 +76,14 @@ def write_manifest(folder, configuration: dict) -> Path:
         except (ValueError, KeyError, TypeError):
             raise ValueError(f"{path} is not a manifest this package wrote; move it aside") from None
     if any(r.get("run") == RUN and r.get("configuration") == configuration for r in runs):
+        _WRITTEN.add(key)
         return path
     runs.append(manifest_entry(configuration))
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{MANIFEST}.{os.getpid()}.tmp")
     tmp.write_text(json.dumps({"runs": runs}, indent=1) + "\n")
     os.replace(tmp, path)
+    _WRITTEN.add(key)
     return path
 
 
