@@ -1,31 +1,19 @@
 """What other experiments would identify (frequency, amplitude, sensor band and noise),
 and what a Stribeck hump or nut backlash in the device does to the identified b;
-Laplace approximations, no sampling. Writes results/design/ (REPORT.md, design.csv,
-richer_truth.csv, design.png).
+Laplace approximations, no sampling (``bayes_inerter.study.design``). Writes
+results/design/ (REPORT.md, design.csv, richer_truth.csv, design.png, one JSON per case
+in cases/, reused by a rerun).
 
-    python studies/design.py [--seed 0]
+    python studies/design.py [--seed 0] [--settings A0 A3 B2] [--processes 2]
 """
 
-import argparse
 import sys
 from pathlib import Path
 
-from tqdm import tqdm
-
-from bayes_inerter.study.design import run_design
+from bayes_inerter.cli.study_script import study_main
+from bayes_inerter.study import design
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "design"
 
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args()
-    bar = tqdm(desc="design", unit="case", file=sys.stderr)
-
-    def progress(done, total):
-        bar.total = total
-        bar.update(done - bar.n)
-
-    result = run_design(OUT, seed=args.seed, progress=progress)
-    bar.close()
-    print(f"wrote {result['report']}")
+    sys.exit(study_main(design, out=OUT, doc=__doc__))

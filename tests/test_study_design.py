@@ -1,6 +1,7 @@
 """Design sensitivity and richer-truth shifts (Laplace approximations)."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -8,8 +9,9 @@ import pytest
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
 from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+from bayes_inerter.executor import Serial
 from bayes_inerter.records import GeneratorSettings, generate_record
-from bayes_inerter.study.design import Design, design_contraction, noise_at, richer_truth_shift, run_design
+from bayes_inerter.study.design import Config, Design, design_contraction, noise_at, richer_truth_shift, run
 
 SHORT = GeneratorSettings(duration=3.0, ramp=1.0)
 
@@ -35,16 +37,19 @@ def test_a_quieter_sensor_identifies_b_better():
 
 
 def test_run_design_writes_tables_figure_and_report(tmp_path):
-    res = run_design(tmp_path / "design", settings=("A1",), designs=(Design("base"), Design("2 Hz", freq=2.0)),
-                     richer=({},), richer_settings=("A1",), generator=SHORT, maxiter=150)
+    config = Config(settings=("A1",), designs=(Design("base"), Design("2 Hz", freq=2.0)), richer=({},),
+                    richer_settings=("A1",), generator=SHORT, maxiter=150)
+    res = run(config, tmp_path / "design", Serial())
+    assert not res.failed and {p.name for p in res.written} == {"design.csv", "richer_truth.csv", "design.png",
+                                                                 "REPORT.md"}
     for name in ("design.csv", "richer_truth.csv", "design.png", "REPORT.md"):
         assert (tmp_path / "design" / name).is_file()
-    (own,) = res["richer"]
+    (own,) = res.values["richer"]
     assert own["truth"] == "model's own"
     # the model's own device: the optimum lies within a few Laplace sd of the generating b
     assert abs(own["shift_sd"]) < 4
-    assert "richer device" in res["report"].read_text()
-    assert [r["design"] for r in res["design"]] == ["base", "2 Hz"]
+    assert "richer device" in (tmp_path / "design" / "REPORT.md").read_text()
+    assert [r["design"] for r in res.values["design"]] == ["base", "2 Hz"]
 
 
 @pytest.mark.slow
@@ -55,11 +60,33 @@ def test_a_stribeck_device_is_fitted_too():
 
 
 def test_run_design_reuses_its_cases_and_refuses_other_settings(tmp_path):
-    kw = dict(settings=("A1",), designs=(Design("base"),), richer=(), generator=SHORT, maxiter=50)
-    first = run_design(tmp_path / "d", **kw)
+    config = Config(settings=("A1",), designs=(Design("base"),), richer=(), generator=SHORT, maxiter=50)
+    first = run(config, tmp_path / "d", Serial())
     (case,) = (tmp_path / "d" / "cases").glob("*.json")
     stamp = case.stat().st_mtime_ns
-    again = run_design(tmp_path / "d", **kw)
-    assert again["design"] == first["design"] and case.stat().st_mtime_ns == stamp  # read, not computed again
+    again = run(config, tmp_path / "d", Serial())
+    assert again.values["design"] == first.values["design"] and case.stat().st_mtime_ns == stamp  # read, not redone
     with pytest.raises(ValueError, match="other settings"):
-        run_design(tmp_path / "d", **{**kw, "seed": 1})
+        run(replace(config, seed=1), tmp_path / "d", Serial())
+
+
+def test_a_failed_case_is_named_and_the_others_are_written(tmp_path, monkeypatch):
+    import bayes_inerter.study.design as design
+
+    def broken(what, setting, **kw):
+        if what.label == "2 Hz":
+            raise RuntimeError("simulator refused")
+        return real(what, setting, **kw)
+
+    real = design.design_contraction
+    monkeypatch.setattr(design, "design_contraction", broken)
+    config = Config(settings=("A1",), designs=(Design("base"), Design("2 Hz", freq=2.0)), richer=(),
+                    generator=SHORT, maxiter=50)
+    got = run(config, tmp_path / "d", Serial())
+    assert [name for name, _ in got.failed] == ["design-A1-2_Hz"] and "refused" in got.failed[0][1]
+    assert [r["design"] for r in got.values["design"]] == ["base"]
+
+
+def test_the_configuration_refuses_an_unknown_setting():
+    with pytest.raises(ValueError, match="unknown settings Z9"):
+        Config(settings=("A1", "Z9"))

@@ -16,6 +16,9 @@ Two questions the paper's experiments leave open, answered cheaply, without samp
   with a Stribeck hump or nut backlash, which the two-port model does not have; the
   model's optimum of b (``optimize.find_start``) and its Laplace sd say how far, in
   kg and in posterior sd, the unmodelled physics moves the identified inertance.
+
+:class:`Config` and :func:`run` make the study of results/design (``studies/design.py``,
+through ``cli.study_script``): every case, on an executor, into one folder.
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from dataclasses import dataclass
+import os
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -32,9 +36,10 @@ from ..device import paper_parameters
 from ..inference.posterior.model import LikelihoodSettings, PosteriorModel
 from ..inference.sampling.optimize import NM_MAXITER, laplace_covariance, local_optimum
 from ..records.generator import GeneratorSettings, generate_record
+from .output import StudyOutput
 
 __all__ = ["Design", "DEFAULT_DESIGNS", "DEFAULT_RICHER", "design_contraction", "richer_truth_shift", "noise_at",
-           "run_design"]
+           "Config", "run"]
 
 
 @dataclass(frozen=True)
@@ -148,15 +153,80 @@ def richer_truth_shift(setting: str, freq: float, truth: dict, *, seed: int = 0,
 DEFAULT_RICHER = ({}, {"friction": "stribeck"}, {"backlash": 2e-5})
 
 
-def run_design(out, *, settings=("A0", "A3", "B2"), designs=DEFAULT_DESIGNS, richer=DEFAULT_RICHER,
-               richer_settings=("A3",), richer_freq: float = 1.0, seed: int = 0, generator: GeneratorSettings | None = None,
-               maxiter: int = NM_MAXITER, progress=None) -> dict:
-    """Both questions for ``settings``, written into ``out``: design.csv,
-    richer_truth.csv, design.png and REPORT.md (each case also as a JSON file in
-    ``out``/cases, reused by a rerun); the richer devices on ``richer_settings``
-    only (a record with backlash takes minutes to generate: the dead zone's switches
-    make the truth simulator take small steps). ``maxiter``: Nelder-Mead iterations of
-    each richer-truth optimum. ``progress(done, total)`` hears each case."""
+@dataclass(frozen=True)
+class Config:
+    """The design study as ``studies/design.py`` runs it.
+
+    Attributes
+    ----------
+    settings : flywheel settings whose designs are tried.
+    designs : the candidate experiments (:data:`DEFAULT_DESIGNS`).
+    richer : the richer devices, each a dict of ``GeneratorSettings`` changes
+        (:data:`DEFAULT_RICHER`; ``{}`` is the model's own device, the control).
+    richer_settings : settings the richer devices are tried on (a record with backlash
+        takes minutes to generate: the dead zone's switches make the truth simulator
+        take small steps).
+    richer_freq : their drive frequency, Hz.
+    seed : the records' noise seed.
+    generator : how records are made (None: ``GeneratorSettings()``).
+    maxiter : Nelder-Mead iterations of each optimum.
+    """
+
+    settings: tuple[str, ...] = field(default=("A0", "A3", "B2"), metadata={"help": "flywheel settings"})
+    designs: tuple = DEFAULT_DESIGNS
+    richer: tuple = DEFAULT_RICHER
+    richer_settings: tuple[str, ...] = field(default=("A3",), metadata={"help": "settings of the richer devices"})
+    richer_freq: float = field(default=1.0, metadata={"help": "the richer devices' drive frequency, Hz"})
+    seed: int = field(default=0, metadata={"help": "the records' noise seed"})
+    generator: GeneratorSettings | None = None
+    maxiter: int = field(default=NM_MAXITER, metadata={"help": "Nelder-Mead iterations of each optimum"})
+
+    def __post_init__(self) -> None:
+        from ..device import SETTINGS
+
+        object.__setattr__(self, "settings", tuple(self.settings))
+        object.__setattr__(self, "richer_settings", tuple(self.richer_settings))
+        unknown = sorted(set(self.settings + self.richer_settings) - set(SETTINGS))
+        if unknown:
+            raise ValueError(f"unknown settings {', '.join(unknown)}; choose from {', '.join(SETTINGS)}")
+        if not self.richer_freq > 0:
+            raise ValueError(f"richer_freq must be positive (Hz), got {self.richer_freq}")
+        if not (isinstance(self.maxiter, int) and self.maxiter >= 1):
+            raise ValueError(f"maxiter must be a whole number of at least 1, got {self.maxiter!r}")
+
+    def cases(self) -> list[tuple]:
+        """(kind, setting, design or richer device) of every case, in the tables' order."""
+        return ([("design", s, d) for s in self.settings for d in self.designs]
+                + [("richer", s, t) for s in self.richer_settings for t in self.richer])
+
+
+def _case_file(out: Path, kind: str, setting: str, what) -> Path:
+    label = what.label if kind == "design" else (",".join(f"{k}={v}" for k, v in what.items()) or "own")
+    return out / "cases" / f"{kind}-{setting}-{label}.json".replace("/", "_").replace(" ", "_")
+
+
+def _case(job) -> dict:
+    """One case computed and written to its file (atomically: an interrupted run leaves no
+    half-written case)."""
+    config, kind, setting, what, path = job
+    if kind == "design":
+        row = design_contraction(what, setting, seed=config.seed, generator=config.generator, maxiter=config.maxiter)
+    else:
+        row = richer_truth_shift(setting, config.richer_freq, what, seed=config.seed, generator=config.generator,
+                                 maxiter=config.maxiter)
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(row) + "\n")
+    tmp.replace(path)
+    return row
+
+
+def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
+    """Both questions, written into ``out``: design.csv, richer_truth.csv, design.png and
+    REPORT.md, each case also as a JSON file in ``out``/cases (reused by a rerun: delete
+    one to compute it again); the cases not yet there run on ``executor``, one each.
+    ``progress(done, total)`` hears each case. A case that fails is named in the
+    output's ``failed`` and the tables are written without it. ``values``: ``design``
+    and ``richer``, the tables' rows."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -164,41 +234,36 @@ def run_design(out, *, settings=("A0", "A3", "B2"), designs=DEFAULT_DESIGNS, ric
 
     from ..inference.fit import check_output_folder, versions
     from .analysis import write_csv
-    from .plots import plot_design
     from .design_report import design_report
-    from .manifest import write_manifest
+    from .plots import plot_design
 
     out = Path(out)
     check_output_folder(out)
-    out.mkdir(parents=True, exist_ok=True)
-    cases = [("design", s, d) for s in settings for d in designs] + [("richer", s, t) for s in richer_settings
-                                                                     for t in richer]
-    (out / "cases").mkdir(exist_ok=True)
-    mine = {"seed": seed, "maxiter": maxiter, "richer_freq": richer_freq,
-            "generator": dataclasses.asdict(generator or GeneratorSettings())}
+    (out / "cases").mkdir(parents=True, exist_ok=True)
+    mine = {"seed": config.seed, "maxiter": config.maxiter, "richer_freq": config.richer_freq,
+            "generator": dataclasses.asdict(config.generator or GeneratorSettings())}
     settings_file = out / "settings.json"
     if settings_file.exists() and json.loads(settings_file.read_text()) != json.loads(json.dumps(mine)):
         raise ValueError(f"{out} holds cases of other settings (seed, generator, maxiter); choose another folder")
     settings_file.write_text(json.dumps(mine, indent=2) + "\n")
-    write_manifest(out, {**mine, "settings": list(settings), "designs": [d.label for d in designs],
-                         "richer": [dict(t) for t in richer], "richer_settings": list(richer_settings)})
-    rows, shifts = [], []
-    for done, (kind, s, what) in enumerate(cases, 1):
-        label = what.label if kind == "design" else (",".join(f"{k}={v}" for k, v in what.items()) or "own")
-        path = out / "cases" / f"{kind}-{s}-{label}.json".replace("/", "_").replace(" ", "_")
-        if path.exists():  # finished by an earlier run (delete the file to compute it again)
-            row = json.loads(path.read_text())
+    cases = [(kind, s, what, _case_file(out, kind, s, what)) for kind, s, what in config.cases()]
+    got = {path: json.loads(path.read_text()) for *_, path in cases if path.exists()}
+    todo = [(config, *case) for case in cases if case[-1] not in got]
+    failed = []
+    if progress:
+        progress(len(got), len(cases))
+    for outcome in executor.as_completed(_case, todo):
+        job = todo[outcome.index]
+        if outcome.ok:
+            got[job[-1]] = outcome.value
         else:
-            if kind == "design":
-                row = design_contraction(what, s, seed=seed, generator=generator, maxiter=maxiter)
-            else:
-                row = richer_truth_shift(s, richer_freq, what, seed=seed, generator=generator, maxiter=maxiter)
-            tmp = path.with_suffix(".tmp")
-            tmp.write_text(json.dumps(row) + "\n")
-            tmp.replace(path)  # atomic: an interrupted run leaves no half-written case
-        (rows if kind == "design" else shifts).append(row)
+            failed.append((job[-1].stem, str(outcome.error)))
         if progress:
-            progress(done, len(cases))
+            progress(len(got) + len(failed), len(cases))
+    rows = [got[c[-1]] for c in cases if c[0] == "design" and c[-1] in got]
+    shifts = [got[c[-1]] for c in cases if c[0] == "richer" and c[-1] in got]
+    if not rows:
+        return StudyOutput(failed=tuple(failed))
     write_csv(out / "design.csv", rows)
     write_csv(out / "richer_truth.csv", shifts)
     names = [k for k in rows[0] if k not in ("design", "setting", "freq_hz", "amplitude_m", "cutoff_hz",
@@ -206,5 +271,6 @@ def run_design(out, *, settings=("A0", "A3", "B2"), designs=DEFAULT_DESIGNS, ric
     fig = plot_design(rows, names)
     fig.savefig(out / "design.png", dpi=110)
     plt.close(fig)
-    report = design_report(out, rows, shifts, names, versions(), seed)
-    return {"design": rows, "richer": shifts, "report": report}
+    report = design_report(out, rows, shifts, names, versions(), config.seed)
+    return StudyOutput(written=(out / "design.csv", out / "richer_truth.csv", out / "design.png", report),
+                       failed=tuple(failed), values={"design": rows, "richer": shifts})
