@@ -19,6 +19,7 @@ __all__ = [
     "FREQUENCIES_HZ",
     "setting",
     "setting_and_frequency",
+    "grid_case",
     "paper_parameters",
     "theoretical_inertance",
     "apparent_inertance",
@@ -161,6 +162,14 @@ def setting_and_frequency(text: str) -> tuple[str, float]:
     if not name or not value > 0:
         raise ValueError(f"expected SETTING:FREQUENCY with a positive frequency in Hz, got {text!r}")
     return name.upper(), value
+
+
+def grid_case(k: int) -> tuple[str, float]:
+    """The k-th record of the paper's grid in the coverage studies' order: setting
+    ``SETTINGS[k % 9]`` at ``FREQUENCIES_HZ[(k + k // 9) % 3]``, so that every 27 hold
+    each setting at each frequency once, the frequencies interleaved."""
+    names = list(SETTINGS)
+    return names[k % len(names)], FREQUENCIES_HZ[(k + k // len(names)) % len(FREQUENCIES_HZ)]
 
 
 def _disc_inertia(mass: float, diameter: float) -> float:

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from bayes_inerter import SETTINGS
-from bayes_inerter.device import setting_and_frequency
+from bayes_inerter.device import grid_case, setting_and_frequency  # noqa: F401 (grid_case: the scripts')
 from bayes_inerter.executor import make_executor
 from bayes_inerter.inference.sampling.adaptation import NAMED
 from bayes_inerter.study.manifest import script_configuration, write_manifest
@@ -46,14 +46,6 @@ def likelihood_changes(text: str) -> dict:
             changes[name.strip()] = json.loads(value)
     LikelihoodSettings(**changes)  # an unknown name or a bad value fails here, before any fit
     return changes
-
-
-def grid_case(k: int) -> tuple[str, float]:
-    """The k-th record of the paper's grid in the coverage studies' order: setting
-    ``SETTINGS[k % 9]`` at ``FREQUENCIES[(k + k // 9) % 3]``, so that every 27 hold each
-    setting at each frequency once, the frequencies interleaved."""
-    names = list(SETTINGS)
-    return names[k % len(names)], FREQUENCIES[(k + k // len(names)) % len(FREQUENCIES)]
 
 
 def sbc_design_records(seed: int, replicates):

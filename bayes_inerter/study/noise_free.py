@@ -1,0 +1,143 @@
+"""Does the default fit's posterior hold b on the generator's noise-free records?
+
+Issue 39, item 1's interval half, measured with chains: record k of the paper's grid
+(``device.grid_case``; records 0 to 26 cover every setting at every frequency once) is
+made by the project's own generator from Table I and Table 2 with every noise off
+(:data:`NOISE_FREE`: the sensors' band limits kept), and fitted by ``fit_record`` as
+``bayes-inerter fit`` runs it (the default likelihood, each chain to the convergence
+rule, at most ``Config.max_steps``). ``Config.zeta_B`` gives the generator's plate mode
+that damping ratio in place of Table I's c_B (a ratio of 8e-6, outside the fit's damping
+prior of 0.5 to 10 %: ``priors.MODAL_PRIORS``).
+
+The study of results/noise-free-chains* (``studies/noise_free_chains.py``, through
+``cli.study_script``): one JSON per record in ``out``/records (a run that stops goes on
+where it stopped), chains.csv from all of them: b's posterior median and its error, the
+94 % highest-density interval and whether it holds the true b, the chain's state and
+seconds, the commit the process loaded.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import math
+import tempfile
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..device import grid_case, paper_parameters
+from ..inference.fit import fit_record
+from ..inference.sampling.convergence import Convergence
+from ..inference.summaries.results import hdi
+from ..records import GeneratorSettings, generate_record
+from .manifest import source_commit
+from .output import StudyOutput
+
+__all__ = ["Config", "run", "NOISE_FREE", "device", "fit_one"]
+
+#: The generator with every noise off (its sensors' band limits kept).
+NOISE_FREE = GeneratorSettings(force_noise=0.0, accel_noise=0.0, disp_noise=0.0)
+
+
+@dataclass(frozen=True)
+class Config:
+    """Attributes
+    ----------
+    records : how many records of the paper's grid (1 to 27, from record 0).
+    zeta_B : the generator's plate-mode damping ratio (None: Table I's c_B).
+    max_steps : each chain's cap.
+    summarise : only write chains.csv from the records already there.
+    """
+
+    records: int = field(default=27, metadata={"help": "records of the paper's grid, 1 to 27"})
+    zeta_B: float | None = field(default=None, metadata={"help": "the plate mode's damping ratio (default: Table I's c_B)"})
+    max_steps: int = field(default=20000, metadata={"help": "each chain's cap"})
+    summarise: bool = field(default=False, metadata={"help": "only write chains.csv from the records there"})
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.records, int) and 1 <= self.records <= 27):
+            raise ValueError(f"records must lie in 1 to 27 (the paper's grid), got {self.records!r}")
+        if self.zeta_B is not None and not 0.0 < self.zeta_B < 1.0:
+            raise ValueError(f"zeta_B is a damping ratio in (0, 1), got {self.zeta_B}")
+        if not (isinstance(self.max_steps, int) and self.max_steps >= 100):
+            raise ValueError(f"max_steps must be a whole number of at least 100, got {self.max_steps!r}")
+
+
+def device(setting: str, zeta_b: float | None):
+    """Table I and Table 2's device, its plate mode damped ``zeta_b`` (None: Table I's c_B)."""
+    p = paper_parameters(setting)
+    if zeta_b is None:
+        return p
+    return dataclasses.replace(p, c_B=2.0 * zeta_b * math.sqrt(p.k_B * p.m_B))
+
+
+def fit_one(job) -> dict:
+    """Record k's row (``job``: (k, out, config, commit)), written to ``out``/records as
+    it ends; read from there where an earlier run finished it."""
+    k, out, config, commit = job
+    path = Path(out) / "records" / f"{k:04d}.json"
+    if path.exists():
+        return json.loads(path.read_text())
+    setting, freq = grid_case(k)
+    p = device(setting, config.zeta_B)
+    rec = generate_record(p, freq, settings=NOISE_FREE, setting_name=setting)
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        res = fit_record(rec, Path(tmp) / "fit", seed=k, plots=False,
+                         convergence=replace(Convergence(), max_steps=config.max_steps))
+    b = np.asarray(res.idata.posterior["b"]).ravel()
+    lo, hi = hdi(b)
+    tau = np.asarray(res.tau, dtype=float)
+    row = {"record": k, "setting": setting, "freq_hz": freq, "zeta_B": config.zeta_B, "b_true": p.b,
+           "b_median": float(np.median(b)), "error_pct": 100.0 * (float(np.median(b)) / p.b - 1.0),
+           "hdi94_lo": float(lo), "hdi94_hi": float(hi), "holds94": bool(lo <= p.b <= hi),
+           "width94_pct": 100.0 * (hi - lo) / p.b, "identified": bool(res.b_interval.identified),
+           "converged": bool(res.converged), "steps": int(res.iterations),
+           "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
+           "seconds": round(time.perf_counter() - t0, 1), "commit": commit}
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(row, indent=1) + "\n")
+    tmp.replace(path)
+    return row
+
+
+def _line(r: dict) -> str:
+    return (f"{r['setting']} {r['freq_hz']:g} Hz: b {r['b_median']:.1f} (true {r['b_true']:.1f}, "
+            f"{r['error_pct']:+.3f} %), 94 % {'holds' if r['holds94'] else 'MISSES'}, converged {r['converged']} "
+            f"({r['steps']} steps), {r['seconds']} s")
+
+
+def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
+    """The records not yet in ``out``/records fitted on ``executor`` (one each), then
+    chains.csv from every record there. A folder keeps one ``zeta_B``: a run asking
+    another is refused (ValueError). ``lines``: one per record fitted or read."""
+    out = Path(out)
+    (out / "records").mkdir(parents=True, exist_ok=True)
+    kept = {json.loads(p.read_text())["zeta_B"] for p in (out / "records").glob("*.json")}
+    if kept - {config.zeta_B}:
+        raise ValueError(f"{out} holds records of zeta_B {sorted(kept, key=str)}, not {config.zeta_B}; "
+                         "choose another folder")
+    failed = []
+    if not config.summarise:
+        commit = source_commit() or ""  # the code this run loaded: HEAD may move while it runs
+        jobs = [(k, out, config, commit) for k in range(config.records)]
+        if progress:
+            progress(0, len(jobs))
+        for i, got in enumerate(executor.as_completed(fit_one, jobs), 1):
+            if not got.ok:  # one record's failure is reported, the others go on
+                failed.append((f"record {jobs[got.index][0]}", str(got.error)))
+            if progress:
+                progress(i, len(jobs))
+    rows = [json.loads(p.read_text()) for p in sorted((out / "records").glob("*.json"))]
+    if not rows:
+        raise ValueError(f"{out} holds no finished record; run without summarise first")
+    with open(out / "chains.csv", "w", newline="") as f:  # every digit: the rows are the study's result
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return StudyOutput(written=(out / "chains.csv",), failed=tuple(failed), lines=tuple(map(_line, rows)),
+                       values={"rows": rows})

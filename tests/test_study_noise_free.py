@@ -1,0 +1,40 @@
+"""The noise-free chains study (``study.noise_free``): its configuration, its folder's
+one damping ratio, and chains.csv remade from the committed records."""
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from bayes_inerter.device import paper_parameters
+from bayes_inerter.executor import Serial
+from bayes_inerter.study.noise_free import Config, device, run
+
+COMMITTED = Path(__file__).resolve().parents[1] / "results" / "noise-free-chains-v3"
+
+
+@pytest.mark.parametrize("changes, cause", [({"records": 28}, "1 to 27"), ({"zeta_B": 1.5}, "damping ratio"),
+                                            ({"max_steps": 10}, "at least 100")])
+def test_the_configuration_names_what_it_refuses(changes, cause):
+    with pytest.raises(ValueError, match=cause):
+        Config(**changes)
+
+
+def test_the_device_takes_the_damping_ratio_asked():
+    p = device("A3", 0.02)
+    assert p.c_B / (2 * (p.k_B * p.m_B) ** 0.5) == pytest.approx(0.02)
+    assert device("A3", None) == paper_parameters("A3")
+
+
+def test_summarise_remakes_the_committed_table_and_a_folder_keeps_one_damping(tmp_path):
+    shutil.copytree(COMMITTED / "records", tmp_path / "records")
+    got = run(Config(zeta_B=0.02, summarise=True), tmp_path, Serial())
+    assert (tmp_path / "chains.csv").read_bytes() == (COMMITTED / "chains.csv").read_bytes()
+    assert len(got.lines) == 27 and not got.failed
+    with pytest.raises(ValueError, match="holds records of zeta_B"):
+        run(Config(summarise=True), tmp_path, Serial())
+
+
+def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):
+    with pytest.raises(ValueError, match="run without summarise first"):
+        run(Config(summarise=True), tmp_path, Serial())
