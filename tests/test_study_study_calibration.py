@@ -200,3 +200,31 @@ def test_inspecting_a_single_record_replicate_uses_its_one_record(tmp_path):
     assert list(by) == [*NAMES, "sigma", "rho"]  # one record: its own b, noise and AR(1) coefficient
     assert by["rho"]["truth"] is None and by["b"]["truth"] == replicate_device(cs, 2).truth["b"]
     assert np.isfinite(got["log_posterior_truth"]) and np.isfinite(got["log_posterior_median"])
+
+
+def test_the_scripts_config_makes_the_settings_a_committed_folder_was_run_with():
+    """results/coverage-sbc-v6's command, read as the script reads it, gives the settings
+    that folder's settings.json holds."""
+    from dataclasses import asdict
+    from pathlib import Path
+
+    from bayes_inerter.study.study_calibration import Config
+
+    folder = Path(__file__).resolve().parents[1] / "results" / "coverage-sbc-v6"
+    saved = json.loads((folder / "settings.json").read_text())
+    config = Config(replicates=150, seed=11, single=True, residual="motion", converge=True, max_steps=40000,
+                    freqs=(0.5, 1.0, 1.5))
+    assert json.loads(json.dumps(asdict(config.settings()), default=str)) == saved
+    with pytest.raises(ValueError, match="replicates must be"):
+        Config(replicates=0)
+    with pytest.raises(ValueError):
+        Config(residual="no-such-likelihood")
+
+
+def test_summarising_an_empty_folder_says_what_to_do(tmp_path):
+    from bayes_inerter.executor import Serial
+    from bayes_inerter.study.study_calibration import Config, run
+
+    (tmp_path / "replicates").mkdir()
+    with pytest.raises(ValueError, match="run the study into it first"):
+        run(Config(summarise=True), tmp_path, Serial())

@@ -116,8 +116,8 @@ def _bar(desc: str) -> tuple[Callable, Callable]:
 
 def study_main(module, *, out, doc: str | None = None, argv=None) -> int:
     """Run the study ``module`` (see the module docstring) from the command line
-    ``argv`` (default: the script's own); ``out``: the default output folder. Returns
-    the exit code."""
+    ``argv`` (default: the script's own); ``out``: the default output folder, or a
+    function of the configuration that names it. Returns the exit code."""
     from ..executor import make_executor
     from ..study.manifest import write_manifest
 
@@ -125,7 +125,8 @@ def study_main(module, *, out, doc: str | None = None, argv=None) -> int:
     ap = argparse.ArgumentParser(prog=f"{name}.py", description=doc or module.__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     names = config_options(ap, module.Config)
-    ap.add_argument("--out", default=str(out), help="the folder the study writes (default: %(default)s)")
+    ap.add_argument("--out", default=None, help="the folder the study writes (default: "
+                    + ("one named by the configuration" if callable(out) else str(out)) + ")")
     ap.add_argument("--processes", type=int, default=min(2, os.cpu_count() or 1),
                     help="local worker processes (default: %(default)s)")
     ap.add_argument("--scheduler", default=None, help="a Dask scheduler's address, in place of local processes")
@@ -133,6 +134,7 @@ def study_main(module, *, out, doc: str | None = None, argv=None) -> int:
     try:
         config = config_from_arguments(module.Config, args, names)
         executor = make_executor(args.processes, args.scheduler)
+        args.out = args.out or str(out(config) if callable(out) else out)
     except (ValueError, TypeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_USAGE

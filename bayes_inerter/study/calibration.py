@@ -33,7 +33,7 @@ import copy
 import csv
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -47,7 +47,8 @@ from ..inference.sampling.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 
-__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "run_calibration", "coverage_table", "compare_calibrations"]
+__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "run_calibration", "coverage_table",
+           "compare_calibrations", "Config", "run", "case_name"]
 
 _P = paper_parameters("A1")
 #: The calibration prior (see module docstring).
@@ -204,13 +205,15 @@ def _with_defaults(saved: dict, defaults: dict) -> dict:
     return out
 
 
-def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=None, work=None) -> list[dict]:
+def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=None, work=None,
+                   executor=None) -> list[dict]:
     """Run replicates 0..``replicates``-1 of ``cs`` (any frozen settings dataclass with a
     ``replicate(k)`` method) into ``out``/replicates, one JSON each, those already there
     reused, and return them all in order. A replicate that raised holds ``error``.
     Settings that resume (``resumes`` true) have ``replicate(k, folder)`` run replicate
     k's fit in ``work``/<k> (None: ``out``/:data:`RUNNING`), continued there by the next
-    run if this one stops."""
+    run if this one stops. ``executor``: where the replicates run (each in a process of
+    its own on local processes); None: ``processes`` local processes."""
     from ..inference.fit import check_output_folder
     from .manifest import write_manifest
 
@@ -230,22 +233,28 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
         progress(done, replicates)
     work = out / RUNNING if work is None else Path(work)
     jobs = [(cs, k, out, work) for k in todo]
-    with make_executor(processes if len(jobs) > 1 else 1) as executor:
+    mine = executor is None
+    executor = make_executor(processes if len(jobs) > 1 else 1) if mine else executor
+    try:
         for outcome in executor.as_completed(_worker, jobs):  # each replicate in a process of its own
             if not outcome.ok:
                 raise outcome.error
             done += 1
             if progress:
                 progress(done, replicates)
+    finally:
+        if mine:
+            executor.close()
     return [json.loads(_replicate_file(out, k).read_text()) for k in range(replicates)]
 
 
-def run_calibration(cs: CalibrationSettings, out, replicates: int, *, processes: int = 1, progress=None) -> dict:
+def run_calibration(cs: CalibrationSettings, out, replicates: int, *, processes: int = 1, progress=None,
+                    executor=None) -> dict:
     """Run ``replicates`` replicates into ``out`` (one JSON each; those already there are
     reused) and write ranks.csv, coverage.csv, ranks.png and REPORT.md."""
     from ..inference.fit import versions
 
-    results = run_replicates(cs, out, replicates, processes=processes, progress=progress)
+    results = run_replicates(cs, out, replicates, processes=processes, progress=progress, executor=executor)
     return write_calibration(Path(out), cs, results, versions())
 
 
@@ -325,3 +334,53 @@ def compare_calibrations(root) -> Path | None:
     fig.savefig(root / "coverage.png", dpi=100)
     plt.close(fig)
     return calibration_comparison(root, cases)
+
+
+@dataclass(frozen=True)
+class Config:
+    """What ``studies/calibration.py`` is asked: a case of :class:`CalibrationSettings`
+    (its generator's friction, backlash and noise colour as options) and how many
+    replicates."""
+
+    replicates: int = field(default=100, metadata={"help": "how many replicates"})
+    truth: str = field(default="model", metadata={"choices": ("model", "generator"), "help": "what makes the data"})
+    residual: str = field(default="ar1", metadata={"choices": ("ar1", "iid"), "help": "the likelihood's residual"})
+    friction: str = field(default="coulomb", metadata={"choices": ("coulomb", "stribeck", "smooth"),
+                                                       "help": "the generator's friction law"})
+    backlash: float = field(default=0.0, metadata={"help": "the generator's nut backlash, m"})
+    noise_corner: float | None = field(default=None, metadata={
+        "help": "colour the generator's sensor noise with a low-pass at this frequency, Hz"})
+    steps: int = field(default=CalibrationSettings.steps, metadata={"help": "steps per chain"})
+    seed: int = field(default=0, metadata={"help": "replicate k uses the seed sequence (seed, k)"})
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.replicates, int) and self.replicates >= 1):
+            raise ValueError(f"replicates must be a whole number of at least 1, got {self.replicates!r}")
+        self.settings()  # a bad value fails here, before anything runs
+
+    def settings(self) -> CalibrationSettings:
+        base = CalibrationSettings()
+        return replace(base, truth=self.truth, residual=self.residual, steps=self.steps, seed=self.seed,
+                       generator=replace(base.generator, friction=self.friction, backlash=self.backlash,
+                                         noise_corner=self.noise_corner))
+
+
+def case_name(config: Config) -> str:
+    """The case's folder name under results/calibration: truth, richer physics, residual."""
+    richer = "" if config.friction == "coulomb" and not config.backlash else f"-{config.friction}-bl{config.backlash:g}"
+    richer += f"-colour{config.noise_corner:g}Hz" if config.noise_corner else ""
+    return f"{config.truth}{richer}-{config.residual}"
+
+
+def run(config: Config, out, executor, *, progress=None):
+    """The case's replicates into ``out`` (those not yet there on ``executor``), its
+    report, then every case beside it in ``out``'s parent compared
+    (:func:`compare_calibrations`)."""
+    from .output import StudyOutput
+
+    res = run_calibration(config.settings(), out, config.replicates, progress=progress, executor=executor)
+    compared = compare_calibrations(Path(out).parent)
+    return StudyOutput(written=(res["report"],) + ((compared,) if compared else ()),
+                       lines=(f"{res['replicates']} replicates, {len(res['failed'])} failed",),
+                       failed=tuple((f"replicate {r.get('replicate', '?')}", r["error"]) for r in res["failed"]),
+                       values=res)

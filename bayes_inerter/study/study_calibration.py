@@ -41,6 +41,10 @@ ones the study reports and the equal-tailed ones.
   fitted by :func:`inference.fit.fit_record` as ``bayes-inerter fit`` runs it, instead of
   the joint fit; ``steps`` None runs each chain to the convergence rule (``Convergence``,
   capped at ``max_steps``).
+
+:class:`Config` and :func:`run` are the study as ``studies/study_calibration.py`` runs
+it (through ``cli.study_script``): a run, a cap raised, a folder summarised, or one
+replicate inspected.
 """
 
 from __future__ import annotations
@@ -69,7 +73,7 @@ from ..simulate import SimulationError
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
-           "RANK_CORRELATION"]
+           "RANK_CORRELATION", "Config", "run"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -450,14 +454,14 @@ def write_study_calibration(out, cs: StudyCalibration, results: list[dict], vers
 
 
 def run_study_calibration(cs: StudyCalibration, out, replicates: int, *, processes: int = 1, progress=None,
-                          work=None) -> dict:
+                          work=None, executor=None) -> dict:
     """Run ``replicates`` replicates into ``out`` (one JSON each; those already there are
     reused) and write the tables, figures and reports (:func:`write_study_calibration`).
     ``work``: where each replicate's fit runs until done (``calibration.run_replicates``)."""
     from ..inference.fit import versions
     from .calibration import run_replicates
 
-    results = run_replicates(cs, out, replicates, processes=processes, progress=progress, work=work)
+    results = run_replicates(cs, out, replicates, processes=processes, progress=progress, work=work, executor=executor)
     return write_study_calibration(out, cs, results, versions())
 
 
@@ -499,3 +503,103 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
              "q3": float(np.quantile(kept[n], 0.03)), "q97": float(np.quantile(kept[n], 0.97))} for n in jm.names]
     return {"replicate": k, "steps": int(res.iterations), "tau_max": float(np.nanmax(res.tau)),
             "log_posterior_truth": log_post(at_truth), "log_posterior_median": log_post(median), "parameters": rows}
+
+
+@dataclass(frozen=True)
+class Config:
+    """What ``studies/study_calibration.py`` is asked (see the module docstring).
+
+    Attributes
+    ----------
+    replicates : how many replicates (0 to replicates - 1).
+    steps : steps of each chain, unless ``converge``.
+    seed : the design seed (replicate k: the seed sequence (seed, k)).
+    single : one record per replicate, fitted alone (else the joint fit).
+    residual : the likelihood (``LikelihoodSettings.residual``; None: the study's).
+    input_noise : draws of the drivetrain's input noise (0: off; None: the library's).
+    converge : each chain to the convergence rule, at most ``max_steps``.
+    max_steps : the cap of a chain run to the rule.
+    freqs : the drive frequencies, Hz (None: the study's).
+    work : where each replicate's fit runs until done, continued by the next run
+        (None: the output folder's ``.running``).
+    raise_cap : raise the folder's cap to ``max_steps`` first (:func:`raise_cap`).
+    summarise : only write coverage_so_far.csv (and its companions) from the replicates
+        finished there (:func:`write_coverage_so_far`); run nothing.
+    inspect : run this replicate again with its fit kept (:func:`inspect_replicate`).
+    """
+
+    replicates: int = field(default=200, metadata={"help": "how many replicates"})
+    steps: int = field(default=StudyCalibration.steps, metadata={"help": "steps of each chain, unless --converge"})
+    seed: int = field(default=0, metadata={"help": "the design seed"})
+    single: bool = field(default=False, metadata={"help": "one record per replicate, fitted alone"})
+    residual: str | None = field(default=None, metadata={"help": "the likelihood (LikelihoodSettings.residual)"})
+    input_noise: int | None = field(default=None, metadata={
+        "help": "draws of the drivetrain's input noise (0: off; default: the library's)"})
+    converge: bool = field(default=False, metadata={"help": "each chain to the convergence rule"})
+    max_steps: int = field(default=StudyCalibration.max_steps, metadata={"help": "the cap of a chain run to the rule"})
+    freqs: tuple[float, ...] | None = field(default=None, metadata={"help": "drive frequencies, Hz"})
+    work: str | None = field(default=None, metadata={
+        "help": "where each replicate's fit runs until done (default: OUT/.running)"})
+    raise_cap: bool = field(default=False, metadata={"help": "raise the folder's cap to --max-steps first"})
+    summarise: bool = field(default=False, metadata={
+        "help": "write coverage_so_far.csv from the replicates finished there, run nothing"})
+    inspect: int | None = field(default=None, metadata={"help": "run replicate K again, its fit kept"})
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.replicates, int) and self.replicates >= 1):
+            raise ValueError(f"replicates must be a whole number of at least 1, got {self.replicates!r}")
+        self.settings()  # a bad likelihood or frequency fails here, before anything runs
+
+    def settings(self) -> StudyCalibration:
+        """The calibration's own settings."""
+        extra = {}
+        if self.residual or self.input_noise is not None:
+            extra["likelihood"] = LikelihoodSettings(
+                **({"residual": self.residual} if self.residual else {}),
+                **({"input_noise": self.input_noise} if self.input_noise is not None else {}))
+        if self.freqs:
+            extra["frequencies"] = tuple(self.freqs)
+        return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
+                                   single=self.single, max_steps=self.max_steps, **extra)
+
+
+def _summary_lines(out) -> tuple[str, ...]:
+    rows = write_coverage_so_far(out)
+    if not rows:
+        raise ValueError(f"{out} holds no finished replicate; run the study into it first")
+    lines = [f"{r['chains']:>9} {r['parameter']:>14}: of {r['intervals']:4d} the 94 % held {r['held_94']:4d} "
+             f"(expected {r['expected_94']}, se {r['se_94']}), the 50 % {r['held_50']:4d} "
+             f"(expected {r['expected_50']}, se {r['se_50']})" for r in rows]
+    lines += [f"ranks of {pair['parameter']} and {pair['with']} move together (r {pair['r']:+.2f}): "
+              "their counts are not independent tests" for pair in rank_correlations(finished_replicates(out))]
+    return tuple(lines)
+
+
+def run(config: Config, out, executor, *, progress=None):
+    """The calibration into ``out`` (replicates not yet there run on ``executor``, each in
+    a process of its own), then its tables, figures and reports; or, as ``config``
+    asks, a folder summarised, its cap raised first, or one replicate inspected
+    (``values["inspect"]``: :func:`inspect_replicate`'s dict, in ``work``)."""
+    from .output import StudyOutput
+
+    out = Path(out)
+    if config.summarise:
+        written = [out / n for n in ("coverage_so_far.csv", "rank_correlations.csv", "coverage_by_frequency.csv")]
+        lines = _summary_lines(out)
+        return StudyOutput(written=tuple(p for p in written if p.exists()), lines=lines)
+    cs = config.settings()
+    lines = []
+    if config.raise_cap:
+        moved = raise_cap(out, config.max_steps)
+        lines.append(f"cap raised to {config.max_steps} steps; replicates to fit again: {moved or 'none'}")
+    if config.inspect is not None:
+        kind = "single" if cs.single else "joint"
+        folder = ((Path(config.work) if config.work else out / ".running")
+                  / f"inspect_{kind}_seed{cs.seed}_{config.inspect}_{cs.steps}")
+        got = inspect_replicate(cs, config.inspect, folder)
+        return StudyOutput(lines=(*lines, json.dumps(got, indent=1)), values={"inspect": got})
+    got = run_study_calibration(cs, out, config.replicates, progress=progress, work=config.work, executor=executor)
+    lines.append(f"{got['replicates']} replicates, {len(got['failed'])} failed")
+    return StudyOutput(written=(got["report"], got["section"]), lines=tuple(lines),
+                       failed=tuple((f"replicate {r.get('replicate', '?')}", r["error"]) for r in got["failed"]),
+                       values=got)
