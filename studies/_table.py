@@ -1,5 +1,5 @@
 """What the studies' scripts share: read a record named SETTING:FREQUENCY, walk the
-paper's grid in the coverage studies' order, run jobs on local processes, write rows of
+paper's grid in the coverage studies' order (``device.grid_case``), run jobs on local processes, write rows of
 results to a CSV file and print them (and the run's entry into the folder's
 manifest.json: ``bayes_inerter.study.manifest``), name the commit a run loaded, and the
 adaptive samplers they compare by name."""
@@ -10,8 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from bayes_inerter import SETTINGS
-from bayes_inerter.device import grid_case, setting_and_frequency  # noqa: F401 (grid_case: the scripts')
+from bayes_inerter.device import setting_and_frequency
 from bayes_inerter.executor import make_executor
 from bayes_inerter.inference.sampling.adaptation import NAMED
 from bayes_inerter.study.manifest import script_configuration, write_manifest

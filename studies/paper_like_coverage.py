@@ -48,7 +48,8 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import FREQUENCIES, git_commit, grid_case, likelihood_changes
+from _table import FREQUENCIES, git_commit, likelihood_changes
+from bayes_inerter.device import grid_case
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.sampling.convergence import Convergence

@@ -33,7 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import append_row, grid_case, read_rows, sbc_design_records
+from _table import append_row, read_rows, sbc_design_records
+from bayes_inerter.device import grid_case
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
 from bayes_inerter.inference.sampling import optimize
