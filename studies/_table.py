@@ -5,7 +5,6 @@ manifest.json: ``bayes_inerter.study.manifest``), name the commit a run loaded, 
 adaptive samplers they compare by name."""
 
 import csv
-import json
 import subprocess
 import sys
 from pathlib import Path
@@ -32,19 +31,11 @@ def record_arg(item: str) -> tuple[str, float]:
 
 
 def likelihood_changes(text: str) -> dict:
-    """``name=value,...`` (values as JSON: 16, false, "plate") as a dict of changes of
-    ``LikelihoodSettings``; "" or "default": none. Raises ValueError on a name it lacks."""
-    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+    """``likelihood.settings_changes``: ``--likelihood name=value,...`` as changes of
+    ``LikelihoodSettings``."""
+    from bayes_inerter.inference.posterior.likelihood import settings_changes
 
-    changes = {}
-    if text and text != "default":
-        for part in text.split(","):
-            name, sep, value = part.partition("=")
-            if not sep:
-                raise ValueError(f"--likelihood takes name=value pairs, got {part!r}")
-            changes[name.strip()] = json.loads(value)
-    LikelihoodSettings(**changes)  # an unknown name or a bad value fails here, before any fit
-    return changes
+    return settings_changes(text)
 
 
 def sbc_design_records(seed: int, replicates):

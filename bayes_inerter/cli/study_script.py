@@ -101,17 +101,26 @@ def config_from_arguments(config_type, args: argparse.Namespace, names) -> Any:
 
 
 def _bar(desc: str) -> tuple[Callable, Callable]:
-    """(progress, close) of a bar on standard error that also prints where it is not a
-    terminal (at most every 30 s there)."""
+    """(progress, close) of a bar on standard error, made at the first progress a study
+    reports (none for one that reports none), that also prints where standard error is
+    not a terminal (at most every 30 s there)."""
     from tqdm import tqdm
 
-    shown = tqdm(desc=desc, unit="item", file=sys.stderr, mininterval=0.5 if sys.stderr.isatty() else 30)
+    shown = []
 
     def progress(done: int, total: int) -> None:
-        shown.total = total
-        shown.update(done - shown.n)
+        if not shown:
+            shown.append(tqdm(desc=desc, total=total, unit="item", file=sys.stderr,
+                              mininterval=0.5 if sys.stderr.isatty() else 30))
+        bar = shown[0]
+        bar.total = total
+        bar.update(done - bar.n)
 
-    return progress, shown.close
+    def close() -> None:
+        if shown:
+            shown[0].close()
+
+    return progress, close
 
 
 def study_main(module, *, out, doc: str | None = None, argv=None) -> int:

@@ -15,7 +15,7 @@ from ...records.sensitivity import SensorCalibration
 from ...simulate import SAMPLINGS
 
 __all__ = ["LikelihoodSettings", "RESIDUALS", "NORMALISERS", "DEVIATION_SCALES", "DELAY_SD", "INPUT_NOISE_DRAWS", "INPUT_NOISE_FORMS", "ar1_pointwise",
-           "ar1_marginal"]
+           "ar1_marginal", "settings_changes"]
 
 #: The likelihoods: the time-domain residual as a stationary AR(1) process or white, and
 #: the harmonic likelihood with errors in both signals and a sampled discrepancy.
@@ -264,3 +264,27 @@ def ar1_marginal(residual: np.ndarray, rho: float) -> float:
     if not s > 0:
         return -math.inf
     return 0.5 * math.log(one) + math.lgamma(0.5 * n) - math.log(2.0) - 0.5 * n * math.log(math.pi * s)
+
+
+def settings_changes(text: str) -> dict:
+    """``name=value,...`` (values as JSON: 16, false, "plate") as a dict of changes of
+    :class:`LikelihoodSettings`; "" or "default": none. Raises ValueError on a pair
+    without "=", a name it lacks or a value it refuses (before any fit)."""
+    import json
+
+    changes = {}
+    if text and text != "default":
+        for part in text.split(","):
+            name, sep, value = part.partition("=")
+            if not sep:
+                raise ValueError(f"likelihood changes are name=value pairs, got {part!r}")
+            try:
+                changes[name.strip()] = json.loads(value)
+            except ValueError:
+                raise ValueError(f"the value of {name.strip()} is not JSON: {value!r}") from None
+    try:
+        LikelihoodSettings(**changes)
+    except TypeError as exc:
+        raise ValueError(f"not a likelihood setting: {exc}") from None
+    return changes
+

@@ -1,0 +1,239 @@
+"""Does the default fit's own posterior hold b on records of a richer device?
+
+The study of results/coverage-paper-like* (``studies/paper_like_coverage.py``, through
+``cli.study_script``): :class:`Config` and :func:`run`.
+
+Issue 39's item 5 measured with real chains: replicate k is one paper-like record
+(``records.paper_like``: the full network, Stribeck friction, nut backlash, miscalibrated
+sensors, coloured noise; one laboratory drawn per replicate from seed ``seed0 + k``),
+of flywheel setting and drive frequency ``device.grid_case(k)`` (every 27 replicates
+hold each setting at each frequency once, the frequencies interleaved), fitted by
+``fit_record`` as ``bayes-inerter fit`` runs it (the default likelihood, each chain to the
+convergence rule, at most ``max_steps``). Each replicate writes one JSON into
+``out``/replicates (a run that stops continues where it stopped: rerun the command);
+``summarise`` writes coverage.csv (coverage where b is identified, and again among
+the converged chains alone) and replicates.csv from them.
+
+Per replicate: b's posterior median, its 94 % and 50 % highest-density intervals and
+whether they hold the true b (Table 2's, which the generator uses), whether the fit
+calls b identified (``FitResult.b_interval.identified``), the chain's state and seconds;
+in replicates.csv also b's error beside the part its laboratory's sensor gains explain
+(``with_errors``), so a bias of the likelihood is not confused with a laboratory's
+miscalibrated sensors.
+
+``family`` makes the records of a device family the likelihood was not designed on
+(``FAMILIES``: a wider nut backlash, a larger break-away, noise coloured at 20 Hz, the two
+sensors' delays unequal); a folder keeps one family. ``likelihood`` (``name=value,...``)
+fits with those of ``LikelihoodSettings`` changed (``input_noise=16``,
+``law_beyond_viscous=false``), a candidate beside the default on the same seeds; a
+folder keeps one likelihood, its every setting recorded in each replicate (a change of
+the library's default starts a new folder). ``freq`` F runs only the replicates driven at F Hz.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import math
+import tempfile
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..device import FREQUENCIES_HZ, grid_case, paper_parameters
+from ..inference.fit import fit_record
+from ..inference.posterior.likelihood import LikelihoodSettings, settings_changes
+from ..inference.sampling.convergence import Convergence
+from ..inference.summaries.results import hdi
+from ..records.paper_like import PaperLike, laboratory, paper_like_record
+from .manifest import source_commit
+from .output import StudyOutput
+
+__all__ = ["Config", "run", "FAMILIES", "LEVELS", "replicate", "with_errors", "summarise", "likelihood_settings"]
+
+LEVELS = (0.94, 0.5)
+#: Device families: the default paper-like device, and the held-out ones of issue 39 (item 5),
+#: each the default with one effect changed (none of them used to choose a setting).
+FAMILIES = {
+    "default": PaperLike(),
+    "backlash": PaperLike(backlash=(5e-6, 1e-5)),  # m: a nut backlash 5 to 10 um
+    "breakaway": PaperLike(ratio=(1.5, 1.5)),  # Stribeck break-away 1.5 times the Coulomb force
+    "corner20": PaperLike(noise_corner=20.0),  # Hz: noise coloured inside the drive's harmonics
+    "delays": PaperLike(force_delay=2e-4, accel_delay=7e-4),  # s: the load cell's and accelerometer's latencies
+}
+
+
+def likelihood_settings(text: str) -> dict:
+    """Every field of the ``LikelihoodSettings`` that ``--likelihood text`` fits with:
+    what a replicate records, so that a folder never mixes two likelihoods, not even
+    when the library's default changes between its chunks."""
+    return dataclasses.asdict(LikelihoodSettings(**settings_changes(text)))
+
+
+def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
+              likelihood: str = "default") -> dict:
+    setting, freq = grid_case(k)
+    seed = seed0 + k
+    rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family])
+    b_true = paper_parameters(setting).b
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        res = fit_record(rec, Path(tmp) / "fit", seed=seed, plots=False,
+                         likelihood=LikelihoodSettings(**settings_changes(likelihood)),
+                         convergence=replace(Convergence(), max_steps=max_steps))
+    b = np.asarray(res.idata.posterior["b"]).ravel()
+    tau = np.asarray(list(res.tau.values()) if isinstance(res.tau, dict) else res.tau, dtype=float)
+    out = {"replicate": k, "setting": setting, "freq_hz": freq, "seed": seed, "b_true": b_true,
+           "b_median": float(np.median(b)), "converged": bool(res.converged), "steps": int(res.iterations),
+           "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
+           "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
+           "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
+           "likelihood_settings": likelihood_settings(likelihood)}
+    for level in LEVELS:
+        lo, hi = hdi(b, level)
+        key = round(100 * level)
+        out[f"hdi{key}"] = [float(lo), float(hi)]
+        out[f"covered{key}"] = bool(lo <= b_true <= hi)
+        out[f"width{key}_pct"] = 100.0 * (hi - lo) / b_true
+    return out
+
+
+def _file(out: Path, k: int) -> Path:
+    return out / "replicates" / f"{k:04d}.json"
+
+
+def _run(job) -> dict:
+    k, out, config, commit = job
+    got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood)
+    path = _file(out, k)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(got, indent=1) + "\n")
+    tmp.replace(path)  # atomic: a killed run leaves no half-written replicate
+    return got
+
+
+def with_errors(r: dict) -> dict:
+    """A replicate with b's error beside the part of it its laboratory's sensors explain.
+
+    A load cell that reads g_F times the force and an accelerometer that reads g_a times
+    the acceleration make any model's b come out b g_F / g_a: ``gain_ratio_pct`` is
+    100 (g_F / g_a - 1) of the replicate's laboratory (``records.paper_like.laboratory``),
+    which the fit cannot learn from the record (it samples the ratio with its prior), and
+    ``error_beyond_gain_pct`` the error that is left after it."""
+    lab = laboratory(r["seed"], device=FAMILIES[r.get("family", "default")])
+    gain = lab.force_gain / lab.accel_gain
+    return {**r, "error_pct": 100.0 * (r["b_median"] / r["b_true"] - 1.0), "gain_ratio_pct": 100.0 * (gain - 1.0),
+            "error_beyond_gain_pct": 100.0 * (r["b_median"] / (r["b_true"] * gain) - 1.0)}
+
+
+def summarise(out: Path) -> list[dict]:
+    reps = [with_errors(json.loads(p.read_text())) for p in sorted((out / "replicates").glob("*.json"))]
+    with (out / "replicates.csv").open("w", newline="") as f:
+        fields = ["replicate", "setting", "freq_hz", "seed", "b_true", "b_median", "hdi94", "hdi50", "covered94",
+                  "covered50", "width94_pct", "identified", "converged", "steps", "tau_max", "seconds", "phi",
+                  "error_pct", "gain_ratio_pct", "error_beyond_gain_pct"]
+        w = csv.DictWriter(f, fields)
+        w.writeheader()
+        for r in reps:
+            w.writerow({k: r.get(k) for k in fields})
+    rows = []
+    for freq in (*FREQUENCIES_HZ, None):
+        sel = [r for r in reps if freq is None or r["freq_hz"] == freq]
+        if not sel:
+            continue
+        ident = [r for r in sel if r["identified"]]
+        row = {"freq_hz": "all" if freq is None else freq, "replicates": len(sel), "identified": len(ident),
+               "converged": sum(r["converged"] for r in sel)}
+        for key, nominal in (("94", 0.94), ("50", 0.5)):
+            n = len(ident)
+            row[f"coverage{key}"] = round(sum(r[f"covered{key}"] for r in ident) / n, 3) if n else ""
+            row[f"se{key}"] = round(math.sqrt(nominal * (1 - nominal) / n), 3) if n else ""
+            row[f"median_width{key}_pct"] = round(float(np.median([r[f"width{key}_pct"] for r in ident])), 2) if n \
+                else ""
+        good = [r for r in ident if r["converged"]]  # what the issue asks of: converged chains
+        row["converged_identified"] = len(good)
+        for key in ("94", "50"):
+            row[f"coverage{key}_converged"] = round(sum(r[f"covered{key}"] for r in good) / len(good), 3) if good else ""
+        row["median_seconds"] = round(float(np.median([r["seconds"] for r in sel])), 1)
+        for key in ("error_pct", "error_beyond_gain_pct"):
+            row[f"mean_{key}"] = round(float(np.mean([r[key] for r in sel])), 2)
+        rows.append(row)
+    with (out / "coverage.csv").open("w", newline="") as f:
+        w = csv.DictWriter(f, list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    return rows
+
+
+@dataclass(frozen=True)
+class Config:
+    """What ``studies/paper_like_coverage.py`` is asked (see the module docstring)."""
+
+    replicates: int = field(default=27, metadata={"help": "replicates 0 to N - 1"})
+    seed0: int = field(default=1000, metadata={"help": "replicate k's laboratory seed is seed0 + k"})
+    max_steps: int = field(default=20000, metadata={"help": "each chain's cap"})
+    family: str = field(default="default", metadata={"choices": tuple(FAMILIES), "help": "the device family"})
+    likelihood: str = field(default="default", metadata={
+        "help": "LikelihoodSettings changed from the default, NAME=VALUE,... (values as JSON)"})
+    freq: float | None = field(default=None, metadata={"help": "only the replicates driven at this frequency, Hz"})
+    summarise: bool = field(default=False, metadata={"help": "only write the tables from the replicates there"})
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.replicates, int) and self.replicates >= 1):
+            raise ValueError(f"replicates must be a whole number of at least 1, got {self.replicates!r}")
+        if self.family not in FAMILIES:
+            raise ValueError(f"unknown family {self.family!r}; choose from {', '.join(FAMILIES)}")
+        if self.freq is not None and self.freq not in FREQUENCIES_HZ:
+            raise ValueError(f"freq must be one of {', '.join(f'{f:g}' for f in FREQUENCIES_HZ)} Hz, got {self.freq:g}")
+        try:
+            settings_changes(self.likelihood)
+        except ValueError as exc:
+            raise ValueError(f"likelihood {self.likelihood!r}: {exc}") from None
+
+
+def _line(r: dict) -> str:
+    return (f"{r['setting']} {r['freq_hz']:g} Hz seed {r['seed']}: b {r['b_median']:.0f} (true {r['b_true']:.0f}), "
+            f"94 % {'holds' if r['covered94'] else 'MISSES'}, {'identified' if r['identified'] else 'not identified'}, "
+            f"converged {r['converged']}, {r['seconds']} s")
+
+
+def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
+    """The replicates not yet in ``out``/replicates fitted on ``executor`` (one each),
+    then replicates.csv and coverage.csv from every replicate there. A folder keeps one
+    family and one likelihood's settings: a run asking others is refused (ValueError).
+    ``lines``: one per replicate fitted, then the coverage rows."""
+    out = Path(out)
+    (out / "replicates").mkdir(parents=True, exist_ok=True)
+    found = [json.loads(p.read_text()) for p in (out / "replicates").glob("*.json")]
+    kept = {r.get("family", "default") for r in found}
+    if not config.summarise and kept - {config.family}:
+        raise ValueError(f"{out} holds replicates of family {', '.join(sorted(kept))}, not {config.family}; "
+                         "choose another folder")
+    want = likelihood_settings(config.likelihood)
+    if not config.summarise and any(r.get("likelihood_settings") != want for r in found):
+        raise ValueError(f"{out} holds replicates fitted with other likelihood settings than {config.likelihood!r} "
+                         "gives today (or made before replicates recorded them); choose another folder")
+    lines, failed = [], []
+    if not config.summarise:
+        commit = source_commit() or ""  # the code this run loaded, read once: HEAD may move while it runs
+        todo = [k for k in range(config.replicates) if not _file(out, k).exists()
+                and (config.freq is None or grid_case(k)[1] == config.freq)]
+        jobs = [(k, out, config, commit) for k in todo]
+        if progress:
+            progress(config.replicates - len(todo), config.replicates)
+        for i, got in enumerate(executor.as_completed(_run, jobs), config.replicates - len(todo) + 1):
+            if got.ok:
+                lines.append(_line(got.value))
+            else:  # one replicate's failure is reported, the rest go on
+                failed.append((f"replicate {jobs[got.index][0]}", str(got.error)))
+            if progress:
+                progress(i, config.replicates)
+    if not any((out / "replicates").glob("*.json")):
+        raise ValueError(f"{out} holds no finished replicate; run without summarise first")
+    rows = summarise(out)
+    lines += [", ".join(f"{k} {v}" for k, v in r.items()) for r in rows]
+    return StudyOutput(written=(out / "replicates.csv", out / "coverage.csv"), failed=tuple(failed),
+                       lines=tuple(lines), values={"coverage": rows})

@@ -1,0 +1,45 @@
+"""The paper-like coverage study (``study.paper_like_coverage``): its configuration, a
+folder's one family and likelihood, and its tables remade from committed replicates."""
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from bayes_inerter.executor import Serial
+from bayes_inerter.study.paper_like_coverage import Config, run
+
+COMMITTED = Path(__file__).resolve().parents[1] / "results" / "coverage-paper-like-v5"
+
+
+@pytest.mark.parametrize("changes, cause", [
+    ({"family": "nonsense"}, "unknown family"), ({"freq": 2.0}, "freq must be one of"),
+    ({"likelihood": "input_noise"}, "name=value pairs"), ({"likelihood": "no_such=1"}, "not a likelihood setting"),
+    ({"replicates": 0}, "replicates must be")])
+def test_the_configuration_names_what_it_refuses(changes, cause):
+    with pytest.raises(ValueError, match=cause):
+        Config(**changes)
+
+
+def test_summarise_remakes_the_committed_tables(tmp_path):
+    shutil.copytree(COMMITTED / "replicates", tmp_path / "replicates")
+    got = run(Config(summarise=True), tmp_path, Serial())
+    for name in ("replicates.csv", "coverage.csv"):
+        assert (tmp_path / name).read_bytes() == (COMMITTED / name).read_bytes()
+    assert got.values["coverage"][-1]["freq_hz"] == "all" and not got.failed
+
+
+def test_a_folder_keeps_one_family_and_one_likelihood(tmp_path):
+    (tmp_path / "replicates").mkdir()
+    one = json.loads(next((COMMITTED / "replicates").glob("*.json")).read_text())
+    (tmp_path / "replicates" / "0000.json").write_text(json.dumps(one))
+    with pytest.raises(ValueError, match="family default, not backlash"):
+        run(Config(family="backlash"), tmp_path, Serial())
+    with pytest.raises(ValueError, match="other likelihood settings"):
+        run(Config(likelihood="input_noise=3"), tmp_path, Serial())
+
+
+def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):
+    with pytest.raises(ValueError, match="run without summarise first"):
+        run(Config(summarise=True), tmp_path, Serial())
