@@ -18,14 +18,16 @@ import dataclasses
 import functools
 import math
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Callable
 
 import numpy as np
 from numba import njit
 
-from .device import DEFAULT_GEOMETRY, InerterParameters, paper_parameters
+from .device import DEFAULT_GEOMETRY, InerterParameters
 from .friction import STRIBECK_RATIO, STRIBECK_VELOCITY, FrictionLaw, make_law
 from .network import Backlash, Deformation, Friction, Inerter, Mass, Network, cascade, compile_network
+from .network.symbolic import SymbolicCoulomb, coefficients, symbols
 
 __all__ = ["NETWORKS", "build_network", "with_backlash", "device_network", "lead_angle", "NUT_SHARE", "FIELDS", "LinearChain", "linear_chain"]
 
@@ -173,17 +175,21 @@ class LinearChain:
     """One of the paper's networks with Coulomb friction, as the linear map it is from the
     parameters (a vector in :data:`FIELDS` order) to its compiled arrays: each node's mass
     plus inertance, each link's damping and stiffness, each node's viscous coefficient and
-    Coulomb bound is a sum of parameters. The likelihood forms the arrays from it at every
-    evaluation instead of building and compiling the network (the same arrays; see
-    :func:`linear_chain`)."""
+    Coulomb bound is a linear form of the parameters (``coef @ values + const``), read off
+    by compiling the network once on symbolic parameters (:func:`linear_chain`). The
+    likelihood forms the arrays from it at every evaluation instead of building and
+    compiling the network (the same arrays)."""
 
     name: str
-    coef: np.ndarray  # (rows, len(FIELDS)), entries 0 or 1
+    coef: np.ndarray  # (rows, len(FIELDS))
     sizes: tuple[int, ...]  # masses, link_c, link_k, viscous, bounds
+    const: np.ndarray | None = None  # (rows,); None where every form has none
 
     def arrays(self, values: np.ndarray) -> tuple[np.ndarray, ...]:
         """(masses, link_c, link_k, viscous, bounds) at ``values`` (FIELDS order)."""
         flat = _sums(self.coef, np.asarray(values, dtype=float))
+        if self.const is not None:
+            flat = flat + self.const
         out, at = [], 0
         for size in self.sizes:
             out.append(flat[at : at + size])
@@ -203,35 +209,22 @@ def _sums(coef, values):
     return out
 
 
-def _compiled(name: str, values):
-    return compile_network(build_network(name, InerterParameters(**dict(zip(FIELDS, map(float, values))))))
-
-
-def _flat_arrays(compiled) -> tuple[np.ndarray, tuple[int, ...]]:
-    parts = (compiled.masses, compiled.link_c, compiled.link_k, compiled.viscous, compiled.coulomb_bounds)
-    return np.concatenate(parts), tuple(len(p) for p in parts)
-
-
 @functools.lru_cache(maxsize=None)
 def linear_chain(name: str) -> LinearChain | None:
-    """The :class:`LinearChain` of network ``name`` (Coulomb friction), found by compiling
-    it at the paper's A3 parameters and at each parameter raised by one, and checked at
-    another point; None where the arrays are not sums of parameters (the full network's
-    tan(theta) shares) or the network needs more than the exact kernel."""
-    base = np.array([getattr(paper_parameters("A3"), f) for f in FIELDS])
-    compiled = _compiled(name, base)
+    """The :class:`LinearChain` of network ``name`` (Coulomb friction): the network built
+    and compiled once on symbolic parameters (``network.symbolic``), every array's
+    entries read off as linear forms. None where the network needs more than the exact
+    kernel's Coulomb form, or is not linear in its parameters (a builder that multiplies
+    two of them raises TypeError there)."""
+    p = SimpleNamespace(**symbols(FIELDS))
+    try:
+        compiled = compile_network(build_network(name, p, SymbolicCoulomb))
+    except TypeError:
+        return None
     if not compiled.all_coulomb:
         return None
-    flat0, sizes = _flat_arrays(compiled)
-    coef = np.empty((len(flat0), len(FIELDS)))
-    for k in range(len(FIELDS)):
-        v = base.copy()
-        v[k] += 1.0
-        coef[:, k] = _flat_arrays(_compiled(name, v))[0] - flat0
-    rounded = np.round(coef)
-    if not (np.allclose(coef, rounded, rtol=0, atol=1e-6) and set(np.unique(rounded)) <= {0.0, 1.0}):
-        return None
-    check = base * np.linspace(0.5, 2.0, len(FIELDS))
-    if not np.allclose(rounded @ check, _flat_arrays(_compiled(name, check))[0], rtol=1e-14, atol=0):
-        return None
-    return LinearChain(name, rounded, sizes)
+    parts = (list(compiled.masses), list(compiled.link_c), list(compiled.link_k),
+             [sum(law.viscous for law in node) for node in compiled.laws],
+             [sum(law.bound for law in node) for node in compiled.laws])
+    coef, const = coefficients([v for part in parts for v in part], FIELDS)
+    return LinearChain(name, coef, tuple(len(part) for part in parts), const if np.any(const) else None)

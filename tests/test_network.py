@@ -1,4 +1,5 @@
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -168,7 +169,7 @@ def test_bad_network_input():
         cascade(Mass(1.0), "spring")
 
 
-@pytest.mark.parametrize("name", ["reduced", "rigid", "linear"])
+@pytest.mark.parametrize("name", ["reduced", "full", "rigid", "linear"])
 def test_linear_chain_gives_the_compiled_arrays(name):
     from bayes_inerter.networks import FIELDS, linear_chain
 
@@ -184,8 +185,26 @@ def test_linear_chain_gives_the_compiled_arrays(name):
             np.testing.assert_allclose(g, w, rtol=1e-15, atol=0)
 
 
-def test_linear_chain_refuses_a_network_that_is_not_a_sum_of_parameters():
-    from bayes_inerter.networks import linear_chain
+def test_linear_chain_reads_the_full_networks_nut_share_exactly():
+    from bayes_inerter.networks import FIELDS, NUT_SHARE, lead_angle, linear_chain
 
-    assert linear_chain("full") is None  # its tan(theta) shares of f2
+    chain = linear_chain("full")
+    bounds = chain.coef[-chain.sizes[-1]:]  # each node's Coulomb bound as a form of the parameters
+    share = math.tan(lead_angle()) * NUT_SHARE
+    assert bounds[1, FIELDS.index("f2_0")] == share and bounds[2, FIELDS.index("f2_0")] == 1.0
+    assert bounds[0, FIELDS.index("f1_0")] == 1.0 and np.count_nonzero(bounds) == 3
+
+
+def test_linear_chain_refuses_a_network_that_is_not_linear_in_its_parameters(monkeypatch):
+    import bayes_inerter.networks as networks
+
+    def squared(p, friction="coulomb"):  # a mass that grows as b squared
+        return cascade(Mass(p.m_B), Inerter(p.b * p.b))
+
+    monkeypatch.setitem(networks.NETWORKS, "squared", squared)
+    networks.linear_chain.cache_clear()
+    try:
+        assert networks.linear_chain("squared") is None
+    finally:
+        networks.linear_chain.cache_clear()
 

@@ -29,11 +29,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..friction import FrictionLaw
+from .symbolic import Linear
 
 __all__ = ["Block", "Mass", "Inerter", "Deformation", "Friction", "Backlash"]
 
 
 def _positive(kind: str, name: str, value: float) -> float:
+    if isinstance(value, Linear):  # a symbolic parameter: checked where it takes a number
+        return value
     value = float(value)
     if not math.isfinite(value) or value <= 0:
         raise ValueError(f"{kind}: {name} must be positive and finite, got {value}")
@@ -41,6 +44,8 @@ def _positive(kind: str, name: str, value: float) -> float:
 
 
 def _non_negative(kind: str, name: str, value: float) -> float:
+    if isinstance(value, Linear):
+        return value
     value = float(value)
     if not math.isfinite(value) or value < 0:
         raise ValueError(f"{kind}: {name} must be non-negative and finite, got {value}")

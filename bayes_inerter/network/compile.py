@@ -21,6 +21,7 @@ from numba import njit
 
 from ..friction import FrictionLaw
 from .blocks import Deformation, Friction, Inerter, Mass
+from .symbolic import Linear
 from .twoport import Network
 
 __all__ = ["CompiledNetwork", "compile_network", "chain_state_space"]
@@ -117,7 +118,9 @@ def _state_space(masses, link_c, link_k, viscous, use_viscous, position):
 
 
 def compile_network(network: Network) -> CompiledNetwork:
-    """Flatten a :class:`Network` into nodes, links and contacts."""
+    """Flatten a :class:`Network` into nodes, links and contacts. A network built on
+    symbolic parameters (``network.symbolic``) compiles into arrays of their linear
+    forms (its nodes' masses unchecked: they have no number yet)."""
     masses: list[float] = [0.0]
     laws: list[list[FrictionLaw]] = [[]]
     link_c: list[float] = []
@@ -138,16 +141,18 @@ def compile_network(network: Network) -> CompiledNetwork:
             laws.append([])
         else:
             raise ValueError(f"cannot compile block {blk!r}")
+    symbolic = any(isinstance(v, Linear) for v in (*masses, *link_c, *link_k))
     for i, m in enumerate(masses):
-        if m <= 0:
+        if not symbolic and m <= 0:
             raise ValueError(
                 f"network {network.name!r}: node {i} has no mass or inertance "
                 "(every node between deformations needs a Mass or an Inerter)"
             )
+    kind = object if symbolic else float  # symbolic: arrays of ``symbolic.Linear``
     return CompiledNetwork(
-        masses=np.array(masses),
-        link_c=np.array(link_c, dtype=float),
-        link_k=np.array(link_k, dtype=float),
+        masses=np.array(masses, dtype=kind),
+        link_c=np.array(link_c, dtype=kind),
+        link_k=np.array(link_k, dtype=kind),
         link_gap=np.array(link_gap, dtype=float),
         laws=tuple(tuple(node) for node in laws),
         name=network.name,
