@@ -32,7 +32,7 @@ from ...records.conditioning import lowpass
 from ...masses import resolve_masses
 from ...records.drive import resolve_drive, with_drive
 from ...records.record import Record
-from ...simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate, simulate_network
+from ...simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate_network
 from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
 from .harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
 from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise
@@ -268,9 +268,12 @@ class PosteriorModel:
         if self.model == "rigid":
             fixed.update(f2_0=0.0, c_f2=0.0)
         self.fixed = fixed
-        # The evaluation's short way (see simulate_lp): the network's arrays straight from
-        # the parameters, with no network built; where there is none, simulate().
-        self._chain = linear_chain(self.network) if q == 1 and not self.effect_names else None
+        # The paper's networks (Coulomb friction) run from their arrays, formed straight
+        # from the parameters (``networks.linear_chain``); the richer models' effects make
+        # a network of their own at each evaluation (simulate_raw).
+        self._chain = None if self.effect_names else linear_chain(self.network)
+        if self._chain is None and not self.effect_names:
+            raise ValueError(f"network {self.network!r} has no linear map from the parameters to its arrays")
         if self.motion is not None:
             # the motion-in algebra is the two-port network's: the nested networks are its limits
             fixed.update(MOTION_LIMITS.get(self.network, {}))
@@ -384,17 +387,17 @@ class PosteriorModel:
 
     def simulate_raw(self, theta) -> np.ndarray:
         """Simulated acceleration over the whole record (before the low-pass), sampled as
-        the likelihood says. With the network's :class:`~bayes_inerter.networks.LinearChain`
-        the arrays come straight from :meth:`field_vector` and the exact kernel runs on
-        them (``simulate.run_exact``): the same simulation as ``simulate()``, without
-        building and compiling a network at every evaluation (about a quarter of a 10 s
-        record's evaluation before)."""
+        the likelihood says. Two routes, one per kind of model: the paper's networks take
+        their arrays straight from :meth:`field_vector` through the network's
+        :class:`~bayes_inerter.networks.LinearChain` (compiled once on symbolic
+        parameters), and the exact kernel runs on them (``simulate.run_exact``: the same
+        simulation as ``simulate()``, bit for bit, without a network built at every
+        evaluation); the richer models build their effects' network
+        (``networks.device_network``) and run it (``simulate.simulate_network``)."""
         lk = self.likelihood
         if self.effect_names:
             net = effect_network(self.network, self.parameters(theta), self.effects(theta))
             return simulate_network(net, self._drive, sampling=lk.sampling)
-        if self._chain is None:
-            return simulate(self.parameters(theta), self._drive, network=self.network, sampling=lk.sampling)
         masses, link_c, link_k, viscous, bounds = self._chain.arrays(self.field_vector(theta))
         A, B = chain_state_space(masses, link_c, link_k, viscous)
         a, _ = run_exact(A, B, *contacts(bounds, masses), self._force, self._drive.h, sampling=lk.sampling)
