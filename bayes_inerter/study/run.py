@@ -138,7 +138,7 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
 
 
 def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None = None, on_done=None,
-              on_jobs=None, on_joint_step=None, on_identified=None) -> StudyResult:
+              on_jobs=None, on_joint_step=None, on_identified=None, executor=None) -> StudyResult:
     """Run ``plan`` into ``out``: records, fits, tables (CSV), figures (PNG), REPORT.md.
 
     ``processes`` local worker processes (one fit each) or a Dask ``scheduler`` address.
@@ -148,6 +148,7 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     processes (also with a scheduler); ``on_joint_step(iteration, target)`` hears its steps.
     With ``plan.identify`` every record's least-squares fit (``study.least_squares``)
     then runs on ``processes`` local processes; ``on_identified(name)`` hears each end.
+    ``executor``: the fits run on it instead (``processes`` is then its workers).
     """
     import matplotlib
 
@@ -158,12 +159,14 @@ def run_study(plan: StudyPlan, out, *, processes: int = 1, scheduler: str | None
     out = Path(out)
     check_output_folder(out)
     with folder_lock(out):
+        if executor is not None:
+            processes = executor.workers
         return _run_study(plan, out, processes=processes, scheduler=scheduler, on_done=on_done, on_jobs=on_jobs,
-                          on_joint_step=on_joint_step, on_identified=on_identified)
+                          on_joint_step=on_joint_step, on_identified=on_identified, executor=executor)
 
 
 def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_jobs, on_joint_step,
-               on_identified) -> StudyResult:
+               on_identified, executor=None) -> StudyResult:
     """:func:`run_study`'s work, with the folder locked."""
     from ..inference.fit import versions as fit_versions  # one list of versions for fits and studies
     from .report import write_report
@@ -175,7 +178,8 @@ def _run_study(plan: StudyPlan, out: Path, *, processes, scheduler, on_done, on_
     if on_jobs:
         on_jobs(len(jobs))
     t1 = time.perf_counter()
-    outcomes = run_jobs(jobs, processes=processes, scheduler=scheduler, on_done=on_done, plots=plan.figures)
+    outcomes = run_jobs(jobs, processes=processes, scheduler=scheduler, on_done=on_done, plots=plan.figures,
+                        executor=executor)
     t2 = time.perf_counter()
     fits = collect(out / "fits")
     joint = run_joint(plan, out, fits, records, processes=processes, progress=on_joint_step) if plan.joint else None

@@ -109,13 +109,14 @@ def _message(error: BaseException) -> str:
 
 
 def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=None,
-             plots: bool = False) -> list[dict]:
+             plots: bool = False, executor: Executor | None = None) -> list[dict]:
     """Run the jobs not finished before; return one outcome per job (in job order).
     ``plots``: each fit draws its figures too.
 
     ``processes``: local worker processes at a time; ``scheduler``: the address of a
-    Dask scheduler (``tcp://host:port``) to run them there instead. ``on_done`` is called
-    with each outcome as it comes (skipped ones first).
+    Dask scheduler (``tcp://host:port``) to run them there instead; ``executor``: an
+    executor to run them on, in place of both (left open). ``on_done`` is called with
+    each outcome as it comes (skipped ones first).
     """
     if processes < 1:
         raise ValueError(f"processes must be at least 1, got {processes}")
@@ -132,8 +133,10 @@ def run_jobs(jobs, *, processes: int = 1, scheduler: str | None = None, on_done=
             on_done(outcomes[job.key])
         else:
             todo.append(job)
-    # locally, every job runs in a process of its own, one process at a time included
-    with (Dask(scheduler) if scheduler else LocalProcesses(processes)) as executor:
+    if executor is not None:
         ran = _run(todo, executor, on_done, plots)
+    else:  # locally, every job runs in a process of its own, one process at a time included
+        with (Dask(scheduler) if scheduler else LocalProcesses(processes)) as mine:
+            ran = _run(todo, mine, on_done, plots)
     outcomes.update((o["key"], o) for o in ran)
     return [outcomes[job.key] for job in jobs]

@@ -1,0 +1,60 @@
+"""The full study's library form (``study.full``): its configuration, the paper-like
+records it fits, the chains' sentence, and the report made again from committed results."""
+
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from bayes_inerter.cli import main
+from bayes_inerter.executor import Serial
+from bayes_inerter.study.full import MORE, Config, chains_sentence, paper_like_records, run
+
+RESULTS = Path(__file__).resolve().parents[1] / "results"
+
+
+def test_the_configuration_refuses_too_few_steps():
+    with pytest.raises(ValueError, match="at least 20"):
+        Config(paper_like_steps=5)
+
+
+def test_the_paper_like_records_are_those_generate_writes(tmp_path):
+    mine = paper_like_records(tmp_path / "mine", seed=3)
+    assert main(["generate", "--paper-grid", "--truth", "paper-like", "--seed", "3", "--out",
+                 str(tmp_path / "cli")]) == 0
+    names = sorted(p.name for p in mine.glob("*.csv"))
+    assert len(names) == 27 and names == sorted(p.name for p in (tmp_path / "cli").glob("*.csv"))
+    for name in names[:4]:
+        assert (mine / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+    stamp = (mine / names[0]).stat().st_mtime_ns
+    assert paper_like_records(mine, seed=4) == mine and (mine / names[0]).stat().st_mtime_ns == stamp  # kept
+
+
+def test_chains_sentence_counts_the_converged_two_port_chains(tmp_path):
+    for k, (converged, steps) in enumerate([(True, 4000), (False, 20000)]):
+        folder = tmp_path / "fits" / "two-port" / f"r{k}"
+        folder.mkdir(parents=True)
+        (folder / "fit.json").write_text(json.dumps({"converged": converged, "iterations": steps}))
+    text = chains_sentence(tmp_path)
+    assert text.startswith("1 of the 2 two-port chains met") and "4,000 to 20,000 steps" in text
+    assert "indicative" in text and chains_sentence(tmp_path / "none") == ""
+
+
+def test_report_only_remakes_the_committed_report(tmp_path):
+    if subprocess.run(["git", "-C", str(RESULTS), "status", "--porcelain", "full"], capture_output=True,
+                      text=True).stdout.strip():
+        pytest.skip("results/full has changes not committed")
+    for name in ("full", *MORE):  # the study's folder and those whose sections its report takes in
+        if (RESULTS / name).is_dir():
+            shutil.copytree(RESULTS / name, tmp_path / "results" / name,
+                            ignore=shutil.ignore_patterns("*.h5", "*.nc", "records", "*.png"))
+    got = run(Config(report_only=True), tmp_path / "results" / "full", Serial())
+    (report,) = got.written
+    assert report.read_text() == (RESULTS / "full" / "REPORT.md").read_text()
+
+
+def test_report_only_without_a_study_says_what_to_do(tmp_path):
+    with pytest.raises(ValueError, match="run the study without report_only first"):
+        run(Config(report_only=True), tmp_path / "full", Serial())
