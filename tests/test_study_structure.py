@@ -132,3 +132,30 @@ def test_a_common_scale_error_costs_nothing_where_every_b_is_off_by_it():
         0.999, dof)
     with pytest.raises(ValueError, match="must not be negative"):
         with_identification_error(precise, per_setting=-0.01)
+
+
+def test_the_study_writes_its_tables_and_section_from_the_full_studys_results(tmp_path):
+    """A short chain on the committed results/full: every file, and the section written
+    from the numbers of the same run."""
+    from pathlib import Path
+
+    from bayes_inerter.study.structure import Config, run
+
+    results = Path(__file__).resolve().parents[1] / "results"
+    got = run(Config(steps=200, full=str(results / "full"), coverage=str(tmp_path / "none.csv")),
+              tmp_path / "structure")
+    assert [p.name for p in got.written] == ["explanations.csv", "terms.csv", "frequency.csv", "structure.png",
+                                             "summary.json", "SECTION.md"]
+    assert all(p.is_file() for p in got.written)
+    section = (tmp_path / "structure" / "SECTION.md").read_text()
+    control = got.values["fits"]["control"]
+    assert section.startswith("## Why identified inertance differs from theory")
+    assert f"{1e3 * np.percentile(control.terms['dJ_0'], 50):.3g}" in section
+    assert "other laboratories" not in section  # no coverage rows given, no sentence on them
+
+
+def test_the_study_says_which_result_it_needs(tmp_path):
+    from bayes_inerter.study.structure import Config, run
+
+    with pytest.raises(ValueError, match="b_draws.npz is missing; run the full study"):
+        run(Config(steps=200), tmp_path / "structure")

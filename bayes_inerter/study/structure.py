@@ -27,6 +27,11 @@ gives each one's misfit to the identified b's (chi-square at its posterior mode)
 says which explanation the b's support and which they rule out;
 :func:`frequency_shares` asks whether the flywheels' share of b changes with the drive
 frequency (a flywheel on a compliant hub would turn differently at higher frequency).
+
+:class:`Config` and :func:`run` are the study of results/structure
+(``studies/structure.py``, through ``cli.study_script``): the model fitted to the full
+study's identified b's, its tables, figure and the report's section
+(``structure_report``).
 """
 
 from __future__ import annotations
@@ -41,7 +46,7 @@ from .analysis import Z94
 
 __all__ = ["StructurePriors", "Identified", "StructureFit", "identified_from_draws", "identified_from_intervals",
            "with_identification_error", "fit_structure", "explanations", "frequency_shares", "EXPLANATIONS", "TERMS",
-           "IDENTIFICATION_SD", "COMMON_SD"]
+           "IDENTIFICATION_SD", "COMMON_SD", "Config", "run"]
 
 #: How many of each kind of flywheel the settings use at most.
 N_SMALL = max(s.n_small for s in SETTINGS.values())
@@ -374,3 +379,153 @@ def frequency_shares(rows: list[dict], lo: str, hi: str) -> list[dict]:
                 stats.chi2.sf(c, len(out) - 1))})
         out.append(row)
     return out
+
+
+@dataclass(frozen=True)
+class Config:
+    """What ``studies/structure.py`` is asked.
+
+    Attributes
+    ----------
+    seed, steps : the structural model's chain (40 walkers; a quarter discarded).
+    per_setting, common : each setting's identification error beyond its posterior and
+        a scale error common to all, relative sd (:data:`IDENTIFICATION_SD`,
+        :data:`COMMON_SD`: assumptions).
+    full : the full study's folder whose b's are fitted (None: ``full`` beside ``out``).
+    coverage : the paper-like coverage study's replicates.csv, for A0's error under the
+        package's own fit (None: ``coverage-paper-like-v5`` beside ``out``; skipped
+        where it is not there).
+    """
+
+    seed: int = field(default=0, metadata={"help": "the structural model's chain seed"})
+    steps: int = field(default=6000, metadata={"help": "the structural model's chain steps"})
+    per_setting: float = field(default=IDENTIFICATION_SD, metadata={
+        "help": "each setting's identification error beyond its posterior, relative sd"})
+    common: float = field(default=COMMON_SD, metadata={"help": "a scale error common to every setting's b, relative sd"})
+    full: str | None = field(default=None, metadata={"help": "the full study's folder (default: OUT/../full)"})
+    coverage: str | None = field(default=None, metadata={
+        "help": "the paper-like coverage study's replicates.csv (default: OUT/../coverage-paper-like-v5)"})
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.steps, int) and self.steps >= 100):
+            raise ValueError(f"steps must be a whole number of at least 100, got {self.steps!r}")
+        if not (self.per_setting >= 0 and self.common >= 0):
+            raise ValueError(f"per_setting and common are sds, at least 0; got {self.per_setting} and {self.common}")
+
+
+def _rows(path) -> list[dict]:
+    import csv
+
+    def num(v):
+        try:
+            return float(v)
+        except ValueError:
+            return v or None
+
+    with open(path, newline="") as f:
+        return [{k: (v if k in ("setting", "record") else num(v)) for k, v in r.items()} for r in csv.DictReader(f)]
+
+
+def _write(path, rows: list[dict]) -> None:
+    import csv
+
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+
+
+def _lines(expl: list[dict], freq: list[dict]) -> list[str]:
+    lines = [f"{r['identified']:>10}: {r['explanation']:<48} chi2 {r['chi2']:>12.1f} worst {r['worst_setting']} "
+             f"z {r['worst_z']:+.1f} max error {100 * r['max_rel_error']:.2f} %" for r in expl]
+    for r in freq:
+        if r["freq_hz"] == "agree?":
+            lines.append(f"{r['identified']}: shares agree across frequencies? p base {r['b_base_p']:.3g}, "
+                         f"per small {r['b_per_small_p']:.3g}, per big {r['b_per_big_p']:.3g}")
+        else:
+            lines.append(f"{r['identified']} {r['freq_hz']:g} Hz: base {r['b_base']:.1f} +- {r['b_base_sd']:.1f}, "
+                         f"per small {r['b_per_small']:.1f} +- {r['b_per_small_sd']:.1f}, per big "
+                         f"{r['b_per_big']:.1f} +- {r['b_per_big_sd']:.1f} (chi2 {r['chi2']:.1f} on {r['dof']})")
+    return lines
+
+
+def run(config: Config, out, executor=None, *, progress=None):
+    """The structural model fitted to the full study's b's (the control's joint draws and
+    the paper-like honest intervals, each with the identification error of ``config``),
+    written into ``out``: explanations.csv, terms.csv, frequency.csv, structure.png,
+    summary.json and SECTION.md. Everything runs in this process (``executor`` is not
+    used: two short chains); ``progress(done, 2)`` hears each chain."""
+    import json
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .manifest import source_commit
+    from .output import StudyOutput
+    from .plots import plot_structure
+    from .structure_report import structure_section
+
+    out = Path(out)
+    full = Path(config.full) if config.full else out.parent / "full"
+    coverage_file = Path(config.coverage) if config.coverage else (
+        out.parent / "coverage-paper-like-v5" / "replicates.csv")
+    for need in (full / "joint" / "b_draws.npz", full / "paper-like" / "inertance.csv",
+                 full / "inertance_records.csv", full / "paper-like" / "least_squares.csv"):
+        if not need.is_file():
+            raise ValueError(f"{need} is missing; run the full study (studies/study.py) first")
+    out.mkdir(parents=True, exist_ok=True)
+    priors = StructurePriors()
+    with np.load(full / "joint" / "b_draws.npz") as npz:
+        draws = {k: npz[k] for k in npz.files}
+    precise = identified_from_draws(draws, "control: joint posterior draws")
+    control = with_identification_error(precise, config.per_setting, config.common)
+    paper_like = with_identification_error(
+        identified_from_intervals(_rows(full / "paper-like" / "inertance.csv"), "b_honest_3%", "b_honest_97%",
+                                  "paper-like: honest intervals"), config.per_setting, config.common)
+    sets = {"control": control, "paper-like": paper_like}
+    expl = [{"identified": "control, posterior precision alone", **r} for r in explanations(precise, priors)]
+    terms, fits = [], {}
+    if progress:
+        progress(0, len(sets))
+    for label, ident in sets.items():
+        expl += [{"identified": label, **r} for r in explanations(ident, priors)]
+        fit = fit_structure(ident, priors, seed=config.seed, steps=config.steps, burn=config.steps // 4)
+        fits[label] = fit
+        for name, v in fit.terms.items():
+            lo, med, hi = np.percentile(v, [3, 50, 97])
+            terms.append({"identified": label, "term": name, "median": med, "3%": lo, "97%": hi})
+        terms.append({"identified": label, "term": "ppc (posterior predictive p of the b's misfit)", "median": fit.ppc})
+        terms.append({"identified": label, "term": "tau (steps; chain of 40 walkers)", "median": fit.tau,
+                      "3%": None, "97%": None})
+        if progress:
+            progress(len(fits), len(sets))
+    _write(out / "explanations.csv", expl)
+    _write(out / "terms.csv", terms)
+    least_squares = _rows(full / "paper-like" / "least_squares.csv")
+    freq = ([{"identified": "control (posterior HDI)", **r} for r in
+             frequency_shares(_rows(full / "inertance_records.csv"), "b_hdi_3%", "b_hdi_97%")]
+            + [{"identified": "paper-like (honest, identified records)", **r} for r in
+               frequency_shares(least_squares, "b_honest_3%", "b_honest_97%")])
+    _write(out / "frequency.csv", freq)
+    fig = plot_structure(fits)
+    fig.savefig(out / "structure.png", dpi=110)
+    plt.close(fig)
+    (out / "summary.json").write_text(json.dumps({
+        "commit": source_commit(), "seed": config.seed, "steps": config.steps, "per_setting_sd": config.per_setting,
+        "common_sd": config.common, "priors": {k: getattr(priors, k) for k in priors.__dataclass_fields__},
+        "sources": {k: v.source for k, v in sets.items()}}, indent=2) + "\n")
+    rest = identified_from_draws({k: v for k, v in draws.items() if k != "b_A0"}, "control without A0")
+    without_a0 = explanations(with_identification_error(rest, config.per_setting, config.common), priors)[3]
+    coverage = _rows(coverage_file) if coverage_file.is_file() else []
+    (out / "SECTION.md").write_text(structure_section(expl, fits, freq, priors, config.per_setting, config.common,
+                                                      without_a0, least_squares, coverage))
+    lines = [f"{label}: acceptance {f.acceptance:.2f}, tau {f.tau:.0f} steps, ppc {f.ppc:.2f}"
+             for label, f in fits.items()] + _lines(expl, freq)
+    return StudyOutput(written=tuple(out / n for n in ("explanations.csv", "terms.csv", "frequency.csv",
+                                                        "structure.png", "summary.json", "SECTION.md")),
+                       lines=tuple(lines), values={"fits": fits, "explanations": expl})
