@@ -223,3 +223,27 @@ def test_every_results_folder_names_the_script_that_makes_it():
     paths = tracked_paths()
     assert "results/quick/README.md" in paths
     assert unmade_results(ROOT, paths) == []
+
+
+# --- docs without history: no dated runs in the methods -----------------------------------
+
+DATE = re.compile(r"\b20\d\d-[01]\d-[0-3]\d\b")
+#: Docs whose dates are data: the performance tables, generated from the CSV rows that
+#: carry each measurement's date (``benchmarks/performance_table.py``).
+DATED_DATA = ("performance.md",)
+
+
+def dated_lines(text: str) -> list[str]:
+    """Lines of ``text`` that name a calendar date (a run's day belongs in CHANGELOG.md)."""
+    return [line for line in text.splitlines() if DATE.search(line)]
+
+
+def test_a_dated_line_is_caught():
+    assert dated_lines("measured on 2026-11-25 (8 min)\nmeasured from rows\n") == ["measured on 2026-11-25 (8 min)"]
+    assert dated_lines("a record of 2026 samples, seed 11-25") == []
+
+
+def test_the_docs_and_the_guide_name_no_run_by_its_date():
+    pages = [p for p in (ROOT / "docs").glob("*.md") if p.name not in DATED_DATA] + [ROOT / "README.md"]
+    found = {p.name: dated_lines(p.read_text()) for p in pages}
+    assert {k: v for k, v in found.items() if v} == {}
