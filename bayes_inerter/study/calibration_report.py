@@ -123,8 +123,9 @@ def study_calibration_report(out: Path, cs, rows: list[dict], results: list[dict
     prior = "\n".join(f"- {name}: {p.describe()}" for name, p in priors.items())
     report = ["# Simulation-based calibration in the study's configuration", "",
               "**Question.** Do the intervals the study reports hold the truth as often as they say, where its "
-              "numbers come from: 10 s generator records, the joint model, the package's start and the 94 % "
-              "interval?", "", head, "", " ".join(verdict), "",
+              "numbers come from: 10 s generator records, "
+              + ("each fitted alone as `bayes-inerter fit` fits it" if getattr(cs, "single", False) else
+                 "the joint model") + ", the package's start and the 94 % interval?", "", head, "", " ".join(verdict), "",
               "Columns: `hdi_<q>` is the coverage of the highest-density interval the study reports, `central_<q>` "
               "of the equal-tailed one, `se_<q>` the binomial standard error at the nominal level.", "",
               table, "", "![coverage](coverage.png)", "", "![ranks](ranks.png)", "",
