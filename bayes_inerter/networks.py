@@ -223,8 +223,6 @@ def linear_chain(name: str) -> LinearChain | None:
         return None
     if not compiled.all_coulomb:
         return None
-    parts = (list(compiled.masses), list(compiled.link_c), list(compiled.link_k),
-             [sum(law.viscous for law in node) for node in compiled.laws],
-             [sum(law.bound for law in node) for node in compiled.laws])
+    parts = (compiled.masses, compiled.link_c, compiled.link_k, compiled.viscous, compiled.coulomb_bounds)
     coef, const = coefficients([v for part in parts for v in part], FIELDS)
     return LinearChain(name, coef, tuple(len(part) for part in parts), const if np.any(const) else None)

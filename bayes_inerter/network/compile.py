@@ -55,8 +55,9 @@ class CompiledNetwork:
 
     @property
     def viscous(self) -> np.ndarray:
-        """Sum of the laws' viscous coefficients per node, N s/m."""
-        return np.array([sum(law.viscous for law in node) for node in self.laws], dtype=float)
+        """Sum of the laws' viscous coefficients per node, N s/m (linear forms for a
+        network on symbolic parameters)."""
+        return np.array([sum(law.viscous for law in node) for node in self.laws], dtype=self.masses.dtype)
 
     @property
     def all_coulomb(self) -> bool:
@@ -68,8 +69,9 @@ class CompiledNetwork:
 
     @property
     def coulomb_bounds(self) -> np.ndarray:
-        """Set-valued bound at rest per node (sum of the laws' bounds), N."""
-        return np.array([sum(law.bound for law in node) for node in self.laws], dtype=float)
+        """Set-valued bound at rest per node (sum of the laws' bounds), N (linear forms
+        for a network on symbolic parameters)."""
+        return np.array([sum(law.bound for law in node) for node in self.laws], dtype=self.masses.dtype)
 
     def state_space(self, *, viscous: bool = True, position: bool = False):
         """Linear part as x' = A x + B F (force on node 0), shape (n, n) and (n,).
