@@ -44,7 +44,7 @@ from ..inference.summaries.results import hdi
 from ..records.sensitivity import SensorCalibration
 from .fits import RecordFit, collect, fit_loo  # the tables' input, named here as before
 
-__all__ = ["RecordFit", "birge_ratio", "collect", "added_calibration", "inertance_table", "is_joint", "joint_estimate", "joint_inertance",
+__all__ = ["read_csv", "TEXT_COLUMNS", "RecordFit", "birge_ratio", "collect", "added_calibration", "inertance_table", "is_joint", "joint_estimate", "joint_inertance",
            "record_table",
            "flywheel_regression", "phi_table", "model_comparison", "fit_loo", "contraction_table", "write_csv", "Z94"]
 
@@ -349,13 +349,33 @@ def contraction_table(fits: list[RecordFit]) -> list[dict]:
 
 
 def write_csv(path: Path, rows: list[dict], fields=None) -> None:
-    """``rows`` as CSV, floats to 6 significant digits; with no rows the header of
-    ``fields`` alone (an empty file where none are given)."""
+    """``rows`` as CSV, floats to 6 significant digits, the columns every key of the rows
+    in the order they first come; with no rows the header of ``fields`` alone (an empty
+    file where none are given)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as f:
         if not rows and not fields:
             return
-        w = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else list(fields))
+        w = csv.DictWriter(f, fieldnames=list(dict.fromkeys(k for r in rows for k in r)) if rows else list(fields))
         w.writeheader()
         for row in rows:
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in row.items()})
+
+
+#: Columns :func:`read_csv` keeps as text, whatever they hold.
+TEXT_COLUMNS = ("setting", "record")
+
+
+def read_csv(path) -> list[dict]:
+    """The rows of a table this package wrote, as numbers where they are: floats,
+    "True"/"False" as booleans, an empty cell as None; :data:`TEXT_COLUMNS` as text."""
+    def value(v):
+        if v in ("True", "False"):
+            return v == "True"
+        try:
+            return float(v)
+        except ValueError:
+            return v or None
+
+    with open(path, newline="") as f:
+        return [{k: (v if k in TEXT_COLUMNS else value(v)) for k, v in r.items()} for r in csv.DictReader(f)]

@@ -12,13 +12,12 @@ summary.png. The fits themselves are ``study.least_squares``'s, run by the full 
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .analysis import write_csv
+from .analysis import read_csv, write_csv
 from .output import StudyOutput
 
 __all__ = ["Config", "run", "KINDS", "summary_row", "plot_summary"]
@@ -32,19 +31,6 @@ class Config:
     """``full``: the full study's folder (None: ``full`` beside the output folder)."""
 
     full: str | None = field(default=None, metadata={"help": "the full study's folder (default: OUT/../full)"})
-
-
-def _read(path: Path) -> list[dict]:
-    def num(v):
-        if v in ("True", "False"):
-            return v == "True"
-        try:
-            return float(v)
-        except ValueError:
-            return v or None
-
-    with open(path, newline="") as f:
-        return [{k: num(v) for k, v in r.items()} for r in csv.DictReader(f)]
 
 
 def summary_row(device: str, rows: list[dict], freq) -> dict:
@@ -108,7 +94,7 @@ def run(config: Config, out, executor=None, *, progress=None) -> StudyOutput:
             raise ValueError(f"{path} is missing; run the full study (studies/study.py) first")
     table = []
     for device, path in sources.items():
-        rows = _read(path)
+        rows = read_csv(path)
         for f in sorted({r["freq_hz"] for r in rows}):
             table.append(summary_row(device, [r for r in rows if r["freq_hz"] == f], f"{f:g}"))
         table.append(summary_row(device, rows, "all"))

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..device import DEFAULT_GEOMETRY, SETTINGS
-from .analysis import Z94
+from .analysis import Z94, read_csv, write_csv
 
 __all__ = ["StructurePriors", "Identified", "StructureFit", "identified_from_draws", "identified_from_intervals",
            "with_identification_error", "fit_structure", "explanations", "frequency_shares", "EXPLANATIONS", "TERMS",
@@ -413,30 +413,6 @@ class Config:
             raise ValueError(f"per_setting and common are sds, at least 0; got {self.per_setting} and {self.common}")
 
 
-def _rows(path) -> list[dict]:
-    import csv
-
-    def num(v):
-        try:
-            return float(v)
-        except ValueError:
-            return v or None
-
-    with open(path, newline="") as f:
-        return [{k: (v if k in ("setting", "record") else num(v)) for k, v in r.items()} for r in csv.DictReader(f)]
-
-
-def _write(path, rows: list[dict]) -> None:
-    import csv
-
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
-
-
 def _lines(expl: list[dict], freq: list[dict]) -> list[str]:
     lines = [f"{r['identified']:>10}: {r['explanation']:<48} chi2 {r['chi2']:>12.1f} worst {r['worst_setting']} "
              f"z {r['worst_z']:+.1f} max error {100 * r['max_rel_error']:.2f} %" for r in expl]
@@ -485,7 +461,7 @@ def run(config: Config, out, executor=None, *, progress=None):
     precise = identified_from_draws(draws, "control: joint posterior draws")
     control = with_identification_error(precise, config.per_setting, config.common)
     paper_like = with_identification_error(
-        identified_from_intervals(_rows(full / "paper-like" / "inertance.csv"), "b_honest_3%", "b_honest_97%",
+        identified_from_intervals(read_csv(full / "paper-like" / "inertance.csv"), "b_honest_3%", "b_honest_97%",
                                   "paper-like: honest intervals"), config.per_setting, config.common)
     sets = {"control": control, "paper-like": paper_like}
     expl = [{"identified": "control, posterior precision alone", **r} for r in explanations(precise, priors)]
@@ -504,14 +480,14 @@ def run(config: Config, out, executor=None, *, progress=None):
                       "3%": None, "97%": None})
         if progress:
             progress(len(fits), len(sets))
-    _write(out / "explanations.csv", expl)
-    _write(out / "terms.csv", terms)
-    least_squares = _rows(full / "paper-like" / "least_squares.csv")
+    write_csv(out / "explanations.csv", expl)
+    write_csv(out / "terms.csv", terms)
+    least_squares = read_csv(full / "paper-like" / "least_squares.csv")
     freq = ([{"identified": "control (posterior HDI)", **r} for r in
-             frequency_shares(_rows(full / "inertance_records.csv"), "b_hdi_3%", "b_hdi_97%")]
+             frequency_shares(read_csv(full / "inertance_records.csv"), "b_hdi_3%", "b_hdi_97%")]
             + [{"identified": "paper-like (honest, identified records)", **r} for r in
                frequency_shares(least_squares, "b_honest_3%", "b_honest_97%")])
-    _write(out / "frequency.csv", freq)
+    write_csv(out / "frequency.csv", freq)
     fig = plot_structure(fits)
     fig.savefig(out / "structure.png", dpi=110)
     plt.close(fig)
@@ -521,7 +497,7 @@ def run(config: Config, out, executor=None, *, progress=None):
         "sources": {k: v.source for k, v in sets.items()}}, indent=2) + "\n")
     rest = identified_from_draws({k: v for k, v in draws.items() if k != "b_A0"}, "control without A0")
     without_a0 = explanations(with_identification_error(rest, config.per_setting, config.common), priors)[3]
-    coverage = _rows(coverage_file) if coverage_file.is_file() else []
+    coverage = read_csv(coverage_file) if coverage_file.is_file() else []
     (out / "SECTION.md").write_text(structure_section(expl, fits, freq, priors, config.per_setting, config.common,
                                                       without_a0, least_squares, coverage))
     lines = [f"{label}: acceptance {f.acceptance:.2f}, tau {f.tau:.0f} steps, ppc {f.ppc:.2f}"

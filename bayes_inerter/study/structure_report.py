@@ -33,7 +33,7 @@ def _posterior_errors(coverage) -> str:
     if not a0:
         return ""
     every = [x for e in err.values() for x in e]
-    capped = sum(1 for r in coverage if r.get("converged") == "False")
+    capped = sum(1 for r in coverage if r.get("converged") is False)
     return (f" This package's default fit (motion in, force out, each chain to the convergence rule or its cap; "
             f"{capped} of {len(coverage)} stopped at the cap) showed no such bias on the same device family in "
             f"other laboratories (results/coverage-paper-like-v5): A0's b {', '.join(a0)}, every setting's within "
