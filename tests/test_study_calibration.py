@@ -115,3 +115,12 @@ def test_a_resuming_replicate_is_given_a_work_folder_under_the_run(tmp_path):
     assert run_replicates(_Plain(), tmp_path / "b", 2) == [{"replicate": 0}, {"replicate": 1}]
     got = run_replicates(_Resuming(), tmp_path / "c", 1, work=tmp_path / "elsewhere")  # a checkpoint kept apart
     assert got[0]["folder"] == str(tmp_path / "elsewhere" / "0000")
+
+
+def test_a_result_file_is_written_whole_and_leaves_nothing_beside_it(tmp_path):
+    from bayes_inerter.study.output import write_json
+
+    write_json(tmp_path / "0001.json", {"replicate": 1, "b": 3531.6}, indent=1)
+    assert json.loads((tmp_path / "0001.json").read_text()) == {"replicate": 1, "b": 3531.6}
+    assert (tmp_path / "0001.json").read_text().endswith("}\n")
+    assert [p.name for p in tmp_path.iterdir()] == ["0001.json"]

@@ -46,6 +46,7 @@ from ..inference.summaries.results import ar1_noise, posterior_sample
 from ..inference.sampling.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
+from .output import write_json
 
 __all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "run_calibration", "coverage_table",
            "compare_calibrations", "Config", "run", "case_name"]
@@ -188,9 +189,7 @@ def _worker(args):
     except Exception as exc:  # one replicate's failure is reported, the others go on
         result = {"replicate": k, "error": f"{type(exc).__name__}: {exc}"}
     path = _replicate_file(out, k)
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(result) + "\n")
-    tmp.replace(path)  # atomic: a killed run leaves no half-written replicate
+    write_json(path, result)
     return result
 
 

@@ -26,7 +26,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -36,7 +35,7 @@ from ..device import paper_parameters
 from ..inference.posterior.model import LikelihoodSettings, PosteriorModel
 from ..inference.sampling.optimize import NM_MAXITER, laplace_covariance, local_optimum
 from ..records.generator import GeneratorSettings, generate_record
-from .output import StudyOutput
+from .output import StudyOutput, write_json
 
 __all__ = ["Design", "DEFAULT_DESIGNS", "DEFAULT_RICHER", "design_contraction", "richer_truth_shift", "noise_at",
            "Config", "run"]
@@ -214,9 +213,7 @@ def _case(job) -> dict:
     else:
         row = richer_truth_shift(setting, config.richer_freq, what, seed=config.seed, generator=config.generator,
                                  maxiter=config.maxiter)
-    tmp = path.with_suffix(f".{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(row) + "\n")
-    tmp.replace(path)
+    write_json(path, row)
     return row
 
 

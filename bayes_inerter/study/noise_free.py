@@ -35,7 +35,7 @@ from ..inference.sampling.convergence import Convergence
 from ..inference.summaries.results import hdi
 from ..records import GeneratorSettings, generate_record
 from .manifest import source_commit
-from .output import StudyOutput
+from .output import StudyOutput, write_json
 
 __all__ = ["Config", "run", "NOISE_FREE", "device", "fit_one"]
 
@@ -99,9 +99,7 @@ def fit_one(job) -> dict:
            "converged": bool(res.converged), "steps": int(res.iterations),
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
            "seconds": round(time.perf_counter() - t0, 1), "commit": commit}
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(row, indent=1) + "\n")
-    tmp.replace(path)
+    write_json(path, row, indent=1)
     return row
 
 

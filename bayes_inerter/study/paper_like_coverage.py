@@ -50,7 +50,7 @@ from ..inference.sampling.convergence import Convergence
 from ..inference.summaries.results import hdi
 from ..records.paper_like import PaperLike, laboratory, paper_like_record
 from .manifest import source_commit
-from .output import StudyOutput
+from .output import StudyOutput, write_json
 
 __all__ = ["Config", "run", "FAMILIES", "LEVELS", "replicate", "with_errors", "summarise", "likelihood_settings"]
 
@@ -109,9 +109,7 @@ def _run(job) -> dict:
     k, out, config, commit = job
     got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood)
     path = _file(out, k)
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(got, indent=1) + "\n")
-    tmp.replace(path)  # atomic: a killed run leaves no half-written replicate
+    write_json(path, got, indent=1)
     return got
 
 
