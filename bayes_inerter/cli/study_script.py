@@ -44,23 +44,21 @@ from .status import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 __all__ = ["config_options", "config_from_arguments", "study_main", "StudyOutput"]
 
 
-def _simple(hint) -> tuple[type | None, bool, bool]:
-    """(element type, is a tuple, may be None) of a field's type hint; element None where
-    the command line cannot give it (a nested dataclass)."""
-    optional = False
+def _simple(hint) -> tuple[type | None, bool]:
+    """(element type, is a tuple) of a field's type hint (``X | None`` read as X); element
+    None where the command line cannot give it (a nested dataclass)."""
     origin = typing.get_origin(hint)
     if origin in (typing.Union, types.UnionType):
         args = [a for a in typing.get_args(hint) if a is not type(None)]
-        optional = len(args) < len(typing.get_args(hint))
         if len(args) != 1:
-            return None, False, optional
+            return None, False
         hint = args[0]
         origin = typing.get_origin(hint)
     if hint is tuple or origin is tuple:
         args = [a for a in typing.get_args(hint) if a is not Ellipsis]
         elem = args[0] if args else str
-        return (elem if elem in (int, float, str) else None), True, optional
-    return (hint if hint in (int, float, str, bool) else None), False, optional
+        return (elem if elem in (int, float, str) else None), True
+    return (hint if hint in (int, float, str, bool) else None), False
 
 
 def config_options(parser: argparse.ArgumentParser, config_type) -> list[str]:
@@ -69,7 +67,7 @@ def config_options(parser: argparse.ArgumentParser, config_type) -> list[str]:
     hints = typing.get_type_hints(config_type)
     names = []
     for f in dataclasses.fields(config_type):
-        elem, many, optional = _simple(hints[f.name])
+        elem, many = _simple(hints[f.name])
         if elem is None or f.name.startswith("_"):
             continue
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()

@@ -49,7 +49,7 @@ from ..simulate import SimulationError
 from .output import write_json
 
 __all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "run_calibration", "coverage_table",
-           "compare_calibrations", "Config", "run", "case_name"]
+           "compare_calibrations", "Config", "run", "case_name", "failed_items"]
 
 _P = paper_parameters("A1")
 #: The calibration prior (see module docstring).
@@ -371,6 +371,11 @@ def case_name(config: Config) -> str:
     return f"{config.truth}{richer}-{config.residual}"
 
 
+def failed_items(results: list[dict]) -> tuple:
+    """``StudyOutput.failed`` of the replicates that raised (each holds ``error``)."""
+    return tuple((f"replicate {r.get('replicate', '?')}", r["error"]) for r in results if "error" in r)
+
+
 def run(config: Config, out, executor, *, progress=None):
     """The case's replicates into ``out`` (those not yet there on ``executor``), its
     report, then every case beside it in ``out``'s parent compared
@@ -381,5 +386,5 @@ def run(config: Config, out, executor, *, progress=None):
     compared = compare_calibrations(Path(out).parent)
     return StudyOutput(written=(res["report"],) + ((compared,) if compared else ()),
                        lines=(f"{res['replicates']} replicates, {len(res['failed'])} failed",),
-                       failed=tuple((f"replicate {r.get('replicate', '?')}", r["error"]) for r in res["failed"]),
+                       failed=failed_items(res["failed"]),
                        values=res)

@@ -580,6 +580,7 @@ def run(config: Config, out, executor, *, progress=None):
     a process of its own), then its tables, figures and reports; or, as ``config``
     asks, a folder summarised, its cap raised first, or one replicate inspected
     (``values["inspect"]``: :func:`inspect_replicate`'s dict, in ``work``)."""
+    from .calibration import failed_items
     from .output import StudyOutput
 
     out = Path(out)
@@ -601,5 +602,5 @@ def run(config: Config, out, executor, *, progress=None):
     got = run_study_calibration(cs, out, config.replicates, progress=progress, work=config.work, executor=executor)
     lines.append(f"{got['replicates']} replicates, {len(got['failed'])} failed")
     return StudyOutput(written=(got["report"], got["section"]), lines=tuple(lines),
-                       failed=tuple((f"replicate {r.get('replicate', '?')}", r["error"]) for r in got["failed"]),
+                       failed=failed_items(got["failed"]),
                        values=got)

@@ -5,6 +5,7 @@ the single-record and the joint model share (the harmonic likelihood: ``harmonic
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 
@@ -270,8 +271,6 @@ def settings_changes(text: str) -> dict:
     """``name=value,...`` (values as JSON: 16, false, "plate") as a dict of changes of
     :class:`LikelihoodSettings`; "" or "default": none. Raises ValueError on a pair
     without "=", a name it lacks or a value it refuses (before any fit)."""
-    import json
-
     changes = {}
     if text and text != "default":
         for part in text.split(","):
@@ -287,4 +286,3 @@ def settings_changes(text: str) -> dict:
     except TypeError as exc:
         raise ValueError(f"not a likelihood setting: {exc}") from None
     return changes
-
