@@ -32,7 +32,7 @@ import numpy as np
 from _table import append_row, read_rows
 from bayes_inerter.device import grid_case
 from bayes_inerter.inference.posterior.model import PosteriorModel
-from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, find_start, local_optimum
+from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, find_start, held_optimum, local_optimum
 from bayes_inerter.records import generate_record
 from bayes_inerter.records.drive import resolve_drive, with_drive
 from bayes_inerter.study.noise_free import NOISE_FREE, device
@@ -44,19 +44,8 @@ STEP = 5e-5  # the relative move of b alone
 
 def held_b(model: PosteriorModel, theta: np.ndarray, b: float) -> float:
     """The log posterior with b held at ``b`` and every other parameter polished from
-    ``theta``."""
-    i = model.names.index("b")
-    base = np.array(theta, dtype=float)
-    base[i] = math.log(b)
-    free = np.arange(len(base)) != i
-
-    def at(x):
-        t = base.copy()
-        t[free] = x
-        return t
-
-    _, lp = local_optimum(model, base[free], restarts=NM_RESTARTS, log_prob=lambda x: model.log_prob(at(x)))
-    return float(lp)
+    ``theta`` (``optimize.held_optimum``)."""
+    return float(model.log_prob(held_optimum(model, theta, model.names.index("b"), math.log(b)))[0])
 
 
 def one(k: int, chain: dict) -> dict:

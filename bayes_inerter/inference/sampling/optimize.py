@@ -58,7 +58,7 @@ from ..posterior.priors import RHO_BOUNDS
 __all__ = ["find_start", "local_optimum", "laplace_ensemble", "laplace_covariance", "sse", "profiled_misfit",
            "rigid_guess", "velocity_estimate", "OBJECTIVES", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER",
            "NM_RESTARTS", "RESTART_GAIN", "POLISH_RIGID_GUESS", "mirrored_modes", "MIRROR_SHARES", "MIRROR_NATS",
-           "MIRROR_SEPARATION", "tau_continued", "TAU_CONTINUATION"]
+           "MIRROR_SEPARATION", "tau_continued", "TAU_CONTINUATION", "held_optimum"]
 
 DE_POPSIZE = 8  # population per parameter
 #: Generations of each objective's differential evolution. Forty: on six records
@@ -307,11 +307,11 @@ def tau_continued(model: PosteriorModel, theta: np.ndarray, factors: tuple | Non
     own = t[i]
     for f in factors:
         level = float(np.clip(own + math.log(f) if log_scale else own * f, lo, hi))
-        t = _held(model, t, i, level)
+        t = held_optimum(model, t, i, level)
     return local_optimum(model, t, restarts=NM_RESTARTS)
 
 
-def _held(model: PosteriorModel, theta: np.ndarray, i: int, value: float) -> np.ndarray:
+def held_optimum(model: PosteriorModel, theta: np.ndarray, i: int, value: float) -> np.ndarray:
     """``theta`` with entry ``i`` set to ``value`` and the others polished (Nelder-Mead
     with restarts as :func:`local_optimum`'s) with it held there."""
     base = np.array(theta, dtype=float)
