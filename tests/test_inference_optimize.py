@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bayes_inerter.inference.sampling.optimize import (RESTART_GAIN, laplace_covariance, laplace_ensemble, local_optimum,
-                                              mirrored_modes)
+                                              mirrored_modes, whitened_optimum)
 
 #: These tests measure the search itself: the package's settings, not the lighter ones the
 #: rest of the suite runs (conftest's TEST_SEARCH).
@@ -98,6 +98,38 @@ def test_restarts_stop_once_a_pass_gains_little(monkeypatch):
     # the first pass finds the normal's peak; the second gains nothing and ends the restarts
     assert len(calls) == 2
     assert lp > -1e-6
+
+
+class Banana:
+    """Two Rosenbrock valleys a thousand times narrower than long, scaled to 0.01: a
+    curved ridge like the posterior's on a noise-free record, peak 0 at all ones."""
+
+    box = np.array([[-2.0, 2.0]] * 4)
+
+    def bounds(self):
+        return self.box
+
+    def log_prob(self, x):
+        if np.any(x < self.box[:, 0]) or np.any(x > self.box[:, 1]):
+            return -np.inf, np.nan
+        valleys = 1e6 * ((x[1] - x[0] ** 2) ** 2 + (x[3] - x[2] ** 2) ** 2)
+        return -(valleys + (1 - x[0]) ** 2 + (1 - x[2]) ** 2) / 0.01, 0.0
+
+
+def test_whitened_polish_follows_a_thin_curved_ridge_where_nelder_mead_stalls():
+    model = Banana()
+    x0 = np.array([-0.5, 0.25, 1.5, 2.0])
+    _, lp_nm = local_optimum(model, x0, restarts=6)
+    theta, lp = whitened_optimum(model, x0)
+    assert lp_nm < -10.0  # Nelder-Mead with its restarts stalls in the valley
+    assert lp > -1e-3
+    assert np.allclose(theta, 1.0, atol=1e-2)
+    assert lp == pytest.approx(model.log_prob(theta)[0])
+
+
+def test_whitened_polish_refuses_a_point_of_zero_density():
+    with pytest.raises(ValueError, match="zero posterior density"):
+        whitened_optimum(Banana(), np.array([3.0, 1.0, 1.0, 1.0]))
 
 
 def _short_record_model(residual="ar1"):

@@ -58,7 +58,7 @@ from ..posterior.priors import RHO_BOUNDS
 __all__ = ["find_start", "local_optimum", "laplace_ensemble", "laplace_covariance", "sse", "profiled_misfit",
            "rigid_guess", "velocity_estimate", "OBJECTIVES", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER",
            "NM_RESTARTS", "RESTART_GAIN", "POLISH_RIGID_GUESS", "mirrored_modes", "MIRROR_SHARES", "MIRROR_NATS",
-           "MIRROR_SEPARATION", "tau_continued", "TAU_CONTINUATION", "held_optimum"]
+           "MIRROR_SEPARATION", "tau_continued", "TAU_CONTINUATION", "held_optimum", "whitened_optimum"]
 
 DE_POPSIZE = 8  # population per parameter
 #: Generations of each objective's differential evolution. Forty: on six records
@@ -522,6 +522,46 @@ def _hessian(f, u0: np.ndarray, f0: float) -> np.ndarray:
             quad = [f(u0 + e_i + e_j), f(u0 + e_i - e_j), f(u0 - e_i + e_j), f(u0 - e_i - e_j)]
             H[i, j] = H[j, i] = (quad[0] - quad[1] - quad[2] + quad[3]) / (4 * h[i] * h[j]) if np.all(np.isfinite(quad)) else 0.0
     return H
+
+
+def whitened_optimum(model: PosteriorModel, theta: np.ndarray, *, rounds: int = 6, maxiter: int = 2000):
+    """(theta, log posterior) of Nelder-Mead run in coordinates whitened by the Hessian.
+
+    Each round takes the Hessian at the current point in the prior's unit box
+    (:func:`_hessian`), maps every direction to one sd of its normal approximation (a
+    direction the data leave flat or curved the wrong way to 0.3 of the box), and runs
+    Nelder-Mead there from a simplex one sd wide, for ``maxiter`` iterations; rounds go
+    on while one gains more than :data:`RESTART_GAIN` nats, at most ``rounds``. Plain
+    Nelder-Mead's simplex collapses across a narrow curved ridge; whitened, the ridge
+    is as wide as it is long near the point, and the simplex follows it.
+
+    Not part of :func:`find_start` (tried on the generator's noise-free records and
+    not kept: docs/inference.md, "Moves tried and not kept" and results/noise-free-chains-v3).
+    Returns ``theta`` itself where it finds nothing higher.
+    """
+    f, u, from_u, _ = _unit_objective(model, theta)
+    f_u = f(u)
+    if not math.isfinite(f_u):
+        raise ValueError("the point has zero posterior density; there is nothing to polish from")
+    d = len(u)
+    for _ in range(rounds):
+        H = _hessian(f, u, f_u)
+        lam, vec = np.linalg.eigh(-0.5 * (H + H.T))
+        root = vec * np.where(lam > 1.0, 1.0 / np.sqrt(np.maximum(lam, 1.0)), 0.3)
+
+        def neg(z, u=u, root=root):
+            value = f(u + root @ z)
+            return -value if math.isfinite(value) else _BAD
+
+        res = minimize(neg, np.zeros(d), method="Nelder-Mead",
+                       options={"maxiter": maxiter, "xatol": 1e-4, "fatol": 1e-3,
+                                "initial_simplex": np.vstack([np.zeros(d), np.eye(d)])})
+        gain = -float(res.fun) - f_u
+        if gain > 0:
+            u, f_u = u + root @ res.x, -float(res.fun)
+        if not gain > RESTART_GAIN:
+            break
+    return from_u(u), f_u
 
 
 def _laplace_root(H: np.ndarray) -> np.ndarray:
