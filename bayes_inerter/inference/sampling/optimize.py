@@ -535,8 +535,8 @@ def whitened_optimum(model: PosteriorModel, theta: np.ndarray, *, rounds: int = 
     Nelder-Mead's simplex collapses across a narrow curved ridge; whitened, the ridge
     is as wide as it is long near the point, and the simplex follows it.
 
-    Not part of :func:`find_start` (tried on the generator's noise-free records and
-    not kept: docs/inference.md, "Moves tried and not kept" and results/noise-free-chains-v3).
+    Not part of :func:`find_start`: on the generator's noise-free records it takes the
+    start to the ridge's top but not b nearer the truth (results/noise-free-chains-v3).
     Returns ``theta`` itself where it finds nothing higher.
     """
     f, u, from_u, _ = _unit_objective(model, theta)
