@@ -306,13 +306,19 @@ def _fit(record_file, out, steps: int = 40, command=COMMAND) -> list:
             "--processes", "1", "--no-plots", "--seed", "3", "--checkpoint-seconds", "0", "--residual", "ar1"]
 
 
+#: Steps the interrupted runs ask for: far more than they take before Ctrl-C, so that no
+#: processor finishes a run between two looks at its checkpoint (each run is interrupted,
+#: so the number costs nothing).
+INTERRUPTED_STEPS = 400
+
+
 def test_ctrl_c_in_the_start_search_in_sampling_and_in_a_continued_run(tmp_path, record_file):
     """About 15 s: three runs of one command, each interrupted once."""
     out = tmp_path / "fit"
-    cmd = _fit(record_file, out)
+    cmd = _fit(record_file, out, steps=INTERRUPTED_STEPS)
     # during the start search (a long one: its differential evolution takes seconds after
     # the record's lines; no step is written)
-    run = _Run(_fit(record_file, out, command=SLOW_SEARCH_COMMAND))
+    run = _Run(_fit(record_file, out, INTERRUPTED_STEPS, command=SLOW_SEARCH_COMMAND))
     run.wait_for("drive frequency:")
     time.sleep(1.0)
     assert steps_written(out / "chain.h5") == 0
@@ -320,19 +326,19 @@ def test_ctrl_c_in_the_start_search_in_sampling_and_in_a_continued_run(tmp_path,
     assert steps_written(out / "chain.h5") == 0
     # during sampling: its first step reported, a few more written
     run = _Run(cmd)
-    run.wait_for("sampling: step 1 of 40")
+    run.wait_for(f"sampling: step 1 of {INTERRUPTED_STEPS}")
     _wait_for_steps(run, out, 3)
     _assert_interrupted(run, run.ctrl_c())
     kept = read_chain(out / "chain.h5")
-    assert 3 <= len(kept) < 40
+    assert 3 <= len(kept) < INTERRUPTED_STEPS
     # the same command again continues the checkpoint; interrupted two steps on
     run = _Run(cmd)
     said = run.wait_for("continuing")
-    assert f"the checkpoint holds {len(kept)} steps; continuing to step 40" in said
+    assert f"the checkpoint holds {len(kept)} steps; continuing to step {INTERRUPTED_STEPS}" in said
     _wait_for_steps(run, out, len(kept) + 2)
     _assert_interrupted(run, run.ctrl_c())
     now = read_chain(out / "chain.h5")
-    assert len(kept) + 2 <= len(now) < 40
+    assert len(kept) + 2 <= len(now) < INTERRUPTED_STEPS
     np.testing.assert_array_equal(now[: len(kept)], kept)
 
 
