@@ -606,3 +606,56 @@ def test_the_motions_noise_kept_as_shapes_marginalises_its_draws_across_the_harm
     np.testing.assert_array_equal(a.reference_noise, b.reference_noise)
     la, lb = a.motion_terms(theta)[0].sum(), b.motion_terms(theta)[0].sum()
     assert np.isfinite(la) and np.isfinite(lb) and la != lb
+
+
+def test_a_sampled_law_scale_is_the_fixed_one_at_its_value_and_no_law_at_zero():
+    """``law``: the friction law's deviations' prior sd as a share of the Coulomb forces.
+    At ``friction_law.SD`` it is the fixed likelihood's, bit for bit; near 0 it is the
+    likelihood without the law's deviations; in between it moves the likelihood."""
+    from bayes_inerter.inference.posterior.friction_law import SD
+
+    p = paper_parameters("A3")
+    rec = generate_record(p, 1.0, settings=GeneratorSettings(), rng=2, setting_name="A3")
+    data = motion_data(rec, 1.0, cutoff=30.0)
+    x = {n: getattr(p, n) for n in _rigid()}
+    fixed = motion_loglik(data, x, 1.0, 0.0)[0]
+    assert motion_loglik(data, x, 1.0, 0.0, law=SD)[0] == fixed
+    without = motion_loglik(motion_data(rec, 1.0, cutoff=30.0, law=False), x, 1.0, 0.0)[0]
+    assert motion_loglik(data, x, 1.0, 0.0, law=1e-7)[0] == pytest.approx(without, rel=1e-9)
+    assert abs(without - fixed) > 1.0  # the law's deviations matter on this record: the check above has teeth
+    assert motion_loglik(data, x, 1.0, 0.0, law=1.0)[0] != fixed
+
+
+def test_the_law_scale_is_sampled_last_with_its_prior():
+    """With ``law_sampled`` the posterior samples ``law`` after the other likelihood
+    parameters; at ``friction_law.SD`` its log posterior is the fixed model's plus the
+    law's log prior density, and on a record of the model's own physics (no deviation
+    from Coulomb's law) a smaller scale is preferred."""
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.posterior.friction_law import SD
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+
+    p = paper_parameters("A3")
+    rec = generate_record(p, 1.0, settings=GeneratorSettings(), rng=2, setting_name="A3")
+    sampled = PosteriorModel(rec, likelihood=LikelihoodSettings(law_sampled=True))
+    fixed = PosteriorModel(rec)
+    assert sampled.names == [*fixed.names, "law"]
+    truth = dataclasses.replace(p, c_B=2 * 0.02 * math.sqrt(p.k_B * fixed.m_B))  # inside the damping's prior
+    theta, theta_fixed = sampled.to_theta(truth, hyper={"tau": 1.0}), fixed.to_theta(truth, hyper={"tau": 1.0})
+    assert sampled.values(theta)["law"] == pytest.approx(SD)
+    sampled, fixed = sampled.with_reference(theta), fixed.with_reference(theta_fixed)
+    lo, hi = sampled.all_priors["law"].bounds
+    assert sampled.log_prob(theta)[0] == pytest.approx(fixed.log_prob(theta_fixed)[0] - math.log(hi - lo), abs=1e-6)
+    smaller = theta.copy()
+    smaller[sampled.names.index("law")] = math.log(0.01)
+    assert sampled.log_prob(smaller)[0] > sampled.log_prob(theta)[0]
+
+
+def test_a_law_scale_needs_the_law_and_the_motion_likelihood():
+    from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+
+    assert "law" not in LikelihoodSettings().hyper_names  # fixed by default
+    assert LikelihoodSettings(law_sampled=True).hyper_names[-1] == "law"
+    for bad in (dict(law=False), dict(residual="harmonic")):
+        with pytest.raises(ValueError, match="law_sampled needs"):
+            LikelihoodSettings(law_sampled=True, **bad)

@@ -51,7 +51,7 @@ class Prediction:
 #: The likelihood's own parameters (``LikelihoodSettings.hyper_names``), which a
 #: simulation does not use, at values inside their priors: the time-domain residual's
 #: sigma and rho, the harmonic likelihoods' discrepancy and gain, the channels' delay.
-UNUSED = {"sigma": 1.0, "rho": 0.0, "tau": 1.0, "alpha": 0.0, "gain": 1.0, "delay": 0.0}
+UNUSED = {"sigma": 1.0, "rho": 0.0, "tau": 1.0, "alpha": 0.0, "gain": 1.0, "delay": 0.0, "law": 0.25}
 
 
 def _theta(model: PosteriorModel, values: dict) -> np.ndarray:

@@ -517,6 +517,8 @@ class Config:
     single : one record per replicate, fitted alone (else the joint fit).
     residual : the likelihood (``LikelihoodSettings.residual``; None: the study's).
     input_noise : draws of the drivetrain's input noise (0: off; None: the library's).
+    law_sampled : sample the friction law's deviations' scale
+        (``LikelihoodSettings.law_sampled``; the motion-in likelihood).
     converge : each chain to the convergence rule, at most ``max_steps``.
     max_steps : the cap of a chain run to the rule.
     freqs : the drive frequencies, Hz (None: the study's).
@@ -535,6 +537,8 @@ class Config:
     residual: str | None = field(default=None, metadata={"help": "the likelihood (LikelihoodSettings.residual)"})
     input_noise: int | None = field(default=None, metadata={
         "help": "draws of the drivetrain's input noise (0: off; default: the library's)"})
+    law_sampled: bool = field(default=False, metadata={
+        "help": "sample the friction law's deviations' scale (LikelihoodSettings.law_sampled)"})
     converge: bool = field(default=False, metadata={"help": "each chain to the convergence rule"})
     max_steps: int = field(default=StudyCalibration.max_steps, metadata={"help": "the cap of a chain run to the rule"})
     freqs: tuple[float, ...] | None = field(default=None, metadata={"help": "drive frequencies, Hz"})
@@ -553,10 +557,11 @@ class Config:
     def settings(self) -> StudyCalibration:
         """The calibration's own settings."""
         extra = {}
-        if self.residual or self.input_noise is not None:
+        if self.residual or self.input_noise is not None or self.law_sampled:
             extra["likelihood"] = LikelihoodSettings(
                 **({"residual": self.residual} if self.residual else {}),
-                **({"input_noise": self.input_noise} if self.input_noise is not None else {}))
+                **({"input_noise": self.input_noise} if self.input_noise is not None else {}),
+                **({"law_sampled": True} if self.law_sampled else {}))
         if self.freqs:
             extra["frequencies"] = tuple(self.freqs)
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,

@@ -145,6 +145,12 @@ class LikelihoodSettings:
         split of the Coulomb force between plate and rotation is what a record tells
         least: a reference with the friction on the rotation left the reversals no
         room for the plate's (docs/inference.md, "The reversals' scale").
+    law_sampled : with ``law``, sample the law's deviations' prior sd as a share of the
+        Coulomb forces (the likelihood's parameter ``law``, prior
+        ``priors.MOTION_DISCREPANCY_PRIORS["law"]``) in place of the fixed
+        ``friction_law.SD`` (default False: fixed). Where the records carry no
+        deviation (the model's own physics) the posterior can shrink it, and with it
+        the room it gives the friction's parameters.
     """
 
     residual: str = "motion"
@@ -166,6 +172,7 @@ class LikelihoodSettings:
     input_noise_form: str = "shapes"
     deviation_scale: str = "reference"
     reversal_scale: str = "total"
+    law_sampled: bool = False
 
     @property
     def sampled_delay_sd(self) -> float:
@@ -189,8 +196,9 @@ class LikelihoodSettings:
         if self.residual in ("harmonic", "motion"):
             decay = self.residual == "harmonic" or self.decay
             delay = self.residual == "motion" and self.sampled_delay_sd > 0
+            law = self.residual == "motion" and self.law and self.law_sampled
             return (("tau",) + (("alpha",) if decay else ()) + (("gain",) if self.gain_sd > 0 else ())
-                    + (("delay",) if delay else ()))
+                    + (("delay",) if delay else ()) + (("law",) if law else ()))
         return ("sigma", "rho") if self.residual == "ar1" else ("sigma",)
 
     def __post_init__(self) -> None:
@@ -221,6 +229,9 @@ class LikelihoodSettings:
             raise ValueError(f"delay_sd must lie in [0, 0.01) s, got {self.delay_sd}")
         if self.delay_sd and self.residual != "motion":
             raise ValueError("delay_sd needs the motion-in likelihood (residual='motion')")
+        if self.law_sampled and not (self.law and self.residual == "motion"):
+            raise ValueError("law_sampled needs the friction law's deviations (law=True) and the motion-in "
+                             "likelihood (residual='motion')")
         if not (0 <= self.gain_sd < 1):
             raise ValueError(f"gain_sd must lie in [0, 1), got {self.gain_sd}")
         if not self.cutoff > 0:

@@ -34,6 +34,7 @@ from ...records.drive import resolve_drive, with_drive
 from ...records.record import Record
 from ...simulate import Drive, SimulationError, check_record, contacts, run_exact, simulate_network
 from .effects import EFFECT_PRIORS, EFFECTS, NO_EFFECT, effect_network
+from . import friction_law
 from .harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
 from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise
 from .motion import (fundamental_misfit, input_noise_shapes, input_noise_variance, motion_data, motion_loglik,
@@ -98,7 +99,7 @@ MOTION_LIMITS = {
 #: The harmonic likelihood's parameters where :meth:`PosteriorModel.to_theta` is not
 #: told them: a discrepancy of 0.01 (m/s^2 for the force-in likelihood, N for motion in,
 #: inside both priors) decaying as 1/k, and equal gains.
-HYPER_START = {"tau": 1e-2, "alpha": 1.0, "gain": 1.0, "delay": 0.0}
+HYPER_START = {"tau": 1e-2, "alpha": 1.0, "gain": 1.0, "delay": 0.0, "law": friction_law.SD}
 
 #: ``b_app`` (the inertance seen through the nut, to first order in k_n / (omega c_n))
 #: is reported only where k_n / (omega c_n) is below this: an assumption of this
@@ -450,7 +451,7 @@ class PosteriorModel:
             h = self.hyper(theta)
             terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True,
                                        reference=self.reference_noise, delay=h["delay"],
-                                       deviation_at=self.deviation_at)
+                                       deviation_at=self.deviation_at, law=h.get("law"))
         except (SimulationError, ValueError):
             return None
         return (terms, phi) if np.all(np.isfinite(terms)) else None
@@ -461,7 +462,7 @@ class PosteriorModel:
         (``motion.fundamental_misfit``)."""
         h = self.hyper(theta)
         return fundamental_misfit(self.motion, self.field_vector(theta), h["gain"], h["tau"], h["alpha"], h["delay"],
-                                  deviation_at=self.deviation_at)
+                                  deviation_at=self.deviation_at, law=h.get("law"))
 
     def accel_error_variance(self, theta) -> np.ndarray:
         """The variance of each harmonic's error as the likelihood sees it (noise and

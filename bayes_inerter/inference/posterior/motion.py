@@ -186,6 +186,9 @@ class MotionData:
     basis: np.ndarray  # (2K, m): the marginalised deviations, the reversals', the law's, the input noise's
     scale: np.ndarray  # (m, 3): each deviation's prior sd is scale[j] . (f1_0, f2_0, 1), N
     windows: tuple = ()  # the reversals' windows, shares of the period (``reversals.reversal_windows``)
+    #: (m,) bool: the columns of ``basis`` that are the friction law's deviations (their
+    #: prior sd scaled by a sampled ``law`` where the likelihood samples one); None: none
+    law_columns: np.ndarray | None = None
     #: the plate motion's reconstruction: its harmonics (rad/s, the first K are ``omega``'s)
     #: and the variance of each one's period mean, (m/s^2)^2 (:func:`input_noise_variance`)
     fine_omega: np.ndarray | None = None
@@ -252,8 +255,9 @@ def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogo
         parts.append((U, (friction_law.SD, friction_law.SD, 0.0)))
     basis = np.hstack([U for U, _ in parts])
     scale = np.array([c for U, c in parts for _ in range(U.shape[1])], dtype=float).reshape(-1, 3)
+    law_columns = np.concatenate([np.full(U.shape[1], k == 1) for k, (U, _) in enumerate(parts)])
     return MotionData(data, V, sign, data.omega, velocity(DRIVE_GRID),
-                      basis, scale, windows, fine_omega, fine_var)
+                      basis, scale, windows, law_columns, fine_omega, fine_var)
 
 
 #: The physical parameters in the order the compiled kernels unpack them: ``networks.FIELDS``'s.
@@ -313,12 +317,22 @@ def _deviation_sd(scale, x):
     return scale[:, 0] * x[7] + scale[:, 1] * x[9] + scale[:, 2]
 
 
+def _factors(data: MotionData, law: float | None) -> np.ndarray:
+    """Each marginalised deviation's multiplier of its prior sd: ``law`` /
+    ``friction_law.SD`` on the law's columns where ``law`` (a sampled share of the
+    Coulomb forces) is given, 1 elsewhere."""
+    factor = np.ones(data.basis.shape[1])
+    if law is not None and data.law_columns is not None:
+        factor[data.law_columns] = float(law) / friction_law.SD
+    return factor
+
+
 @njit(cache=True)
 def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, basis, scale, force, var_force, var_accel,
-           cov, periods, reference, delay, sd_at):
+           cov, periods, reference, delay, sd_at, factor):
     """Each harmonic's log-likelihood term (the reversals' marginal in equal shares), and
     the squared residuals' and the force's sums; the deviations' prior sd is taken at
-    the parameters ``sd_at`` (``x`` itself, or a reference point's)."""
+    the parameters ``sd_at`` (``x`` itself, or a reference point's), times ``factor``."""
     F, Y = _predicted(x, gain, omega, velocity, sign, bearing, simulated, delay)
     V_all = _variance(Y, tau, alpha, var_force, var_accel, cov, periods)
     K = omega.shape[0]
@@ -326,7 +340,7 @@ def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, basis
     for k in range(K):
         if not V_all[k] > 0:
             ok = False
-    s = _deviation_sd(scale, sd_at)
+    s = _deviation_sd(scale, sd_at) * factor
     share = reversal_correction(basis, V_all, force - F, s) / K if ok else 0.0
     terms = np.empty(K)
     sq_sum = 0.0
@@ -596,45 +610,48 @@ def with_input_shapes(data: MotionData, shapes: np.ndarray) -> MotionData:
     marginalised deviations, each with a prior sd of 1 (their scale is in the columns)."""
     m = shapes.shape[1]
     scale = np.vstack([data.scale, np.column_stack([np.zeros(m), np.zeros(m), np.ones(m)])])
-    return dataclasses.replace(data, basis=np.hstack([data.basis, shapes]), scale=scale)
+    law = None if data.law_columns is None else np.concatenate([data.law_columns, np.zeros(m, dtype=bool)])
+    return dataclasses.replace(data, basis=np.hstack([data.basis, shapes]), scale=scale, law_columns=law)
 
 
 def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0, *,
                   pointwise: bool = False, reference: np.ndarray | None = None, delay: float = 0.0,
-                  deviation_at=None):
+                  deviation_at=None, law: float | None = None):
     """(log L, phi of the force at the harmonics) of the module docstring; with
     ``pointwise``, each harmonic's term (an array) instead of log L. ``p`` as for
     :func:`predicted_force`. ``reference``: each harmonic's noise variance (N^2) that
     the normaliser uses in place of the parameters' own (see module docstring); None:
     their own. ``delay``: the force channel's behind the acceleration's, s.
     ``deviation_at``: the parameters (as ``p``) whose Coulomb forces scale the
-    marginalised deviations' prior sd; None: ``p``'s own."""
+    marginalised deviations' prior sd; None: ``p``'s own. ``law``: the friction law's
+    deviations' prior sd as a share of the Coulomb forces, where the likelihood samples
+    it (``LikelihoodSettings.law_sampled``); None: ``friction_law.SD``."""
     h = data.harmonic
     x, bearing, simulated = _inputs(data, p, gain)
     at = x if deviation_at is None else _vector(deviation_at)
     terms, sq, norm = _terms(x, float(tau), float(alpha), float(gain), data.omega, data.velocity, data.sign, bearing,
                              simulated, data.basis, data.scale, h.force, h.var_force, h.var_accel, h.cov, float(h.periods),
                              np.full(data.harmonics, -1.0) if reference is None else np.asarray(reference, float),
-                             float(delay), at)
+                             float(delay), at, _factors(data, law))
     phi = 1.0 - math.sqrt(sq / norm)
     return (terms if pointwise else float(terms.sum())), phi
 
 
 def fundamental_misfit(data: MotionData, p, gain: float = 1.0, tau: float | None = None,
-                       alpha: float = 0.0, delay: float = 0.0, deviation_at=None) -> float:
+                       alpha: float = 0.0, delay: float = 0.0, deviation_at=None, law: float | None = None) -> float:
     """The fit's residual at the drive's fundamental in phase with the model's inertial
     force there, as a share of that force: |Re(r_1 / (Y_1 A_1 / g))| (see
     :data:`FUNDAMENTAL_MAX`). With ``tau`` (the discrepancy, N) the marginalised
     deviations' posterior mean (the reversals', the law's and the input noise's shapes,
     ``reversals.deviations_mean``) is taken from the residual first: what they explain
     the posterior has accounted for; None: the residual of the mean prediction alone.
-    ``deviation_at`` as for :func:`motion_loglik`."""
+    ``deviation_at`` and ``law`` as for :func:`motion_loglik`."""
     F, Y = predicted_force(data, p, gain, delay)
     r = data.harmonic.force - F
     if tau is not None and data.basis.shape[1]:
         h = data.harmonic
         V = _variance(Y, float(tau), float(alpha), h.var_force, h.var_accel, h.cov, float(h.periods))
         at = _vector(p) if deviation_at is None else _vector(deviation_at)
-        r = r - deviations_mean(data.basis, V, r, _deviation_sd(data.scale, at))
+        r = r - deviations_mean(data.basis, V, r, _deviation_sd(data.scale, at) * _factors(data, law))
     inertial = Y[0] * data.harmonic.accel[0]  # Y already holds the gain
     return float(abs((r[0] / inertial).real))

@@ -193,9 +193,14 @@ DISCREPANCY_PRIORS = {
 #: The same for the motion-in likelihood (``motion``), whose discrepancy is a force: tau
 #: in N, from far below a load cell's noise to above any test's force. Its alpha is
 #: sampled only with ``LikelihoodSettings(decay=True)``; by default it is 0 (white).
+#: ``law``, sampled only with ``LikelihoodSettings(law_sampled=True)``: the friction
+#: law's deviations' prior sd as a share of the Coulomb forces (``friction_law``),
+#: log-uniform from a deviation no record could show to one as large as the Coulomb
+#: force itself (**assumption**).
 MOTION_DISCREPANCY_PRIORS = {
     "tau": LogUniform(1e-3, 1e5),
     "alpha": Uniform(0.0, 2.0),
+    "law": LogUniform(1e-3, 1.0),
 }
 
 

@@ -52,6 +52,7 @@ from scipy.optimize import differential_evolution, minimize
 from ...records.conditioning import lowpass
 from ...simulate import SimulationError
 from ..posterior.model import PosteriorModel
+from ..posterior import friction_law
 from ..posterior.motion import predicted_force
 from ..posterior.priors import RHO_BOUNDS
 
@@ -413,7 +414,8 @@ def _with_noise_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
 
 def _with_discrepancy_estimate(model: PosteriorModel, phys: np.ndarray) -> np.ndarray:
     theta = _with_noise(model, phys)
-    start = {"tau": 1e-4, "alpha": 0.0, "gain": 1.0, "delay": 0.0}  # a white discrepancy of the residual's size
+    # a white discrepancy of the residual's size, the friction law's deviations at their fixed scale
+    start = {"tau": 1e-4, "alpha": 0.0, "gain": 1.0, "delay": 0.0, "law": friction_law.SD}
     try:
         if model.motion is not None:
             r = model.harmonic.force - predicted_force(model.motion, model.field_vector(theta))[0]
