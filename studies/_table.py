@@ -128,3 +128,14 @@ def run_with_bar(run, total: int, desc: str, **bar):
         except ValueError as exc:
             shown.close()
             sys.exit(f"error: {exc}")
+
+
+def append_missing(path, key: str, items, make) -> None:
+    """For each of ``items`` whose ``key`` column is not yet in the CSV file ``path``,
+    ``make(item)``'s row appended (:func:`append_row`): a probe stopped part-way goes on
+    where it stopped when run again."""
+    done = {int(r[key]) for r in read_rows(path)}
+    for item in items:
+        if item not in done:
+            row = make(item)
+            append_row(path, row, list(row))

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import append_row, read_rows
+from _table import append_missing
 from bayes_inerter.device import grid_case
 from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, find_start, held_optimum, local_optimum
@@ -82,11 +82,7 @@ def main() -> int:
         print(f"error: {out}/records has no chain for records {missing}; run studies/noise_free_chains.py first",
               file=sys.stderr)
         return 2
-    done = {int(r["record"]) for r in read_rows(out / "start.csv")}
-    for k in args.records:
-        if k not in done:
-            row = one(k, chains[k])
-            append_row(out / "start.csv", row, list(row))
+    append_missing(out / "start.csv", "record", args.records, lambda k: one(k, chains[k]))
     return 0
 
 

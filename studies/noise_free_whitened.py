@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import append_row, read_rows
+from _table import append_missing
 from bayes_inerter.device import grid_case
 from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.inference.sampling.optimize import NM_RESTARTS, find_start, local_optimum, whitened_optimum
@@ -63,12 +63,7 @@ def main() -> int:
     ap.add_argument("--records", type=int, nargs="+", default=list(range(27)))
     ap.add_argument("--out", default=str(ROOT / "results" / "noise-free-chains-v3"))
     args = ap.parse_args()
-    out = Path(args.out)
-    done = {int(r["record"]) for r in read_rows(out / "whitened.csv")}
-    for k in args.records:
-        if k not in done:
-            row = one(k)
-            append_row(out / "whitened.csv", row, list(row))
+    append_missing(Path(args.out) / "whitened.csv", "record", args.records, one)
     return 0
 
 
