@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..inference.posterior import friction_law
 from ..inference.posterior.model import PosteriorModel
 
 __all__ = ["Prediction", "predict_record", "residual_sd", "LEVEL"]
@@ -51,7 +52,7 @@ class Prediction:
 #: The likelihood's own parameters (``LikelihoodSettings.hyper_names``), which a
 #: simulation does not use, at values inside their priors: the time-domain residual's
 #: sigma and rho, the harmonic likelihoods' discrepancy and gain, the channels' delay.
-UNUSED = {"sigma": 1.0, "rho": 0.0, "tau": 1.0, "alpha": 0.0, "gain": 1.0, "delay": 0.0, "law": 0.25}
+UNUSED = {"sigma": 1.0, "rho": 0.0, "tau": 1.0, "alpha": 0.0, "gain": 1.0, "delay": 0.0, "law": friction_law.SD}
 
 
 def _theta(model: PosteriorModel, values: dict) -> np.ndarray:

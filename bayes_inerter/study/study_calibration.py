@@ -585,7 +585,7 @@ def run(config: Config, out, executor, *, progress=None):
     a process of its own), then its tables, figures and reports; or, as ``config``
     asks, a folder summarised, its cap raised first, or one replicate inspected
     (``values["inspect"]``: :func:`inspect_replicate`'s dict, in ``work``)."""
-    from .calibration import failed_items
+    from .calibration import RUNNING, failed_items
     from .output import StudyOutput
 
     out = Path(out)
@@ -600,7 +600,7 @@ def run(config: Config, out, executor, *, progress=None):
         lines.append(f"cap raised to {config.max_steps} steps; replicates to fit again: {moved or 'none'}")
     if config.inspect is not None:
         kind = "single" if cs.single else "joint"
-        folder = ((Path(config.work) if config.work else out / ".running")
+        folder = ((Path(config.work) if config.work else out / RUNNING)
                   / f"inspect_{kind}_seed{cs.seed}_{config.inspect}_{cs.steps}")
         got = inspect_replicate(cs, config.inspect, folder)
         return StudyOutput(lines=(*lines, json.dumps(got, indent=1)), values={"inspect": got})
