@@ -13,6 +13,9 @@ machine: read the steps and tau, not the seconds), the commit.
 The cuts are diagnoses, not candidate defaults: a range cut to make a chain fast is
 a prior chosen on the records it is measured on. ``physical-nut`` is a candidate: the
 nut's stiffness over a catalogue nut's range, argued from physics before it was run.
+``nut-damping`` is another: the prior truncated to a damping ratio of the flywheel's
+mode on the nut of at least 0.5 % (``priors.NUT_DAMPING_FLOOR``), the plate mode's
+physical floor, argued before it was run.
 
 A record is ``SEED:SETTING:FREQUENCY``: ``records.paper_like.paper_like_record`` of that
 setting and drive frequency (Hz) in the laboratory drawn from SEED (the coverage studies'
@@ -38,7 +41,7 @@ from _table import append_row, git_commit, read_rows
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import fit_record
 from bayes_inerter.inference.sampling.convergence import Convergence
-from bayes_inerter.inference.posterior.priors import LogUniform
+from bayes_inerter.inference.posterior.priors import NUT_DAMPING_FLOOR, LogUniform
 from bayes_inerter.inference.summaries.results import hdi
 from bayes_inerter.records.paper_like import paper_like_record
 
@@ -52,7 +55,7 @@ _KN_CEILING = {"k_n": LogUniform(1e3, 1e8)}  # nut stiffness: default 1e3 to 1e9
 #: shaft and supports in series: the physical range, which Table I's 4.3e5 N/m lies below.
 _KN_PHYSICAL = {"k_n": LogUniform(1e7, 1e10)}
 VARIANTS = {"default": {}, "cf-floor": _CF_FLOOR, "kn-ceiling": _KN_CEILING, "tails": {**_CF_FLOOR, **_KN_CEILING},
-            "physical-nut": _KN_PHYSICAL}
+            "physical-nut": _KN_PHYSICAL, "nut-damping": NUT_DAMPING_FLOOR}
 
 
 #: tails.csv's columns: the sampled parameters' tau are the single-record model's.

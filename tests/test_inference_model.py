@@ -257,3 +257,31 @@ def test_short_way_simulates_as_simulate_does(record, model):
         with pytest.raises(ValueError, match="out of range"):
             m.field_vector(bad)
         assert m.log_prob(bad)[0] == -math.inf
+
+
+def test_a_truncation_by_the_nut_damping_ratio_cuts_only_below_its_floor(record):
+    from bayes_inerter.inference.posterior.priors import NUT_DAMPING_FLOOR, nut_damping_ratio
+    free = PosteriorModel(record, likelihood=AR1)
+    cut = PosteriorModel(record, likelihood=AR1, priors=NUT_DAMPING_FLOOR)
+    p = paper_parameters("A2")
+    assert nut_damping_ratio(p.b, p.k_n, p.c_n) > 1.0  # Table I's nut: overdamped, inside the floor
+    theta = cut.to_theta(p, 0.003, 0.0)
+    assert cut.log_prob(theta) == free.log_prob(theta)  # no density of its own inside
+    # a stiff nut with a weak damper: a ratio of 1e-3, below the 0.5 % floor
+    ringing = dataclasses.replace(p, k_n=1e8, c_n=2e-3 * np.sqrt(1e8 * p.b))
+    assert nut_damping_ratio(ringing.b, ringing.k_n, ringing.c_n) == pytest.approx(1e-3)
+    theta = cut.to_theta(ringing, 0.003, 0.0)
+    assert math.isfinite(free.log_prior(theta)) and cut.log_prior(theta) == -math.inf
+    at_floor = dataclasses.replace(ringing, c_n=2 * 0.0051 * np.sqrt(1e8 * p.b))
+    assert cut.log_prior(cut.to_theta(at_floor, 0.003, 0.0)) == free.log_prior(cut.to_theta(at_floor, 0.003, 0.0))
+
+
+def test_a_truncation_needs_its_arguments_sampled_and_the_joint_model_refuses_one(record):
+    from bayes_inerter.inference.posterior.priors import NUT_DAMPING_FLOOR
+    from bayes_inerter.inference.posterior.joint import JointModel
+    with pytest.raises(ValueError, match="needs k_n, c_n sampled"):
+        PosteriorModel(record, model="rigid", likelihood=AR1, priors=NUT_DAMPING_FLOOR)
+    with pytest.raises(ValueError, match="joint model takes no truncation"):
+        JointModel((record, record), priors=NUT_DAMPING_FLOOR, likelihood=AR1)
+    with pytest.raises(ValueError, match="unknown parameters: zeta_x"):
+        PosteriorModel(record, likelihood=AR1, priors={"zeta_x": LogUniform(1.0, 2.0)})

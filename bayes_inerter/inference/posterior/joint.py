@@ -81,6 +81,9 @@ class JointModel:
         part_likelihood = dataclasses.replace(self.likelihood, input_noise=self.likelihood.input_noise_draws())
         parts = [PosteriorModel(rec, self.model, priors=self.priors, likelihood=part_likelihood)
                  for rec in self.records]
+        if any(p.truncations for p in parts):
+            raise ValueError("the joint model takes no truncation of the prior (priors.TRUNCATIONS); "
+                             "fit the records one at a time to use one")
         self.parts = parts
         self.records = tuple(p.record for p in parts)  # each with its drive frequency settled
         freqs = [p.drive.hz for p in parts]

@@ -41,7 +41,7 @@ from .motion import (fundamental_misfit, input_noise_shapes, input_noise_varianc
                      motion_variance, with_input_noise, with_input_shapes)
 from .parameters import FRICTION_PAIRS, ParameterMap
 from .priors import (DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, MOTION_DISCREPANCY_PRIORS, NOISE_PRIORS,
-                     SPLIT_PRIORS, delay_prior, gain_prior)
+                     SPLIT_PRIORS, TRUNCATIONS, delay_prior, gain_prior)
 
 __all__ = ["MODELS", "MOTION_MODELS", "LikelihoodSettings", "PosteriorModel", "record_masses", "refusal"]
 
@@ -208,7 +208,7 @@ class PosteriorModel:
         discrepancy = MOTION_DISCREPANCY_PRIORS if self.likelihood.residual == "motion" else DISCREPANCY_PRIORS
         hyper = {**NOISE_PRIORS, **discrepancy, "gain": gain_prior(self.likelihood.gain_sd or 0.01),
                  "delay": delay_prior(self.likelihood.sampled_delay_sd or 1e-4)}
-        known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(MODAL_PRIORS) | set(hyper) | set(EFFECT_PRIORS)
+        known = set(PHYSICAL) | set(SPLIT_PRIORS) | set(MODAL_PRIORS) | set(hyper) | set(EFFECT_PRIORS) | set(TRUNCATIONS)
         unknown = set(self.priors) - known
         if unknown:
             raise ValueError(f"priors given for unknown parameters: {', '.join(sorted(unknown))}")
@@ -223,6 +223,19 @@ class PosteriorModel:
         if {"b", "k_n", "c_n"} <= set(self.free):
             self.derived_names.append("b_app")
         self._log = np.array([self.all_priors[n].log_scale for n in self.names])
+        self._set_truncations()
+
+    def _set_truncations(self) -> None:
+        """The truncations of the prior asked for in ``priors`` (``priors.TRUNCATIONS``):
+        (prior, function, positions of its arguments in theta) each."""
+        self.truncations = []
+        for name in (n for n in self.priors if n in TRUNCATIONS):
+            args, fn = TRUNCATIONS[name]
+            missing = [a for a in args if a not in self.names]
+            if missing:
+                raise ValueError(f"the truncation {name} needs {', '.join(missing)} sampled; "
+                                 f"the {self.model} model samples {', '.join(self.names)}")
+            self.truncations.append((self.priors[name], fn, [self.names.index(a) for a in args]))
 
     def _set_data(self) -> None:
         """What the likelihood compares with: the low-passed measured acceleration, its
@@ -363,9 +376,19 @@ class PosteriorModel:
 
     # -- densities -------------------------------------------------------------------
     def log_prior(self, theta) -> float:
+        """The sampled parameters' priors' log density at theta; -inf outside a
+        truncation (``priors.TRUNCATIONS``), which adds nothing inside."""
         lp = 0.0
         for name, t in zip(self.names, theta):
             lp += self.all_priors[name].logpdf(t)
+        if self.truncations and math.isfinite(lp):
+            values = self.to_values(theta)
+            for prior, fn, at in self.truncations:
+                q = float(fn(*values[at]))
+                x = (math.log(q) if q > 0 else -math.inf) if prior.log_scale else q
+                lo, hi = prior.bounds
+                if not lo <= x <= hi:
+                    return -math.inf
         return lp
 
     def field_vector(self, theta) -> np.ndarray:
