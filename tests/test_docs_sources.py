@@ -1,0 +1,247 @@
+"""Every measured number in docs/ names where it was measured (issue 41, item 4): a reader
+who meets a number in the method docs can find the committed file, study or test it
+comes from.
+
+The rule, paragraph by paragraph (paragraphs are separated by blank lines; table rows,
+lines starting with ``|``, fenced code blocks and headings are left out):
+
+1. **A measured number** is, in the paragraph's text with its line breaks made spaces,
+
+   - a number followed by ``%``, ``x`` (``2.2x``), or the word ``ms``, ``s``, ``us``,
+     ``µs``, ``times``, ``nat(s)``, ``steps``, ``min``, ``minutes``, ``h``, ``hour(s)``
+     (``27 %``, ``0.64 ms``, ``1,103 s``, ``8.4 times``, ``10.8 nats``, ``9,500 steps``);
+   - a number with a decimal point next to a physical unit: ``kg``, ``N``, ``N/m``,
+     ``N s/m``, ``mm``, ``m``, ``g`` (``3,502.6 kg``, ``0.23 N``; ``57.2 kg``).
+
+   That is ``MEASURED`` below. Hertz are left out (0.5, 1 and 1.5 Hz are the drive's
+   settings, 1 kHz the sampling's), and so are three conventions that are never a
+   measurement (``CONVENTION``): ``94 %``, the package's interval level (arviz's
+   default) and the chi-square arithmetic made with it; ``3 % to 97 %`` (or ``and``),
+   the quantiles that bound that interval; and ``10 s record``, the records' length.
+
+2. **Its source** is named in the same paragraph (``SOURCE``): a ``results/...`` path, a
+   ``*.csv`` file, or a ``benchmarks/``, ``studies/`` or ``tests/`` path (the command or
+   test that measures it). In docs/performance.md a paragraph may instead rely on its
+   ``## section``, whose first line names ``results/performance/<section>.csv`` (made
+   by ``benchmarks/performance_table.py`` from those files; checked below).
+
+3. **The narrow escape for numbers that are not measurements** (arithmetic, definitions,
+   settings, defaults, the paper's Table I): a number is not counted where its clause
+   (the text between ``.`` or ``;`` and the next, a sentence or a part of one) cites
+   ``MODEL.md`` (``../shared/MODEL.md``, the model and Table I's values), or names in
+   backticks a constant of the package whose value it is: an upper-case name
+   (``motion.FUNDAMENTAL_MAX``, ``BACKLASH_RAMP``) assigned at the top level of a
+   module of ``bayes_inerter`` (of the module named before the dot, where one is).
+   Clause, not paragraph: a constant named beside a setting does not excuse the
+   measurements in the paragraph's other sentences.
+
+4. **The allow-list** (``NO_SOURCE``): paragraphs with a measured number for which no
+   committed source was found (a session's scratch measurement, printed and not kept),
+   each with its reason. They are to be measured again, with the command committed,
+   or removed; an entry must still match a paragraph with a measured number, so a
+   fixed paragraph leaves the list.
+"""
+
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = sorted((ROOT / "docs").glob("*.md"))
+
+_NUM = r"(?<![\w.])\d[\d,]*(?:\.\d+)?"
+MEASURED = re.compile(
+    _NUM + r"(?:\s?%|x\b|\s?(?:ms|s|us|µs|times|nats?|steps|minutes|min|hours?|h)\b)"
+    r"|(?<![\w.])\d[\d,]*\.\d+\s?(?:kg|N/m|N s/m|N|mm|m|g)\b")
+CONVENTION = re.compile(r"\b94 %|\b3 % (?:to|and) 97 %|\b\d+ s records?\b")
+SOURCE = re.compile(r"(?<![\w/.-])(?:results|benchmarks|studies|tests)/[\w./*-]*|[\w./-]+\.csv\b")
+_MODEL = re.compile(r"\bMODEL\.md\b")
+_CODE_CONSTANT = re.compile(r"`(?:[\w.]*?(\w+)\.)?([A-Z][A-Z0-9_]{2,})\b[^`]*`")
+
+# (doc, the paragraph's first 40 characters, why it has no source)
+_NO_SOURCE = "no committed source: to be measured again or removed"
+NO_SOURCE = [
+    ("inference.md", "Why this way round: a friction law that ",
+     "partly: +52 % is results/likelihood-compare/fits.csv (cited); the 27 % at the true parameters and "
+     "'about 1.4 ms' an evaluation: " + _NO_SOURCE),
+    ("inference.md", "(The marginal's own log-determinant is i", _NO_SOURCE),
+    ("inference.md", "(b's posterior median, its 94 % interval", _NO_SOURCE),
+    ("inference.md", "On 11 more design replicates at 0.5 Hz (", _NO_SOURCE),
+    ("inference.md", "Replicate 18's chain sampled again under", _NO_SOURCE),
+    ("inference.md", "No gain at 0.5 Hz. On A6 the prior moved", _NO_SOURCE),
+    ("inference.md", "**Noise-free records and the reversals' ",
+     "its 1 % is a setting (the starts); the optima of the table it introduces: " + _NO_SOURCE),
+    ("inference.md", "On the third row the optima from the thr", _NO_SOURCE),
+    ("inference.md", "**What is left at 0.5 Hz.** Both points ", _NO_SOURCE),
+    ("inference.md", "- **A3 at 0.5 Hz: the generator's plate ", _NO_SOURCE),
+    ("inference.md", "**Chains on the noise-free records** (th", _NO_SOURCE),
+    ("inference.md", "B2 at 1.5 Hz was stopped at 9,500 steps ", _NO_SOURCE),
+    ("inference.md", "The residual at the truth with four is t", _NO_SOURCE),
+    ("inference.md", "**The channels' delay, sampled (default)", _NO_SOURCE),
+    ("inference.md", "**A white discrepancy.** With the revers",
+     "its 2 % is a setting (the plate mode's damping); the optima of the table it introduces: " + _NO_SOURCE),
+    ("inference.md", "b moved by at most 0.54 points (A5 at 1.", _NO_SOURCE),
+    ("inference.md", "**The nut's damping: considered, not giv", "being rewritten"),
+    ("inference.md", "**Identified or not.** With this likelih", _NO_SOURCE),
+    ("inference.md", "**Why paper-like chains are slow** (a di", _NO_SOURCE),
+    ("inference.md", "The sampler's coordinates matter more. O", _NO_SOURCE),
+    ("inference.md", "A drive period of 1.5 Hz at 1 kHz is 666",
+     "partly: tau 0.23 N and b -3 % for 1.2 nats are results/whole-sample-span (cited); the 0.3 to 0.5 N "
+     "against 0.02 N at the even harmonics and the resampling (a helper's scratch scripts): " + _NO_SOURCE),
+    ("inference.md", "The friction is `friction.Stribeck` (sha", _NO_SOURCE),
+    ("inference.md", "Measured on one paper-like record (A3 at", _NO_SOURCE),
+    ("reproducibility.md", "**BLAS threads count too.** Local worker", _NO_SOURCE),
+    ("simulator.md", "**Stribeck's piecewise form** (`Stribeck",
+     "partly: the deviations and knots are friction.stribeck_knots, tests/test_friction.py (cited); "
+     "the 2.55 % of a numerical minimax search: " + _NO_SOURCE),
+    ("studies.md", "`study.structure` writes each setting's ",
+     "its priors are StructurePriors' defaults (settings); '6,000 steps in seconds' (fit_structure's "
+     "default is 4,000 steps): " + _NO_SOURCE),
+]
+
+
+def paragraphs(text: str) -> list[tuple[str, str]]:
+    """``text``'s paragraphs as (the ``## `` section they are in, the paragraph), blank-line
+    separated; table rows, fenced code and headings left out."""
+    out, cur, fence, section = [], [], False, ""
+
+    def close():
+        if cur:
+            out.append((section, "\n".join(cur)))
+            cur.clear()
+
+    for line in text.splitlines():
+        stripped = line.strip()
+        if stripped.startswith("```"):
+            close()
+            fence = not fence
+            continue
+        if fence:
+            continue
+        if not stripped or stripped.startswith("#"):
+            close()
+            if stripped.startswith("## "):
+                section = stripped[3:].strip()
+            continue
+        if stripped.startswith("|"):
+            continue
+        cur.append(line)
+    close()
+    return out
+
+
+def _constants() -> dict[str, set[str]]:
+    """Each upper-case name assigned at a module's top level in the package: the modules
+    (file stems, a package's folder name for its ``__init__``) that assign it."""
+    found: dict[str, set[str]] = {}
+    for path in (ROOT / "bayes_inerter").rglob("*.py"):
+        module = path.parent.name if path.stem == "__init__" else path.stem
+        for name in re.findall(r"^([A-Z][A-Z0-9_]{2,})\s*(?::[^=\n]*)?=", path.read_text(), re.M):
+            found.setdefault(name, set()).add(module)
+    return found
+
+
+CONSTANTS = _constants()
+
+
+def _excused(clause: str) -> bool:
+    """Whether ``clause`` cites MODEL.md or names a constant of the package in backticks."""
+    if _MODEL.search(clause):
+        return True
+    for m in _CODE_CONSTANT.finditer(clause):
+        module, name = m.group(1), m.group(2)
+        if name in CONSTANTS and (module is None or module in CONSTANTS[name]):
+            return True
+    return False
+
+
+def measured_numbers(paragraph: str) -> list[str]:
+    """The measured numbers ``paragraph`` states (rules 1 and 3 of the module docstring)."""
+    flat = " ".join(paragraph.split())
+    found = []
+    for clause in re.split(r"(?<=[.;])\s+", flat):
+        if not _excused(clause):
+            found += MEASURED.findall(CONVENTION.sub("", clause))
+    return found
+
+
+def names_source(paragraph: str) -> bool:
+    return bool(SOURCE.search(paragraph))
+
+
+def _section_csv(doc: Path, section: str) -> bool:
+    return doc.name == "performance.md" and (ROOT / "results" / "performance" / f"{section}.csv").is_file()
+
+
+def key(paragraph: str) -> str:
+    return " ".join(paragraph.split())[:40]
+
+
+def unsourced(doc: Path) -> list[str]:
+    """The paragraphs of ``doc`` that state a measured number and name no source."""
+    return [p for section, p in paragraphs(doc.read_text())
+            if measured_numbers(p) and not names_source(p) and not _section_csv(doc, section)]
+
+
+def test_the_classifier_on_made_up_paragraphs():
+    sourced = ("On the six design records the slowest tau fell from 416 to 67 steps "
+               "(results/chain-geometry, `geometry.csv`).")
+    bare = "On the six design records the slowest tau fell from 416 to 67 steps, b moved 0.1 %."
+    assert measured_numbers(sourced) and names_source(sourced)
+    assert measured_numbers(bare) == ["67 steps", "0.1 %"] and not names_source(bare)
+    # conventions, settings and Table I's values are not measurements
+    assert measured_numbers("b's 94 % interval (3 % to 97 %) on a 10 s record at 0.5 Hz") == []
+    assert measured_numbers("With m_B = 57.2 kg (Table I, ../shared/MODEL.md) and p = 20 mm: a sum.") == []
+    assert measured_numbers("at least 0.2 % of a period (`reversals.MIN_HALF_WIDTH`). It took 4 s.") == ["4 s"]
+    # a constant counts only where the package defines it, in the module named
+    assert measured_numbers("a ramp over 10 % of the gap (`NO_SUCH_CONSTANT`)") == ["10 %"]
+    assert measured_numbers("a ramp over 10 % of the gap (`motion.BACKLASH_RAMP`)") == ["10 %"]
+    assert measured_numbers("a ramp over 10 % of the gap (`BACKLASH_RAMP`)") == []
+
+
+def test_paragraphs_leave_out_tables_code_and_headings():
+    text = "## one\n\nA 5 % text\nsecond line\n\n| 3 % | row |\n\n```\n7 %\n```\n\n## two\nlast 2 s\n"
+    assert paragraphs(text) == [("one", "A 5 % text\nsecond line"), ("two", "last 2 s")]
+
+
+@pytest.mark.parametrize("doc", DOCS, ids=lambda p: p.name)
+def test_every_measured_number_names_its_source(doc):
+    allowed = {k for d, k, _ in NO_SOURCE if d == doc.name}
+    flagged = [p for p in unsourced(doc) if key(p) not in allowed]
+    assert not flagged, (
+        f"{doc.name}: paragraphs that state a measured number and name no source "
+        f"(results/..., a .csv, or the benchmarks/, studies/ or tests/ file that measures it):\n\n"
+        + "\n\n".join(" ".join(p.split())[:300] for p in flagged))
+
+
+def test_the_allow_list_names_live_paragraphs():
+    """An entry names one paragraph of its doc that still states a measured number: a
+    paragraph rewritten or given its source leaves the list."""
+    for doc, start, reason in NO_SOURCE:
+        assert reason
+        matches = [p for _, p in paragraphs((ROOT / "docs" / doc).read_text()) if key(p) == start]
+        assert len(matches) == 1, f"{doc}: no single paragraph starts {start!r}"
+        assert measured_numbers(matches[0]), f"{doc}: {start!r} states no measured number now: remove the entry"
+
+
+def test_performance_sections_name_their_csv():
+    doc = ROOT / "docs" / "performance.md"
+    sections = {}
+    for section, p in paragraphs(doc.read_text()):
+        sections.setdefault(section, p)
+    named = {s: first for s, first in sections.items() if s}
+    assert len(named) >= 10
+    for section, first in named.items():
+        assert first.strip() == f"`results/performance/{section}.csv`", f"## {section} begins {first[:60]!r}"
+        assert _section_csv(doc, section), f"## {section}: results/performance/{section}.csv is not there"
+
+
+def test_the_check_inspects_many_paragraphs():
+    # guards the tests above against passing on nothing (a pattern that matches nothing)
+    all_paragraphs = [p for doc in DOCS for _, p in paragraphs(doc.read_text())]
+    with_numbers = [p for p in all_paragraphs if measured_numbers(p)]
+    sourced = [p for p in with_numbers if names_source(p)]
+    assert len(all_paragraphs) > 150
+    assert len(with_numbers) > 80
+    assert len(sourced) > 50
