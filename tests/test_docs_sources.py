@@ -82,7 +82,6 @@ NO_SOURCE = [
     ("inference.md", "**A white discrepancy.** With the revers",
      "its 2 % is a setting (the plate mode's damping); the optima of the table it introduces: " + _NO_SOURCE),
     ("inference.md", "b moved by at most 0.54 points (A5 at 1.", _NO_SOURCE),
-    ("inference.md", "**The nut's damping: considered, not giv", "being rewritten"),
     ("inference.md", "**Identified or not.** With this likelih", _NO_SOURCE),
     ("inference.md", "**Why paper-like chains are slow** (a di", _NO_SOURCE),
     ("inference.md", "The sampler's coordinates matter more. O", _NO_SOURCE),
