@@ -247,15 +247,16 @@ def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogo
     sign = (np.fft.rfft(switched) / SIGN_GRID * 2.0)[1: data.harmonics + 1]
     K = data.harmonics
     V = data.accel / (1j * data.omega)  # the plate's velocity at the harmonics
-    parts = [(window_basis(windows, K), (SD, SD if reversal_scale == "total" else 0.0, 0.0))]
+    # each part: its deviations' basis, their prior sd's shares, whether they are the law's
+    parts = [(window_basis(windows, K), (SD, SD if reversal_scale == "total" else 0.0, 0.0), False)]
     if law:
         U = friction_law.law_basis(v, switched, K)
         if law_orthogonal:
             U = friction_law.beyond(U, sign, V) if law_beyond_viscous else friction_law.beyond(U, sign)
-        parts.append((U, (friction_law.SD, friction_law.SD, 0.0)))
-    basis = np.hstack([U for U, _ in parts])
-    scale = np.array([c for U, c in parts for _ in range(U.shape[1])], dtype=float).reshape(-1, 3)
-    law_columns = np.concatenate([np.full(U.shape[1], k == 1) for k, (U, _) in enumerate(parts)])
+        parts.append((U, (friction_law.SD, friction_law.SD, 0.0), True))
+    basis = np.hstack([U for U, _, _ in parts])
+    scale = np.array([c for U, c, _ in parts for _ in range(U.shape[1])], dtype=float).reshape(-1, 3)
+    law_columns = np.concatenate([np.full(U.shape[1], is_law) for U, _, is_law in parts])
     return MotionData(data, V, sign, data.omega, velocity(DRIVE_GRID),
                       basis, scale, windows, law_columns, fine_omega, fine_var)
 
