@@ -2,8 +2,8 @@
 who meets a number in the method docs can find the committed file, study or test it
 comes from.
 
-The rule, paragraph by paragraph (paragraphs are separated by blank lines; table rows,
-lines starting with ``|``, fenced code blocks and headings are left out):
+The rule, paragraph by paragraph (paragraphs are separated by blank lines; tables,
+fenced code blocks and headings are left out of them, and tables are checked by rule 5):
 
 1. **A measured number** is, in the paragraph's text with its line breaks made spaces,
 
@@ -14,10 +14,11 @@ lines starting with ``|``, fenced code blocks and headings are left out):
      ``N s/m``, ``mm``, ``m``, ``g`` (``3,502.6 kg``, ``0.23 N``; ``57.2 kg``).
 
    That is ``MEASURED`` below. Hertz are left out (0.5, 1 and 1.5 Hz are the drive's
-   settings, 1 kHz the sampling's), and so are three conventions that are never a
+   settings, 1 kHz the sampling's), and so are four conventions that are never a
    measurement (``CONVENTION``): ``94 %``, the package's interval level (arviz's
    default) and the chi-square arithmetic made with it; ``3 % to 97 %`` (or ``and``),
-   the quantiles that bound that interval; and ``10 s record``, the records' length.
+   the quantiles that bound that interval; ``10 s record``, the records' length; and
+   ``9.80665 m/s^2``, standard gravity (the definition by which a record in g is read).
 
 2. **Its source** is named in the same paragraph (``SOURCE``): a ``results/...`` path, a
    ``*.csv`` file, or a ``benchmarks/``, ``studies/`` or ``tests/`` path (the command or
@@ -42,6 +43,39 @@ lines starting with ``|``, fenced code blocks and headings are left out):
    fixed paragraph leaves the list. Empty now: the scratch measurements it once
    excused are in CHANGELOG.md ("History: measurements behind the method docs"),
    verbatim, and the docs state the decisions they led to without them.
+
+5. **Tables.** A table is a run of consecutive lines starting with ``|`` whose second
+   line is the delimiter row (``| --- | --- |``), as markdown reads one; a line
+   starting with ``|`` that begins no table (``|1 / z|, ...``) is paragraph text. Every
+   row of a table but the header (which names the quantities: ``b 3-50-97 %``) and the
+   delimiter is read cell by cell, each cell as a paragraph's text is (rules 1 and 3:
+   its clauses, ``CONVENTION``, the escape for ``MODEL.md`` and the package's
+   constants), and its measured numbers are
+
+   - the ``MEASURED`` numbers, and
+   - any other number with a decimal point (``-4.72``, ``0.94``, ``1.7e-10``): in a
+     table the unit or the quantity is in the header or the caption, so a bare
+     ``20.7`` in a row is as measured as ``20.7 nats`` in a sentence (hertz left out
+     here too: ``A6 0.5 Hz`` names a record). Integers alone (``6 of 12``,
+     ``292 (k_n)``) do not count: counts and step numbers stand beside decimals or
+     units in every measured table in docs/.
+
+   A table with a measured number has its source (``SOURCE``) in the table itself, in
+   the paragraph immediately before it (its caption) or in the one immediately after
+   it (only blank lines between; not across a heading or code); in
+   docs/performance.md its ``## section`` may name it instead (rule 2). The check
+   cannot tell whose numbers a neighbour's source is for; a table that passes on its
+   neighbour's source is read by hand (the first pass moved the five whose neighbour
+   cited another measurement). The escape of rule 3 excuses a cell only where that
+   cell cites the constant or MODEL.md, so a table of settings says what it is in its
+   header instead (``SETTINGS_HEADER``): a header
+   cell that is exactly ``default`` marks the table as stating defaults, not
+   measurements (the assumptions tables of docs/assumptions.md, the checks'
+   thresholds of docs/records.md), and it is not checked. A comparison of measured
+   variants must therefore not head a column ``default`` alone: it names what it
+   measured (``b's error, default``, ``both (default)``). There is no allow-list for
+   tables: a table without a committed source is moved to CHANGELOG.md with its
+   caption, as the paragraphs of rule 4 were.
 """
 
 import re
@@ -56,7 +90,13 @@ _NUM = r"(?<![\w.])\d[\d,]*(?:\.\d+)?"
 MEASURED = re.compile(
     _NUM + r"(?:\s?%|x\b|\s?(?:ms|s|us|µs|times|nats?|steps|minutes|min|hours?|h)\b)"
     r"|(?<![\w.])\d[\d,]*\.\d+\s?(?:kg|N/m|N s/m|N|mm|m|g)\b")
-CONVENTION = re.compile(r"\b94 %|\b3 % (?:to|and) 97 %|\b\d+ s records?\b")
+CONVENTION = re.compile(r"\b94 %|\b3 % (?:to|and) 97 %|\b\d+ s records?\b|(?<![\w.])9\.80665 m/s\^2")
+# in a table, any number with a decimal point (rule 5)
+DECIMAL = re.compile(r"(?<![\w.])\d[\d,]*\.\d+(?![\d.]|\s?k?Hz\b)")
+# a delimiter row, the second line of a markdown table
+DELIMITER = re.compile(r"^\|?\s*:?-+:?\s*(?:\|\s*:?-+:?\s*)*\|?$")
+# a header cell that marks a table of settings (rule 5)
+SETTINGS_HEADER = "default"
 SOURCE = re.compile(r"(?<![\w/.-])(?:results|benchmarks|studies|tests)/[\w./*-]*|[\w./-]+\.csv\b")
 _MODEL = re.compile(r"\bMODEL\.md\b")
 _CODE_CONSTANT = re.compile(r"`(?:[\w.]*?(\w+)\.)?([A-Z][A-Z0-9_]{2,})\b[^`]*`")
@@ -66,33 +106,68 @@ _NO_SOURCE = "no committed source: to be measured again or removed"
 NO_SOURCE: list[tuple[str, str, str]] = []
 
 
-def paragraphs(text: str) -> list[tuple[str, str]]:
-    """``text``'s paragraphs as (the ``## `` section they are in, the paragraph), blank-line
-    separated; table rows, fenced code and headings left out."""
+def blocks(text: str) -> list[tuple[str, str, str]]:
+    """``text``'s paragraphs and tables in order, as (kind, the ``## `` section they are
+    in, the text): kind ``"paragraph"`` (blank-line separated), ``"table"`` (rule 5) or
+    ``"break"`` (a heading or a fenced code block, which nothing reads across)."""
     out, cur, fence, section = [], [], False, ""
+    lines = text.splitlines()
 
     def close():
         if cur:
-            out.append((section, "\n".join(cur)))
+            out.append(("paragraph", section, "\n".join(cur)))
             cur.clear()
 
-    for line in text.splitlines():
+    i = 0
+    while i < len(lines):
+        line = lines[i]
         stripped = line.strip()
+        i += 1
         if stripped.startswith("```"):
             close()
+            if not fence:
+                out.append(("break", section, ""))
             fence = not fence
             continue
         if fence:
             continue
         if not stripped or stripped.startswith("#"):
             close()
-            if stripped.startswith("## "):
-                section = stripped[3:].strip()
+            if stripped.startswith("#"):
+                if stripped.startswith("## "):
+                    section = stripped[3:].strip()
+                out.append(("break", section, ""))
             continue
-        if stripped.startswith("|"):
+        if stripped.startswith("|") and i < len(lines) and DELIMITER.match(lines[i].strip()):
+            close()
+            rows = [stripped]
+            while i < len(lines) and lines[i].strip().startswith("|"):
+                rows.append(lines[i].strip())
+                i += 1
+            out.append(("table", section, "\n".join(rows)))
             continue
         cur.append(line)
     close()
+    return out
+
+
+def paragraphs(text: str) -> list[tuple[str, str]]:
+    """``text``'s paragraphs as (the ``## `` section they are in, the paragraph), blank-line
+    separated; tables, fenced code and headings left out."""
+    return [(section, t) for kind, section, t in blocks(text) if kind == "paragraph"]
+
+
+def tables(text: str) -> list[tuple[str, str, str, str]]:
+    """``text``'s tables as (section, the paragraph immediately before, the table, the
+    paragraph immediately after); a neighbour across a heading or code is ``""``."""
+    found = blocks(text)
+    out = []
+    for n, (kind, section, t) in enumerate(found):
+        if kind != "table":
+            continue
+        before = found[n - 1][2] if n > 0 and found[n - 1][0] == "paragraph" else ""
+        after = found[n + 1][2] if n + 1 < len(found) and found[n + 1][0] == "paragraph" else ""
+        out.append((section, before, t, after))
     return out
 
 
@@ -121,14 +196,30 @@ def _excused(clause: str) -> bool:
     return False
 
 
-def measured_numbers(paragraph: str) -> list[str]:
-    """The measured numbers ``paragraph`` states (rules 1 and 3 of the module docstring)."""
+def measured_numbers(paragraph: str, decimals: bool = False) -> list[str]:
+    """The measured numbers ``paragraph`` states (rules 1 and 3 of the module docstring);
+    with ``decimals``, also its other numbers with a decimal point (a table's cell, rule 5)."""
     flat = " ".join(paragraph.split())
     found = []
     for clause in re.split(r"(?<=[.;])\s+", flat):
         if not _excused(clause):
-            found += MEASURED.findall(CONVENTION.sub("", clause))
+            text = CONVENTION.sub("", clause)
+            found += MEASURED.findall(text)
+            if decimals:
+                found += DECIMAL.findall(MEASURED.sub(" ", text))
     return found
+
+
+def _cells(row: str) -> list[str]:
+    return [c.strip() for c in row.strip().strip("|").split("|")]
+
+
+def table_numbers(table: str) -> list[str]:
+    """The measured numbers a table states (rule 5): none in a table of settings."""
+    rows = [r for r in table.splitlines() if not DELIMITER.match(r.strip())]
+    if any(c.lower() == SETTINGS_HEADER for c in _cells(rows[0])):
+        return []
+    return [n for row in rows[1:] for cell in _cells(row) for n in measured_numbers(cell, decimals=True)]
 
 
 def names_source(paragraph: str) -> bool:
@@ -149,6 +240,14 @@ def unsourced(doc: Path) -> list[str]:
             if measured_numbers(p) and not names_source(p) and not _section_csv(doc, section)]
 
 
+def unsourced_tables(doc: Path) -> list[str]:
+    """The tables of ``doc`` that state a measured number and name no source in
+    themselves, their caption or the paragraph after them (rule 5)."""
+    return [t for section, before, t, after in tables(doc.read_text())
+            if table_numbers(t) and not any(map(names_source, (before, t, after)))
+            and not _section_csv(doc, section)]
+
+
 def test_the_classifier_on_made_up_paragraphs():
     sourced = ("On the six design records the slowest tau fell from 416 to 67 steps "
                "(results/chain-geometry, `geometry.csv`).")
@@ -166,8 +265,32 @@ def test_the_classifier_on_made_up_paragraphs():
 
 
 def test_paragraphs_leave_out_tables_code_and_headings():
-    text = "## one\n\nA 5 % text\nsecond line\n\n| 3 % | row |\n\n```\n7 %\n```\n\n## two\nlast 2 s\n"
-    assert paragraphs(text) == [("one", "A 5 % text\nsecond line"), ("two", "last 2 s")]
+    text = ("## one\n\nA 5 % text\nsecond line\n\n| a | b |\n| --- | --- |\n| 3 % | row |\n\n"
+            "```\n7 %\n```\n\n## two\nlast 2 s\n|x| is 4 %\n")
+    assert paragraphs(text) == [("one", "A 5 % text\nsecond line"), ("two", "last 2 s\n|x| is 4 %")]
+    assert tables(text) == [("one", "A 5 % text\nsecond line", "| a | b |\n| --- | --- |\n| 3 % | row |", "")]
+
+
+def test_the_classifier_on_made_up_tables():
+    table = ("| record | largest tau | b's error (3 %, 50 %, 97 %) |\n| --- | --- | --- |\n"
+             "| A6 0.5 Hz | 292 (k_n) | -4.72, -3.21, -1.12 % |\n| B1 0.5 Hz | 219 (k_n) | -0.75 |")
+    sourced = ("Chains on paper-like design records (results/chain-geometry, `geometry.csv`):", table,
+               "The text after it.")
+    bare = ("Chains on paper-like design records (laboratory seed 11):", table, "The text after it.")
+    assert table_numbers(table) == ["1.12 %", "4.72", "3.21", "0.75"]  # the header's labels are not read
+    assert any(map(names_source, sourced)) and not any(map(names_source, bare))
+    # a source in the paragraph after the table counts, one across a heading does not
+    doc = "\n\n".join(bare[:2]) + "\n\n" + "Made by studies/chain_geometry.py."
+    assert tables(doc)[0][3] == "Made by studies/chain_geometry.py."
+    assert tables("\n\n".join(bare[:2]) + "\n\n## next\n\nstudies/x.py")[0][3] == ""
+    # integers alone, hertz and the conventions are not measured; a plain decimal is
+    assert table_numbers("| replicate | steps |\n| --- | --- |\n| 1 (1 Hz) | 4,000 of 12 |") == []
+    assert table_numbers("| | median |\n| --- | --- |\n| input_noise=0 | 20.7 |") == ["20.7"]
+    assert table_numbers("| quantity | units |\n| --- | --- |\n| accel | m/s^2, g (9.80665 m/s^2) |") == []
+    # a table of settings says so by a column headed `default`; a measured one may not hide
+    settings = "| check | refuses | default |\n| --- | --- | --- |\n| clipped | a pile | 0.2 %, 4 |"
+    measured = "| record | b's error, default |\n| --- | --- |\n| A3 0.5 Hz | -0.67 % |"
+    assert table_numbers(settings) == [] and table_numbers(measured) == ["0.67 %"]
 
 
 @pytest.mark.parametrize("doc", DOCS, ids=lambda p: p.name)
@@ -210,3 +333,24 @@ def test_the_check_inspects_many_paragraphs():
     assert len(all_paragraphs) > 150
     assert len(with_numbers) > 60  # 97 before the unsourced ones moved to CHANGELOG.md, 77 after
     assert len(sourced) > 50
+
+
+@pytest.mark.parametrize("doc", DOCS, ids=lambda p: p.name)
+def test_every_measured_table_names_its_source(doc):
+    flagged = unsourced_tables(doc)
+    assert not flagged, (
+        f"{doc.name}: tables that state a measured number and name no source in "
+        f"themselves or the paragraph just before or after them:\n\n"
+        + "\n\n".join(t[:300] for t in flagged))
+
+
+def test_the_check_inspects_many_tables():
+    # guards the table check against passing on nothing (a table never found, no number read)
+    found = [(doc, *t) for doc in DOCS for t in tables(doc.read_text())]
+    measured = [t for _, _, _, t, _ in found if table_numbers(t)]
+    outside_performance = [t for doc, _, _, t, _ in found if doc.name != "performance.md" and table_numbers(t)]
+    settings = [t for _, _, _, t, _ in found if any(c.lower() == SETTINGS_HEADER for c in _cells(t.splitlines()[0]))]
+    assert len(found) > 20  # 34 before the unsourced ones moved to CHANGELOG.md, 25 after
+    assert len(measured) > 15  # 20: the 17 of docs/performance.md and 3 sourced ones of docs/inference.md
+    assert len(outside_performance) >= 3
+    assert 1 <= len(settings) <= 5  # the two of docs/assumptions.md and the checks' of docs/records.md
