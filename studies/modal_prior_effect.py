@@ -58,7 +58,7 @@ def one(seed: int, setting: str, freq: float, prior: str, commit: str) -> dict:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--records", nargs="+", default=list(RECORDS), type=record_arg)
+    ap.add_argument("--records", nargs="+", default=[record_arg(r) for r in RECORDS], type=record_arg)
     ap.add_argument("--seed", type=int, default=11, help="the paper-like laboratory (default: 11, a design seed)")
     ap.add_argument("--out", default=str(ROOT / "results" / "likelihood-candidates"))
     args = ap.parse_args()
