@@ -17,7 +17,9 @@ state (converged, longest tau, steps) and the seconds. Candidates:
   physical prior (``modal``);
 - ``motion``: the motion-in likelihood (``inference.posterior.motion``: the measured motion in,
   the force out at the drive's harmonics, no simulation; the same noise, discrepancy,
-  gain and ``modal``).
+  gain and ``modal``);
+- ``motion-law-sampled``: the same with the friction law's deviations' scale sampled
+  (``LikelihoodSettings(law_sampled=True)``).
 
 Records: ``control`` (the generator's records of the model's own physics, Table I and
 Table 2), ``noise-free`` (the same with the sensors' noise off: ideal sensors, band-limited
@@ -60,6 +62,7 @@ FIELDS = ("kind", "setting", "freq_hz", "seed", "candidate", "b_true", "b_median
 
 
 KINDS = ("paper-like", "control", "noise-free")
+CANDIDATES = ("motion", "harmonic", "ar1", "motion-law-sampled")
 
 
 def _record(kind: str, setting: str, freq: float, seed: int):
@@ -71,11 +74,12 @@ def _record(kind: str, setting: str, freq: float, seed: int):
 
 def _fit(record, candidate: str, max_steps: int, processes: int, seed: int) -> list[dict]:
     """The rows of one fit: for ``ar1``, also the ``ar1-honest`` row read from the same chain."""
-    if candidate in ("harmonic", "motion"):
-        kw = {"likelihood": LikelihoodSettings(residual=candidate), "interval": "posterior"}
+    if candidate in ("harmonic", "motion", "motion-law-sampled"):
+        kw = {"likelihood": LikelihoodSettings(residual=candidate.split("-")[0],
+                                               law_sampled=candidate == "motion-law-sampled"), "interval": "posterior"}
     else:
         kw = {"likelihood": LikelihoodSettings(residual="ar1"), "interval": "honest"}
-    modal = candidate in ("harmonic", "motion")
+    modal = candidate != "ar1"
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(record, Path(tmp) / "fit", convergence=replace(Convergence(), max_steps=max_steps),
@@ -113,7 +117,7 @@ def main(argv=None) -> int:
     ap.add_argument("--kinds", nargs="+", default=["paper-like", "control"], choices=KINDS)
     ap.add_argument("--settings", nargs="+", default=["A0", "A3", "B2"])
     ap.add_argument("--freqs", nargs="+", type=float, default=[0.5, 1.0, 1.5])
-    ap.add_argument("--candidates", nargs="+", default=["motion", "harmonic", "ar1"], choices=("motion", "harmonic", "ar1"))
+    ap.add_argument("--candidates", nargs="+", default=["motion", "harmonic", "ar1"], choices=CANDIDATES)
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--max-steps", type=int, default=6000)
     ap.add_argument("--processes", type=int, default=min(2, os.cpu_count() or 1))
