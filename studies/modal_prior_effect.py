@@ -20,7 +20,6 @@ skips the rows there).
 """
 
 import argparse
-import math
 import sys
 import time
 from pathlib import Path
@@ -30,6 +29,7 @@ import numpy as np
 from _table import append_row, git_commit, read_rows, record_arg
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference.posterior.model import PosteriorModel
+from bayes_inerter.inference.posterior.parameters import ParameterMap
 from bayes_inerter.inference.sampling.optimize import find_start, whitened_optimum
 from bayes_inerter.records.paper_like import paper_like_record
 
@@ -51,7 +51,7 @@ def one(seed: int, setting: str, freq: float, prior: str, commit: str) -> dict:
     b = paper_parameters(setting).b
     return {"seed": seed, "setting": setting, "freq_hz": freq, "prior": prior, "b_true": b,
             "b_pct": round(100.0 * (v["b"] / b - 1.0), 3),
-            "zeta_B": round(v["c_B"] / (2.0 * math.sqrt(v["k_B"] * model.m_B)), 6),
+            "zeta_B": round(float(ParameterMap(split=False, modal=True, m_B=model.m_B).sampled(v)["zeta_B"]), 6),
             "c_B": float(f"{v['c_B']:.4g}"), "k_B": float(f"{v['k_B']:.4g}"), "lp": round(float(lp), 2),
             "seconds": round(time.perf_counter() - t0, 1), "commit": commit}
 
