@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from bayes_inerter.executor import Serial
-from bayes_inerter.study.paper_like_coverage import Config, run
+from bayes_inerter.study.paper_like_coverage import Config, likelihood_settings, run
 
 COMMITTED = Path(__file__).resolve().parents[1] / "results" / "coverage-paper-like-v5"
 
@@ -43,3 +43,15 @@ def test_a_folder_keeps_one_family_and_one_likelihood(tmp_path):
 def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):
     with pytest.raises(ValueError, match="run without summarise first"):
         run(Config(summarise=True), tmp_path, Serial())
+
+
+def test_progress_counts_only_the_replicates_of_the_frequency_asked(tmp_path):
+    (tmp_path / "replicates").mkdir()
+    today = likelihood_settings(Config().likelihood)  # the committed ones were fitted under an earlier default
+    for p in (COMMITTED / "replicates").glob("*.json"):
+        (tmp_path / "replicates" / p.name).write_text(json.dumps({**json.loads(p.read_text()),
+                                                                  "likelihood_settings": today}))
+    seen = []
+    run(Config(freq=0.5, replicates=100), tmp_path, Serial(), progress=lambda done, total: seen.append((done, total)))
+    at_half = sum(json.loads(p.read_text())["freq_hz"] == 0.5 for p in (COMMITTED / "replicates").glob("*.json"))
+    assert at_half < 100 and seen == [(at_half, at_half)]

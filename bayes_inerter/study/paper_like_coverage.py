@@ -217,18 +217,18 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     lines, failed = [], []
     if not config.summarise:
         commit = source_commit() or ""  # the code this run loaded, read once: HEAD may move while it runs
-        todo = [k for k in range(config.replicates) if not _file(out, k).exists()
-                and (config.freq is None or grid_case(k)[1] == config.freq)]
+        wanted = [k for k in range(config.replicates) if config.freq is None or grid_case(k)[1] == config.freq]
+        todo = [k for k in wanted if not _file(out, k).exists()]
         jobs = [(k, out, config, commit) for k in todo]
         if progress:
-            progress(config.replicates - len(todo), config.replicates)
-        for i, got in enumerate(executor.as_completed(_run, jobs), config.replicates - len(todo) + 1):
+            progress(len(wanted) - len(todo), len(wanted))
+        for i, got in enumerate(executor.as_completed(_run, jobs), len(wanted) - len(todo) + 1):
             if got.ok:
                 lines.append(_line(got.value))
             else:  # one replicate's failure is reported, the rest go on
                 failed.append((f"replicate {jobs[got.index][0]}", str(got.error)))
             if progress:
-                progress(i, config.replicates)
+                progress(i, len(wanted))
     if not any((out / "replicates").glob("*.json")):
         raise ValueError(f"{out} holds no finished replicate; run without summarise first")
     rows = summarise(out)
