@@ -76,6 +76,19 @@ fenced code blocks and headings are left out of them, and tables are checked by 
    measured (``b's error, default``, ``both (default)``). There is no allow-list for
    tables: a table without a committed source is moved to CHANGELOG.md with its
    caption, as the paragraphs of rule 4 were.
+
+6. **A cited CSV exists.** Every ``*.csv`` a paragraph or table names is in the
+   repository: a ``results/...`` path as written, a bare name (``geometry.csv``) as a
+   file somewhere under results/. Left out: names in capitals (``RECORD.csv``, a
+   placeholder for the user's file) and names in a list item, paragraph or table that
+   states no measured number (a command's outputs described, which it may write under
+   runs/). So a
+   number cannot rest on a file that was never committed or has been removed, which
+   rule 2 alone (a script's name is a source) would let pass.
+
+7. **Counts are measured numbers** in paragraphs: ``N of M`` (``15 of 33``, ``9 of the
+   27 records``) counts as rule 1's numbers do, so a sentence of counts needs its
+   source as one of per cents does.
 """
 
 import re
@@ -90,6 +103,8 @@ _NUM = r"(?<![\w.])\d[\d,]*(?:\.\d+)?"
 MEASURED = re.compile(
     _NUM + r"(?:\s?%|x\b|\s?(?:ms|s|us|µs|times|nats?|steps|minutes|min|hours?|h)\b)"
     r"|(?<![\w.])\d[\d,]*\.\d+\s?(?:kg|N/m|N s/m|N|mm|m|g)\b")
+# rule 7: a count, "15 of 33" or "9 of the 27"
+COUNT = re.compile(r"(?<![\w.,])\d[\d,]* of (?:the )?\d[\d,]*\b")
 CONVENTION = re.compile(r"\b94 %|\b3 % (?:to|and) 97 %|\b\d+ s records?\b|(?<![\w.])9\.80665 m/s\^2")
 # in a table, any number with a decimal point (rule 5)
 DECIMAL = re.compile(r"(?<![\w.])\d[\d,]*\.\d+(?![\d.]|\s?k?Hz\b)")
@@ -197,14 +212,15 @@ def _excused(clause: str) -> bool:
 
 
 def measured_numbers(paragraph: str, decimals: bool = False) -> list[str]:
-    """The measured numbers ``paragraph`` states (rules 1 and 3 of the module docstring);
-    with ``decimals``, also its other numbers with a decimal point (a table's cell, rule 5)."""
+    """The measured numbers ``paragraph`` states (rules 1, 3 and 7 of the module docstring);
+    with ``decimals``, a table's cell (rule 5): also its other numbers with a decimal
+    point, and not its counts."""
     flat = " ".join(paragraph.split())
     found = []
     for clause in re.split(r"(?<=[.;])\s+", flat):
         if not _excused(clause):
             text = CONVENTION.sub("", clause)
-            found += MEASURED.findall(text)
+            found += MEASURED.findall(text) + ([] if decimals else COUNT.findall(text))
             if decimals:
                 found += DECIMAL.findall(MEASURED.sub(" ", text))
     return found
@@ -246,6 +262,31 @@ def unsourced_tables(doc: Path) -> list[str]:
     return [t for section, before, t, after in tables(doc.read_text())
             if table_numbers(t) and not any(map(names_source, (before, t, after)))
             and not _section_csv(doc, section)]
+
+
+# rule 6: a CSV named, with its results/ path or bare
+_CSV = re.compile(r"(?<![\w/.-])((?:results/[\w./-]+/)?([\w.-]+\.csv))\b")
+_COMMITTED_CSV = {p.name for p in (ROOT / "results").rglob("*.csv")}
+
+
+def missing_csvs(block: str, measured: bool) -> list[str]:
+    """The CSVs ``block`` (a paragraph or a table) names that are not in the repository
+    (rule 6); none where it states no ``measured`` number."""
+    if not measured:
+        return []
+    out = []
+    for path, name in _CSV.findall(block):
+        if name[:-4].isupper():
+            continue
+        if not ((ROOT / path).is_file() if path.startswith("results/") else name in _COMMITTED_CSV):
+            out.append(path)
+    return out
+
+
+def items(paragraph: str) -> list[str]:
+    """``paragraph``'s list items (lines beginning ``- `` or ``1. `` start one), or the
+    paragraph itself where it is no list."""
+    return [t for t in re.split(r"\n(?=\s*(?:[-*]|\d+\.) )", paragraph) if t.strip()]
 
 
 def test_the_classifier_on_made_up_paragraphs():
@@ -354,3 +395,31 @@ def test_the_check_inspects_many_tables():
     assert len(measured) > 15  # 20: the 17 of docs/performance.md and 3 sourced ones of docs/inference.md
     assert len(outside_performance) >= 3
     assert 1 <= len(settings) <= 5  # the two of docs/assumptions.md and the checks' of docs/records.md
+
+
+def test_a_cited_csv_is_there():
+    assert missing_csvs("tau 207.5 steps (`walks.csv`, results/chain-geometry/geometry.csv)", True) == ["walks.csv"]
+    assert missing_csvs("tau 207.5 steps (results/chain-geometry/walks.csv, `geometry.csv`)", True) == [
+        "results/chain-geometry/walks.csv"]
+    assert missing_csvs("writes `ridge.csv` under runs/", False) == []
+    assert items("- one 2 %\n  more\n- two `ridge.csv`\n1. three") == ["- one 2 %\n  more", "- two `ridge.csv`",
+                                                                        "1. three"]
+    assert missing_csvs("`bayes-inerter fit RECORD.csv`: b 3.5 %", True) == []
+    assert len(_COMMITTED_CSV) > 50  # the names are read from results/, not from nothing
+
+
+@pytest.mark.parametrize("doc", DOCS, ids=lambda p: p.name)
+def test_every_cited_csv_is_committed(doc):
+    missing = []
+    for kind, _, text in blocks(doc.read_text()):
+        if kind == "paragraph":
+            for item in items(text):
+                missing += missing_csvs(item, bool(measured_numbers(item)))
+        elif kind == "table":
+            missing += missing_csvs(text, bool(table_numbers(text)))
+    assert not missing, f"{doc.name} rests measured numbers on CSVs that are not committed: {sorted(set(missing))}"
+
+
+def test_counts_are_measured_numbers():
+    assert measured_numbers("The 94 % interval held b on 93 of 100, and on 9 of the 33 at 0.5 Hz.") == [
+        "93 of 100", "9 of the 33"]
