@@ -1,6 +1,7 @@
 """The paper-like coverage study (``study.paper_like_coverage``): its configuration, a
 folder's one family and likelihood, and its tables remade from committed replicates."""
 
+import csv
 import json
 import shutil
 from pathlib import Path
@@ -55,3 +56,22 @@ def test_progress_counts_only_the_replicates_of_the_frequency_asked(tmp_path):
     run(Config(freq=0.5, replicates=100), tmp_path, Serial(), progress=lambda done, total: seen.append((done, total)))
     at_half = sum(json.loads(p.read_text())["freq_hz"] == 0.5 for p in (COMMITTED / "replicates").glob("*.json"))
     assert at_half < 100 and seen == [(at_half, at_half)]
+
+
+def test_pairs_set_each_replicate_beside_the_same_record_fitted_otherwise(tmp_path):
+    for side in ("a", "b"):
+        shutil.copytree(COMMITTED / "replicates", tmp_path / side / "replicates")
+    first = tmp_path / "b" / "replicates" / "0000.json"
+    one = json.loads(first.read_text())
+    first.write_text(json.dumps({**one, "b_median": one["b_true"], "covered50": True, "width94_pct": 2 * one["width94_pct"]}))
+    got = run(Config(summarise=True, against=str(tmp_path / "a")), tmp_path / "b", Serial())
+    rows = list(csv.DictReader((tmp_path / "b" / "pairs.csv").open()))
+    assert len(rows) == 100 and rows[0]["error_pct"] == "0.0" and rows[0]["error_pct_against"] != "0.0"
+    overall = got.values["pairs"][-1]
+    assert overall["pairs"] == 100 and overall["median_ratio_width94_pct"] == 1.0
+    assert overall["held50"] - overall["held50_against"] == (not one["covered50"])
+    first.write_text(json.dumps({**one, "seed": one["seed"] + 1}))
+    with pytest.raises(ValueError, match="not the same record"):
+        run(Config(summarise=True, against=str(tmp_path / "a")), tmp_path / "b", Serial())
+    with pytest.raises(ValueError, match="give it with summarise"):
+        Config(against=str(tmp_path / "a"))

@@ -52,7 +52,8 @@ from ..records.paper_like import PaperLike, laboratory, paper_like_record
 from .manifest import source_commit
 from .output import StudyOutput, write_json
 
-__all__ = ["Config", "run", "FAMILIES", "LEVELS", "replicate", "with_errors", "summarise", "likelihood_settings"]
+__all__ = ["Config", "run", "FAMILIES", "LEVELS", "replicate", "with_errors", "summarise", "likelihood_settings",
+           "pairs"]
 
 LEVELS = (0.94, 0.5)
 #: Device families: the default paper-like device, and the held-out ones of issue 39 (item 5),
@@ -166,6 +167,63 @@ def summarise(out: Path) -> list[dict]:
     return rows
 
 
+_PAIRED = ("error_pct", "covered94", "covered50", "width94_pct", "width50_pct", "converged", "steps", "tau_max",
+           "seconds")
+
+
+def pairs(out: Path, against: Path) -> list[dict]:
+    """The replicates of ``out`` beside the same replicates of ``against`` (the same
+    laboratory seed, setting and frequency, fitted otherwise), one row each, written to
+    ``out``/pairs.csv: each fit's b error, coverage, widths, chain; ``*_against`` is
+    ``against``'s. Rows: the pairs, then one per frequency and one for all with the
+    counts held, the mean errors and the median ratios of the widths and of tau.
+    ValueError where a replicate of both folders is not the same record."""
+    out, against = Path(out), Path(against)
+    mine = {json.loads(p.read_text())["replicate"]: p for p in (out / "replicates").glob("*.json")}
+    rows = []
+    for k in sorted(mine):
+        other = _file(against, k)
+        if not other.exists():
+            continue
+        a, b = (with_errors(json.loads(p.read_text())) for p in (mine[k], other))
+        same = ("seed", "setting", "freq_hz", "family")
+        if any(a.get(f, "default") != b.get(f, "default") for f in same):
+            raise ValueError(f"replicate {k} is not the same record in {out} and {against}: "
+                             + ", ".join(f"{f} {a.get(f)} against {b.get(f)}" for f in same))
+        row = {f: a[f] for f in ("replicate", "setting", "freq_hz", "seed", "identified")}
+        row["identified_against"] = b["identified"]
+        for f in _PAIRED:
+            row[f], row[f"{f}_against"] = a.get(f), b.get(f)
+        rows.append(row)
+    if not rows:
+        raise ValueError(f"no replicate of {out} is in {against}")
+    summary = []
+    for freq in (*FREQUENCIES_HZ, None):
+        sel = [r for r in rows if freq is None or r["freq_hz"] == freq]
+        if not sel:
+            continue
+        row = {"replicate": "all", "freq_hz": "all" if freq is None else freq, "pairs": len(sel)}
+        for side in ("", "_against"):
+            row[f"held94{side}"] = sum(bool(r[f"covered94{side}"]) for r in sel)
+            row[f"held50{side}"] = sum(bool(r[f"covered50{side}"]) for r in sel)
+            row[f"converged{side}"] = sum(bool(r[f"converged{side}"]) for r in sel)
+            row[f"mean_error_pct{side}"] = round(float(np.mean([r[f"error_pct{side}"] for r in sel])), 3)
+            row[f"median_abs_error_pct{side}"] = round(float(np.median([abs(r[f"error_pct{side}"]) for r in sel])), 3)
+        for f in ("width94_pct", "width50_pct", "tau_max", "seconds"):
+            got = [r[f] / r[f"{f}_against"] for r in sel if r[f] and r[f"{f}_against"]]
+            row[f"median_ratio_{f}"] = round(float(np.median(got)), 3) if got else ""
+        summary.append(row)
+    with (out / "pairs.csv").open("w", newline="") as f:
+        w = csv.DictWriter(f, list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    with (out / "pairs_summary.csv").open("w", newline="") as f:
+        w = csv.DictWriter(f, list(summary[0]))
+        w.writeheader()
+        w.writerows(summary)
+    return summary
+
+
 @dataclass(frozen=True)
 class Config:
     """What ``studies/paper_like_coverage.py`` is asked (see the module docstring)."""
@@ -178,6 +236,9 @@ class Config:
         "help": "LikelihoodSettings changed from the default, NAME=VALUE,... (values as JSON)"})
     freq: float | None = field(default=None, metadata={"help": "only the replicates driven at this frequency, Hz"})
     summarise: bool = field(default=False, metadata={"help": "only write the tables from the replicates there"})
+    against: str | None = field(default=None, metadata={
+        "help": "with summarise: a folder of the same replicates fitted otherwise; also writes pairs.csv and "
+                "pairs_summary.csv, replicate by replicate"})
 
     def __post_init__(self) -> None:
         if not (isinstance(self.replicates, int) and self.replicates >= 1):
@@ -186,6 +247,8 @@ class Config:
             raise ValueError(f"unknown family {self.family!r}; choose from {', '.join(FAMILIES)}")
         if self.freq is not None and self.freq not in FREQUENCIES_HZ:
             raise ValueError(f"freq must be one of {', '.join(f'{f:g}' for f in FREQUENCIES_HZ)} Hz, got {self.freq:g}")
+        if self.against is not None and not self.summarise:
+            raise ValueError("against compares finished replicates: give it with summarise")
         try:
             settings_changes(self.likelihood)
         except ValueError as exc:
@@ -233,5 +296,9 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
         raise ValueError(f"{out} holds no finished replicate; run without summarise first")
     rows = summarise(out)
     lines += [", ".join(f"{k} {v}" for k, v in r.items()) for r in rows]
-    return StudyOutput(written=(out / "replicates.csv", out / "coverage.csv"), failed=tuple(failed),
-                       lines=tuple(lines), values={"coverage": rows})
+    written, values = (out / "replicates.csv", out / "coverage.csv"), {"coverage": rows}
+    if config.against is not None:
+        values["pairs"] = pairs(out, Path(config.against))
+        lines += [", ".join(f"{k} {v}" for k, v in r.items()) for r in values["pairs"]]
+        written += (out / "pairs.csv", out / "pairs_summary.csv")
+    return StudyOutput(written=written, failed=tuple(failed), lines=tuple(lines), values=values)
