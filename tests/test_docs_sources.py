@@ -80,9 +80,9 @@ fenced code blocks and headings are left out of them, and tables are checked by 
 6. **A cited CSV exists.** Every ``*.csv`` a paragraph or table names is in the
    repository: a ``results/...`` path as written, a bare name (``geometry.csv``) as a
    file somewhere under results/. Left out: names in capitals (``RECORD.csv``, a
-   placeholder for the user's file) and names in a list item, paragraph or table that
-   states no measured number (a command's outputs described, which it may write under
-   runs/). So a
+   placeholder for the user's file) and, in paragraphs, names in a clause (rule 3's)
+   that states no measured number (a command's outputs described, which it may write
+   under runs/). So a
    number cannot rest on a file that was never committed or has been removed, which
    rule 2 alone (a script's name is a source) would let pass.
 
@@ -217,7 +217,7 @@ def measured_numbers(paragraph: str, decimals: bool = False) -> list[str]:
     point, and not its counts."""
     flat = " ".join(paragraph.split())
     found = []
-    for clause in re.split(r"(?<=[.;])\s+", flat):
+    for clause in clauses(flat):
         if not _excused(clause):
             text = CONVENTION.sub("", clause)
             found += MEASURED.findall(text) + ([] if decimals else COUNT.findall(text))
@@ -283,10 +283,9 @@ def missing_csvs(block: str, measured: bool) -> list[str]:
     return out
 
 
-def items(paragraph: str) -> list[str]:
-    """``paragraph``'s list items (lines beginning ``- `` or ``1. `` start one), or the
-    paragraph itself where it is no list."""
-    return [t for t in re.split(r"\n(?=\s*(?:[-*]|\d+\.) )", paragraph) if t.strip()]
+def clauses(paragraph: str) -> list[str]:
+    """``paragraph``'s clauses (rule 3: the text between ``.`` or ``;`` and the next)."""
+    return re.split(r"(?<=[.;])\s+", " ".join(paragraph.split()))
 
 
 def test_the_classifier_on_made_up_paragraphs():
@@ -402,8 +401,7 @@ def test_a_cited_csv_is_there():
     assert missing_csvs("tau 207.5 steps (results/chain-geometry/walks.csv, `geometry.csv`)", True) == [
         "results/chain-geometry/walks.csv"]
     assert missing_csvs("writes `ridge.csv` under runs/", False) == []
-    assert items("- one 2 %\n  more\n- two `ridge.csv`\n1. three") == ["- one 2 %\n  more", "- two `ridge.csv`",
-                                                                        "1. three"]
+    assert clauses("one 2 %\n more; two `ridge.csv`. Three") == ["one 2 % more;", "two `ridge.csv`.", "Three"]
     assert missing_csvs("`bayes-inerter fit RECORD.csv`: b 3.5 %", True) == []
     assert len(_COMMITTED_CSV) > 50  # the names are read from results/, not from nothing
 
@@ -413,8 +411,8 @@ def test_every_cited_csv_is_committed(doc):
     missing = []
     for kind, _, text in blocks(doc.read_text()):
         if kind == "paragraph":
-            for item in items(text):
-                missing += missing_csvs(item, bool(measured_numbers(item)))
+            for clause in clauses(text):
+                missing += missing_csvs(clause, bool(measured_numbers(clause)))
         elif kind == "table":
             missing += missing_csvs(text, bool(table_numbers(text)))
     assert not missing, f"{doc.name} rests measured numbers on CSVs that are not committed: {sorted(set(missing))}"
