@@ -547,9 +547,7 @@ def whitened_optimum(model: PosteriorModel, theta: np.ndarray, *, rounds: int = 
         raise ValueError("the point has zero posterior density; there is nothing to polish from")
     d = len(u)
     for _ in range(rounds):
-        H = _hessian(f, u, f_u)
-        lam, vec = np.linalg.eigh(-0.5 * (H + H.T))
-        root = vec * np.where(lam > 1.0, 1.0 / np.sqrt(np.maximum(lam, 1.0)), 0.3)
+        root = _laplace_root(_hessian(f, u, f_u), curved=1.0, flat_var=0.09)
 
         def neg(z, u=u, root=root):
             value = f(u + root @ z)
@@ -566,12 +564,13 @@ def whitened_optimum(model: PosteriorModel, theta: np.ndarray, *, rounds: int = 
     return from_u(u), f_u
 
 
-def _laplace_root(H: np.ndarray) -> np.ndarray:
+def _laplace_root(H: np.ndarray, curved: float = 12.0, flat_var: float = 1.0 / 12.0) -> np.ndarray:
     """A square root of the normal approximation's covariance in the unit box: the
-    inverse of -H where the data curve the log posterior by more than the prior's
-    variance would (eigenvalue > 12), the prior's variance 1/12 elsewhere."""
+    inverse of -H along the eigenvectors the data curve by more than ``curved`` (by
+    default 12, the prior's precision: a uniform's variance is 1/12 of its box), and the
+    variance ``flat_var`` (by default the prior's) along the rest."""
     lam, vec = np.linalg.eigh(-0.5 * (H + H.T))
-    var = np.where(lam > 12.0, 1.0 / np.where(lam > 12.0, lam, 1.0), 1.0 / 12.0)
+    var = np.where(lam > curved, 1.0 / np.where(lam > curved, lam, 1.0), flat_var)
     return vec * np.sqrt(var)
 
 
