@@ -7,22 +7,16 @@ and appends a row to results/performance/simulator.csv (commit, machine, date).
 
 import argparse
 import statistics
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
+from _timing import record_row
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-
-from _timing import record_row  # noqa: E402
-from conftest import inverse_dynamics_force  # noqa: E402
-from reference import hybrid_reference  # noqa: E402
-
-from bayes_inerter import paper_parameters, simulate  # noqa: E402
-from bayes_inerter.networks import build_network  # noqa: E402
-from bayes_inerter.network import compile_network  # noqa: E402
-from bayes_inerter.simulate import contacts, run_piecewise_linear  # noqa: E402
+from bayes_inerter import paper_parameters, simulate
+from bayes_inerter.networks import build_network
+from bayes_inerter.network import compile_network
+from bayes_inerter.simulate import contacts, run_piecewise_linear
+from bayes_inerter.simulate.reference import hybrid_reference, inverse_dynamics_force
 
 
 def timed(fn, repeats):

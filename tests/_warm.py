@@ -26,8 +26,7 @@ def records():
 
 
 def networks():
-    from conftest import inverse_dynamics_force
-
+    from bayes_inerter.simulate.reference import inverse_dynamics_force
     from bayes_inerter import paper_parameters
     from bayes_inerter.simulate import simulate
 

@@ -78,24 +78,6 @@ def default_search(monkeypatch):
         monkeypatch.setattr(optimize, name, value)
 
 
-def inverse_dynamics_force(params, freq, *, amplitude=0.01, duration=3.0, fs=1000.0, ramp=1.0):
-    """A force record that drives the rigid device roughly through a sinusoid.
-
-    Not a realistic record (that is the generator's job): a smooth test input whose
-    friction part switches sign at each reversal, so the network sticks and slips.
-    """
-    t = np.arange(int(round(duration * fs)) + 1) / fs
-    w = 2 * np.pi * freq
-    s = np.clip(t / ramp, 0, 1)
-    env = s * s * (3 - 2 * s)
-    x = amplitude * np.sin(w * t) * env
-    v = np.gradient(x, t)
-    a = np.gradient(v, t)
-    m = params.m_B + params.m_s + params.b
-    f = m * a + (params.f1_0 + params.f2_0) * np.tanh(v / 1e-3) + (params.c_f1 + params.c_f2) * v
-    return t, f
-
-
 def normal_posterior(duration: float = 1.5, ramp: float = 0.5):
     """A generated A2 record's posterior with its density swapped for a cheap known one:
     independent normals in theta about the generating parameters (``test_start`` holds

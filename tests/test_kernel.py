@@ -3,7 +3,7 @@
 
 import numpy as np
 import pytest
-from conftest import inverse_dynamics_force, with_backlash
+from conftest import with_backlash
 from reference_kernel import Reference
 
 from bayes_inerter import paper_parameters
@@ -12,6 +12,7 @@ from bayes_inerter.friction import Coulomb, PiecewiseLinear
 from bayes_inerter.networks import build_network
 from bayes_inerter.network import compile_network
 from bayes_inerter.simulate import _contacts
+from bayes_inerter.simulate.reference import inverse_dynamics_force
 
 CASES = [("reduced", "A3", 1.0, 1.0), ("reduced", "A0", 0.5, 0.9), ("reduced", "B2", 1.5, 1.0),
          # the full network's kernel and its plain reference take a minute on a busy

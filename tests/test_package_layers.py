@@ -151,9 +151,13 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 
 def script_violations(path: Path) -> list[str]:
-    """A script's imports of private package names or modules."""
+    """A script's imports of private package names or modules, and its edits of
+    ``sys.path`` (a script imports the installed package and its own folder's helpers,
+    never another folder's)."""
     bad = []
     for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Attribute) and node.attr == "path" and getattr(node.value, "id", None) == "sys":
+            bad.append("sys.path")
         if isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").split(".")[0] == PACKAGE:
             if any(_is_private(p) for p in node.module.split(".")):
                 bad.append(f"from {node.module} import ...")
@@ -254,8 +258,9 @@ def test_no_private_name_is_used_outside_its_owner():
 @pytest.mark.parametrize("folder", ["studies", "benchmarks"])
 def test_scripts_use_public_names(folder, tmp_path):
     planted = tmp_path / "planted.py"
-    planted.write_text(f"from {PACKAGE}.simulate import _contacts\nimport {PACKAGE}.simulate._kernel\n")
-    assert len(script_violations(planted)) == 2
+    planted.write_text(f"from {PACKAGE}.simulate import _contacts\nimport {PACKAGE}.simulate._kernel\n"
+                       "import sys\nsys.path.insert(0, 'tests')\n")
+    assert len(script_violations(planted)) == 3
     scripts = sorted((ROOT / folder).glob("*.py"))
     assert len(scripts) > 5
     found = {str(p.relative_to(ROOT)): script_violations(p) for p in scripts}

@@ -2,10 +2,9 @@ import dataclasses
 
 import numpy as np
 import pytest
-from conftest import inverse_dynamics_force, with_backlash
+from conftest import with_backlash
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from reference import hybrid_reference, hybrid_reference_rich, moreau_reference
 from scipy import signal
 from scipy.linalg import expm
 
@@ -15,6 +14,8 @@ from bayes_inerter.friction import make_law, stribeck_knots
 from bayes_inerter.networks import NETWORKS, build_network
 from bayes_inerter.network import accel_response, compile_network
 from bayes_inerter.simulate import Drive, mean_acceleration
+from bayes_inerter.simulate.reference import (hybrid_reference, hybrid_reference_rich, inverse_dynamics_force,
+                                              moreau_reference)
 
 
 def rel_error(a, ref):

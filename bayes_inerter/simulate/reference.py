@@ -1,14 +1,27 @@
-"""An independent reference for the exact kernel: implicit (Moreau) time stepping.
+"""Independent references for the exact kernel, slow and for checks only: a test or a
+benchmark compares the kernel with them (``tests/test_simulate.py``,
+``benchmarks/bench_simulator.py``).
 
-Backward Euler on the linear part with the set-valued Coulomb friction solved exactly at
-each step (all 3^nc contact states enumerated). First order in the step, so it converges
-slowly but surely: a fine step gives a reference that shares no code with the kernel.
+- :func:`moreau_reference`: implicit (Moreau) time stepping. Backward Euler on the
+  linear part with the set-valued Coulomb friction solved exactly at each step (all
+  3^nc contact states enumerated). First order in the step, so it converges slowly but
+  surely: a fine step gives a reference that shares no code with the kernel.
+- :func:`hybrid_reference`, :func:`hybrid_reference_rich`: scipy's Radau on each mode of
+  the hybrid (stick-slip) system with scipy's own event location, the switching rules
+  written out again.
+- :func:`inverse_dynamics_force`: a smooth force record to drive them with.
 """
 
 import numpy as np
 from numba import njit
 
-from bayes_inerter.simulate import _contacts
+from . import contacts
+
+__all__ = ["moreau_reference", "hybrid_reference", "hybrid_reference_rich", "inverse_dynamics_force"]
+
+
+def _contacts(compiled):
+    return contacts(compiled.coulomb_bounds, compiled.masses)
 
 
 @njit(cache=True)
@@ -324,3 +337,23 @@ def hybrid_reference_rich(compiled, time, force, *, rtol=1e-10):
                 break
         accel[k + 1] = hyb.rhs(x, u1)[0]
     return accel
+
+
+def inverse_dynamics_force(params, freq, *, amplitude=0.01, duration=3.0, fs=1000.0, ramp=1.0):
+    """(time, force) of a record that drives the rigid device ``params`` (its masses,
+    inertance and friction as a ``networks`` parameter set) roughly through a sinusoid
+    of ``amplitude`` m at ``freq`` Hz, ramped in over ``ramp`` s.
+
+    Not a realistic record (that is the generator's job): a smooth test input whose
+    friction part switches sign at each reversal, so the network sticks and slips.
+    """
+    t = np.arange(int(round(duration * fs)) + 1) / fs
+    w = 2 * np.pi * freq
+    s = np.clip(t / ramp, 0, 1)
+    env = s * s * (3 - 2 * s)
+    x = amplitude * np.sin(w * t) * env
+    v = np.gradient(x, t)
+    a = np.gradient(v, t)
+    m = params.m_B + params.m_s + params.b
+    f = m * a + (params.f1_0 + params.f2_0) * np.tanh(v / 1e-3) + (params.c_f1 + params.c_f2) * v
+    return t, f
