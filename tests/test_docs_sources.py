@@ -60,13 +60,14 @@ fenced code blocks and headings are left out of them, and tables are checked by 
      ``292 (k_n)``) do not count: counts and step numbers stand beside decimals or
      units in every measured table in docs/.
 
-   A table with a measured number has its source (``SOURCE``) in the table itself, in
-   the paragraph immediately before it (its caption) or in the one immediately after
-   it (only blank lines between; not across a heading or code); in
-   docs/performance.md its ``## section`` may name it instead (rule 2). The check
-   cannot tell whose numbers a neighbour's source is for; a table that passes on its
-   neighbour's source is read by hand (the first pass moved the five whose neighbour
-   cited another measurement). The escape of rule 3 excuses a cell only where that
+   A table with a measured number has its source (``SOURCE``) in the table itself or in
+   the paragraph immediately before it, its caption (only blank lines between; not
+   across a heading or code); in docs/performance.md its ``## section`` may name it
+   instead (rule 2). The paragraph after a table does not count: it is the next
+   paragraph's text, whose source may be for another measurement. The check cannot
+   tell whose numbers a caption's source is for; a caption that cites another
+   measurement is read by hand (the first pass moved the five whose neighbour cited
+   another measurement). The escape of rule 3 excuses a cell only where that
    cell cites the constant or MODEL.md, so a table of settings says what it is in its
    header instead (``SETTINGS_HEADER``): a header
    cell that is exactly ``default`` marks the table as stating defaults, not
@@ -256,12 +257,16 @@ def unsourced(doc: Path) -> list[str]:
             if measured_numbers(p) and not names_source(p) and not _section_csv(doc, section)]
 
 
+def sourced_table(caption: str, table: str) -> bool:
+    """Whether a table or its caption (the paragraph just before it) names a source."""
+    return names_source(caption) or names_source(table)
+
+
 def unsourced_tables(doc: Path) -> list[str]:
     """The tables of ``doc`` that state a measured number and name no source in
-    themselves, their caption or the paragraph after them (rule 5)."""
-    return [t for section, before, t, after in tables(doc.read_text())
-            if table_numbers(t) and not any(map(names_source, (before, t, after)))
-            and not _section_csv(doc, section)]
+    themselves or their caption (rule 5)."""
+    return [t for section, before, t, _ in tables(doc.read_text())
+            if table_numbers(t) and not sourced_table(before, t) and not _section_csv(doc, section)]
 
 
 # rule 6: a CSV named, with its results/ path or bare
@@ -319,10 +324,11 @@ def test_the_classifier_on_made_up_tables():
     bare = ("Chains on paper-like design records (laboratory seed 11):", table, "The text after it.")
     assert table_numbers(table) == ["1.12 %", "4.72", "3.21", "0.75"]  # the header's labels are not read
     assert any(map(names_source, sourced)) and not any(map(names_source, bare))
-    # a source in the paragraph after the table counts, one across a heading does not
+    # a source in the caption counts; one in the paragraph after the table does not
+    assert sourced_table(*sourced[:2]) and not sourced_table(*bare[:2])
     doc = "\n\n".join(bare[:2]) + "\n\n" + "Made by studies/chain_geometry.py."
-    assert tables(doc)[0][3] == "Made by studies/chain_geometry.py."
-    assert tables("\n\n".join(bare[:2]) + "\n\n## next\n\nstudies/x.py")[0][3] == ""
+    assert tables(doc)[0][3] == "Made by studies/chain_geometry.py." and not sourced_table(*tables(doc)[0][1:3])
+    assert tables("## one\n\nstudies/x.py\n\n## two\n\n" + bare[1])[0][1] == ""  # nor one across a heading
     # integers alone, hertz and the conventions are not measured; a plain decimal is
     assert table_numbers("| replicate | steps |\n| --- | --- |\n| 1 (1 Hz) | 4,000 of 12 |") == []
     assert table_numbers("| | median |\n| --- | --- |\n| input_noise=0 | 20.7 |") == ["20.7"]
@@ -380,7 +386,7 @@ def test_every_measured_table_names_its_source(doc):
     flagged = unsourced_tables(doc)
     assert not flagged, (
         f"{doc.name}: tables that state a measured number and name no source in "
-        f"themselves or the paragraph just before or after them:\n\n"
+        f"themselves or the paragraph just before them (their caption):\n\n"
         + "\n\n".join(t[:300] for t in flagged))
 
 
