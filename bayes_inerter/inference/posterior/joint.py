@@ -6,15 +6,19 @@ setting and one inertance per setting (its Tables I and 2). The joint model says
 - shared by all records: the two-port model's friction sums and shares, the nut and
   bearing stiffness and damping (``f_0, f_share, c_f, c_share, c_n, k_n, c_B, k_B``);
 - one ``b_<setting>`` per flywheel setting among the records;
-- the residual of each record is the single-record model's AR(1) process with its own
-  scale sigma, **marginalised analytically** under the scale-invariant prior
-  p(sigma) ~ 1/sigma (the single-record prior is log-uniform, the same law with bounds
-  far from the data), so 27 records do not add 27 dimensions:
+- each record's likelihood is the single-record model's, through the interface both
+  share (``PosteriorModel.log_likelihood``). Under the default, motion in and force out
+  at the harmonics, the discrepancy's ``tau`` (and ``alpha`` where sampled) is one per
+  drive frequency (``PER_FREQUENCY``) and the channels' ``gain`` one for every record.
+  Under the time-domain residuals each record's AR(1) scale sigma is **marginalised
+  analytically** under the scale-invariant prior p(sigma) ~ 1/sigma (the single-record
+  prior is log-uniform, the same law with bounds far from the data), so 27 records do
+  not add 27 dimensions:
 
       log p(r | rho) = 0.5 log(1 - rho^2) + lgamma(n/2) - log 2 - (n/2) log(pi S),
       S = (1 - rho^2) r_0^2 + sum_t (r_t - rho r_{t-1})^2
 
-- one AR(1) coefficient ``rho_<f>Hz`` per drive frequency (an **assumption**: the
+  with one AR(1) coefficient ``rho_<f>Hz`` per drive frequency (an **assumption**: the
   residual's correlation is set by the signal's spectrum, which the frequency sets; a
   record's own rho differs from its frequency's by a few hundredths in the single-record
   fits).

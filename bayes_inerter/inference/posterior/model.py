@@ -1,18 +1,24 @@
 """The statistical model: parameters, priors, and the likelihood of one record.
 
-The data are the record's acceleration, compared with the simulated one (driven by the
-record's force) through the same zero-phase low-pass (``records.lowpass``), on a grid
-thinned to every ``stride``-th sample inside the record less ``edge`` seconds at each
-end. The residual is modelled as
+``PosteriorModel`` is the log posterior of one record under one of the likelihoods of
+``likelihood.RESIDUALS`` (``LikelihoodSettings.residual``):
 
-- ``"ar1"`` (default): a stationary AR(1) process, r_t = rho r_{t-1} + e_t, e_t ~ N(0, sigma^2),
-  with sigma and rho unknown. Model error leaves residuals far from white; the AR(1)
-  term lets the data say how correlated they are, which keeps intervals honest.
-- ``"iid"``: independent N(0, sigma^2) (MODEL.md section 7 measured it overconfident).
+- ``"motion"`` (the default): motion in, force out, at the drive's harmonics
+  (:mod:`.motion`, whose docstring derives it);
+- ``"harmonic"``: the same harmonics the paper's way round, the model driven by the
+  measured force (:mod:`.harmonic`);
+- ``"ar1"`` and ``"iid"``: the time-domain residuals. The record's acceleration is
+  compared with the simulated one (driven by the record's force) through the same
+  zero-phase low-pass (``records.lowpass``), on a grid thinned to every ``stride``-th
+  sample inside the record less ``edge`` seconds at each end; the residual is a
+  stationary AR(1) process, r_t = rho r_{t-1} + e_t, e_t ~ N(0, sigma^2), with sigma
+  and rho unknown, or independent N(0, sigma^2) (MODEL.md section 7 measured it
+  overconfident).
 
-Parameters are sampled as theta = log(value) (see ``priors``); sigma too; rho as is.
-The fit accuracy phi (eq. 5, on the low-passed signals inside the window) is a derived
-quantity of every evaluation.
+Parameters are sampled as theta = log(value) (see ``priors``), the likelihood's
+hyper-parameters with them. The fit accuracy phi is a derived quantity of every
+evaluation (for the time-domain residuals eq. 5 on the low-passed signals inside the
+window; for the harmonic ones the force's at the harmonics, see :mod:`.motion`).
 """
 
 from __future__ import annotations
