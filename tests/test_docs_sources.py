@@ -36,13 +36,12 @@ fenced code blocks and headings are left out of them, and tables are checked by 
    Clause, not paragraph: a constant named beside a setting does not excuse the
    measurements in the paragraph's other sentences.
 
-4. **The allow-list** (``NO_SOURCE``): paragraphs with a measured number for which no
-   committed source was found (a session's scratch measurement, printed and not kept),
-   each with its reason. They are to be measured again, with the command committed,
-   or removed; an entry must still match a paragraph with a measured number, so a
-   fixed paragraph leaves the list. Empty now: the scratch measurements it once
-   excused are in CHANGELOG.md ("History: measurements behind the method docs"),
-   verbatim, and the docs state the decisions they led to without them.
+4. **No allow-list.** A paragraph with a measured number for which no committed source
+   is found (a session's scratch measurement, printed and not kept) is measured again
+   with its command committed, or moved verbatim to CHANGELOG.md ("History:
+   measurements behind the method docs"), the docs keeping the decision it led to
+   without it. The allow-list that once excused such paragraphs emptied as they moved,
+   and went.
 
 5. **Tables.** A table is a run of consecutive lines starting with ``|`` whose second
    line is the delimiter row (``| --- | --- |``), as markdown reads one; a line
@@ -74,9 +73,9 @@ fenced code blocks and headings are left out of them, and tables are checked by 
    measurements (the assumptions tables of docs/assumptions.md, the checks'
    thresholds of docs/records.md), and it is not checked. A comparison of measured
    variants must therefore not head a column ``default`` alone: it names what it
-   measured (``b's error, default``, ``both (default)``). There is no allow-list for
-   tables: a table without a committed source is moved to CHANGELOG.md with its
-   caption, as the paragraphs of rule 4 were.
+   measured (``b's error, default``, ``both (default)``). As for paragraphs (rule 4), a
+   table without a committed source is measured again or moved to CHANGELOG.md with
+   its caption.
 
 6. **A cited CSV exists.** Every ``*.csv`` a paragraph or table names is in the
    repository: a ``results/...`` path as written, a bare name (``geometry.csv``) as a
@@ -118,8 +117,6 @@ _MODEL = re.compile(r"\bMODEL\.md\b")
 _CODE_CONSTANT = re.compile(r"`(?:[\w.]*?(\w+)\.)?([A-Z][A-Z0-9_]{2,})\b[^`]*`")
 
 # (doc, the paragraph's first 40 characters, why it has no source)
-_NO_SOURCE = "no committed source: to be measured again or removed"
-NO_SOURCE: list[tuple[str, str, str]] = []
 
 
 def blocks(text: str) -> list[tuple[str, str, str]]:
@@ -247,10 +244,6 @@ def _section_csv(doc: Path, section: str) -> bool:
     return doc.name == "performance.md" and (ROOT / "results" / "performance" / f"{section}.csv").is_file()
 
 
-def key(paragraph: str) -> str:
-    return " ".join(paragraph.split())[:40]
-
-
 def unsourced(doc: Path) -> list[str]:
     """The paragraphs of ``doc`` that state a measured number and name no source."""
     return [p for section, p in paragraphs(doc.read_text())
@@ -341,22 +334,11 @@ def test_the_classifier_on_made_up_tables():
 
 @pytest.mark.parametrize("doc", DOCS, ids=lambda p: p.name)
 def test_every_measured_number_names_its_source(doc):
-    allowed = {k for d, k, _ in NO_SOURCE if d == doc.name}
-    flagged = [p for p in unsourced(doc) if key(p) not in allowed]
+    flagged = unsourced(doc)
     assert not flagged, (
         f"{doc.name}: paragraphs that state a measured number and name no source "
         f"(results/..., a .csv, or the benchmarks/, studies/ or tests/ file that measures it):\n\n"
         + "\n\n".join(" ".join(p.split())[:300] for p in flagged))
-
-
-def test_the_allow_list_names_live_paragraphs():
-    """An entry names one paragraph of its doc that still states a measured number: a
-    paragraph rewritten or given its source leaves the list."""
-    for doc, start, reason in NO_SOURCE:
-        assert reason
-        matches = [p for _, p in paragraphs((ROOT / "docs" / doc).read_text()) if key(p) == start]
-        assert len(matches) == 1, f"{doc}: no single paragraph starts {start!r}"
-        assert measured_numbers(matches[0]), f"{doc}: {start!r} states no measured number now: remove the entry"
 
 
 def test_performance_sections_name_their_csv():

@@ -266,14 +266,19 @@ def test_a_truncation_by_the_nut_damping_ratio_cuts_only_below_its_floor(record)
     p = paper_parameters("A2")
     assert nut_damping_ratio(p.b, p.k_n, p.c_n) > 1.0  # Table I's nut: overdamped, inside the floor
     theta = cut.to_theta(p, 0.003, 0.0)
-    assert cut.log_prob(theta) == free.log_prob(theta)  # no density of its own inside
-    # a stiff nut with a weak damper: a ratio of 1e-3, below the 0.5 % floor
-    ringing = dataclasses.replace(p, k_n=1e8, c_n=2e-3 * np.sqrt(1e8 * p.b))
-    assert nut_damping_ratio(ringing.b, ringing.k_n, ringing.c_n) == pytest.approx(1e-3)
-    theta = cut.to_theta(ringing, 0.003, 0.0)
-    assert math.isfinite(free.log_prior(theta)) and cut.log_prior(theta) == -math.inf
-    at_floor = dataclasses.replace(ringing, c_n=2 * 0.0051 * np.sqrt(1e8 * p.b))
-    assert cut.log_prior(cut.to_theta(at_floor, 0.003, 0.0)) == free.log_prior(cut.to_theta(at_floor, 0.003, 0.0))
+    inside = free.log_prob(theta)[0]
+    assert math.isfinite(inside) and cut.log_prob(theta)[0] == inside  # no density of its own inside
+    # a stiff nut with a damper just below and just above the floor's ratio
+    floor = NUT_DAMPING_FLOOR["zeta_n"].low
+
+    def nut_at(ratio):
+        ringing = dataclasses.replace(p, k_n=1e8, c_n=2 * ratio * np.sqrt(1e8 * p.b))
+        assert nut_damping_ratio(ringing.b, ringing.k_n, ringing.c_n) == pytest.approx(ratio)
+        return cut.to_theta(ringing, 0.003, 0.0)
+
+    below, above = nut_at(0.99 * floor), nut_at(1.01 * floor)
+    assert math.isfinite(free.log_prior(below)) and cut.log_prior(below) == -math.inf
+    assert math.isfinite(free.log_prior(above)) and cut.log_prior(above) == free.log_prior(above)
 
 
 def test_a_truncation_needs_its_arguments_sampled_and_the_joint_model_refuses_one(record):

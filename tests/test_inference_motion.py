@@ -623,7 +623,10 @@ def test_a_sampled_law_scale_is_the_fixed_one_at_its_value_and_no_law_at_zero():
     without = motion_loglik(motion_data(rec, 1.0, cutoff=30.0, law=False), x, 1.0, 0.0)[0]
     assert motion_loglik(data, x, 1.0, 0.0, law=1e-7)[0] == pytest.approx(without, rel=1e-9)
     assert abs(without - fixed) > 1.0  # the law's deviations matter on this record: the check above has teeth
-    assert motion_loglik(data, x, 1.0, 0.0, law=1.0)[0] != fixed
+    # on the model's own physics, which has no deviation to show, a wider prior on the
+    # deviations costs its Occam factor: the likelihood falls as the scale grows
+    wide = motion_loglik(data, x, 1.0, 0.0, law=1.0)[0]
+    assert math.isfinite(wide) and without > fixed > wide
 
 
 def test_the_law_scale_is_sampled_last_with_its_prior():

@@ -33,7 +33,8 @@ def test_writes_ranks_coverage_and_report(calibration):
     for name in ("ranks.csv", "coverage.csv", "ranks.png", "REPORT.md", "settings.json"):
         assert (out / name).is_file()
     assert res["replicates"] >= 1 and res["replicates"] + len(res["failed"]) == 3
-    assert all(f["error"] for f in res["failed"])
+    # the one failure the processor's arithmetic may bring; any other is a bug
+    assert all("zero posterior density" in f["error"] for f in res["failed"]), res["failed"]
     names = [r["parameter"] for r in res["coverage"]]
     assert names == ["b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "c_B", "k_B", "sigma", "rho"]
     ran = [k for k in range(3) if k not in {f["replicate"] for f in res["failed"]}]
