@@ -160,11 +160,15 @@ def summarise(out: Path) -> list[dict]:
         for key in ("error_pct", "error_beyond_gain_pct"):
             row[f"mean_{key}"] = round(float(np.mean([r[key] for r in sel])), 2)
         rows.append(row)
-    with (out / "coverage.csv").open("w", newline="") as f:
+    _write_rows(out / "coverage.csv", rows)
+    return rows
+
+
+def _write_rows(path: Path, rows: list[dict]) -> None:
+    with path.open("w", newline="") as f:
         w = csv.DictWriter(f, list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    return rows
 
 
 _PAIRED = ("error_pct", "covered94", "covered50", "width94_pct", "width50_pct", "converged", "steps", "tau_max",
@@ -213,14 +217,8 @@ def pairs(out: Path, against: Path) -> list[dict]:
             got = [r[f] / r[f"{f}_against"] for r in sel if r[f] and r[f"{f}_against"]]
             row[f"median_ratio_{f}"] = round(float(np.median(got)), 3) if got else ""
         summary.append(row)
-    with (out / "pairs.csv").open("w", newline="") as f:
-        w = csv.DictWriter(f, list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    with (out / "pairs_summary.csv").open("w", newline="") as f:
-        w = csv.DictWriter(f, list(summary[0]))
-        w.writeheader()
-        w.writerows(summary)
+    _write_rows(out / "pairs.csv", rows)
+    _write_rows(out / "pairs_summary.csv", summary)
     return summary
 
 
