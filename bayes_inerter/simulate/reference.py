@@ -20,10 +20,6 @@ from . import contacts
 __all__ = ["moreau_reference", "hybrid_reference", "hybrid_reference_rich", "inverse_dynamics_force"]
 
 
-def _contacts(compiled):
-    return contacts(compiled.coulomb_bounds, compiled.masses)
-
-
 @njit(cache=True)
 def _moreau(P, PB, node, f0, mass, t_fine, u_fine, h):
     n = P.shape[0]
@@ -113,7 +109,7 @@ def moreau_reference(compiled, time, force, refine):
     t_fine = np.linspace(time[0], time[-1], (len(time) - 1) * refine + 1)
     u_fine = np.interp(t_fine, time, force)
     P = np.linalg.inv(np.eye(A.shape[0]) - h * A)
-    nodes, f0, mass = _contacts(compiled)
+    nodes, f0, mass = contacts(compiled.coulomb_bounds, compiled.masses)
     a = _moreau(P, P @ B, nodes, f0, mass, t_fine, u_fine, h)
     return a[::refine]
 
@@ -128,7 +124,7 @@ def hybrid_reference(compiled, time, force, *, rtol=1e-10):
     from scipy.integrate import solve_ivp
 
     A, B = compiled.state_space(viscous=True)
-    nodes, f0, mass = _contacts(compiled)
+    nodes, f0, mass = contacts(compiled.coulomb_bounds, compiled.masses)
     nc = len(nodes)
     n = A.shape[0]
     stuck = np.ones(nc, dtype=bool)
