@@ -253,6 +253,11 @@ class Config:
             raise ValueError(f"likelihood {self.likelihood!r}: {exc}") from None
 
 
+def _table_line(row: dict) -> str:
+    """A table's row as the line the script prints."""
+    return ", ".join(f"{k} {v}" for k, v in row.items())
+
+
 def _line(r: dict) -> str:
     return (f"{r['setting']} {r['freq_hz']:g} Hz seed {r['seed']}: b {r['b_median']:.0f} (true {r['b_true']:.0f}), "
             f"94 % {'holds' if r['covered94'] else 'MISSES'}, {'identified' if r['identified'] else 'not identified'}, "
@@ -293,10 +298,10 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     if not any((out / "replicates").glob("*.json")):
         raise ValueError(f"{out} holds no finished replicate; run without summarise first")
     rows = summarise(out)
-    lines += [", ".join(f"{k} {v}" for k, v in r.items()) for r in rows]
+    lines += map(_table_line, rows)
     written, values = (out / "replicates.csv", out / "coverage.csv"), {"coverage": rows}
     if config.against is not None:
         values["pairs"] = pairs(out, Path(config.against))
-        lines += [", ".join(f"{k} {v}" for k, v in r.items()) for r in values["pairs"]]
+        lines += map(_table_line, values["pairs"])
         written += (out / "pairs.csv", out / "pairs_summary.csv")
     return StudyOutput(written=written, failed=tuple(failed), lines=tuple(lines), values=values)
