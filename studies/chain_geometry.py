@@ -6,8 +6,8 @@ device drawn from the study's priors and its record) is fitted by ``fit_record``
 fixed number of steps with the default sampler (26 walkers for 12 parameters) and again
 with ``--walkers`` walkers for as many evaluations (and with ``--transport``, a third
 time with the independence move after the triangular map below,
-``Adaptation(transport=True)``); then, on the first chain's draws
-after its first third:
+``Adaptation(transport=True)``; with ``--slice``, ensemble slice sampling, below); then,
+on the first chain's draws after its first third:
 
 - the share of walker steps that moved, and each parameter's autocorrelation time;
 - **midpoints**: for ``--pairs`` pairs of draws, how far the log posterior at their
@@ -21,12 +21,24 @@ after its first third:
   the less identified ones taken away), each evaluated on ``--pairs`` proposals paired
   with as many draws.
 
+**Ensemble slice sampling** (``--slice``; Karamanis and Beutler 2021, the package
+``zeus-mcmc``, which the package does not need and this option alone imports): from the
+first chain's last walkers, zeus's differential slice move (or, with ``--slice global``,
+that move in 0.8 of the steps and its Gaussian-mixture global move in 0.2) runs in the
+same sampler coordinates, blocks of 100 steps until it has made as many evaluations of
+the log posterior as the first chain (its steps times its walkers). A slice step takes
+several evaluations a walker, so the row compares the largest autocorrelation time
+times the walkers times the evaluations a walker step took, on the draws after its
+first third. zeus draws from numpy's global random state, which is seeded with the
+replicate's seed before it runs. Its start is the first chain's equilibrium, which
+favours it.
+
 Rows go to ``--out``/geometry.csv (one per statistic and variant; another replicate's
-rows are kept); the fits stay in
+rows, and this one's of variants not run now, are kept); the fits stay in
 ``--fits`` (runs/chain-geometry, not committed), and a second run reuses them.
 
     python studies/chain_geometry.py [--seed 11] [--replicate 1] [--steps 3000] [--walkers 52]
-        [--transport] [--pairs 300] [--out results/chain-geometry] [--fits runs/chain-geometry]
+        [--transport] [--slice {differential,global}] [--pairs 300] [--out results/chain-geometry] [--fits runs/chain-geometry]
 """
 
 from __future__ import annotations
@@ -38,6 +50,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+import emcee
 import numpy as np
 
 from _table import git_commit, read_rows, write_rows
@@ -71,17 +84,62 @@ def fit(record, out: Path, steps: int, walkers: int | None, seed: int, adaptatio
             "seconds": float((out / "seconds.txt").read_text())}
 
 
-def geometry(model, coords, chain: np.ndarray, pairs: int, rng: np.random.Generator) -> list[dict]:
-    """The midpoint, bent-ridge and independence-proposal rows of one chain."""
-    d = chain.shape[2]
-    fit_draws = chain[len(chain) // 3:].reshape(-1, d)
-    stationary = chain[len(chain) // 2:].reshape(-1, d)
+def posterior_in(model, coords):
+    """The log posterior of ``model`` at rows of points in the sampler ``coords``
+    (the Jacobian included; -inf outside)."""
 
     def log_post(u):
         theta, log_jac = coords.transform(np.atleast_2d(u))
         out = np.array([model.log_prob(t)[0] for t in theta], dtype=float) + log_jac
         return np.where(np.isfinite(out), out, -np.inf)
 
+    return log_post
+
+
+def slice_chain(log_post, start: np.ndarray, evaluations: int, kind: str, seed: int, out: Path) -> dict:
+    """Ensemble slice sampling from the walkers ``start`` until ``evaluations`` log
+    posteriors are made (see module docstring); the chain kept in ``out`` (reused)."""
+    try:
+        import zeus
+    except ImportError:
+        raise SystemExit("error: --slice needs the package zeus-mcmc; install it with pip install zeus-mcmc") from None
+    calls = [0]
+
+    def counted(u):
+        calls[0] += 1
+        return log_post(np.atleast_2d(u))[0]
+
+    if not (out / "chain.npy").exists():
+        out.mkdir(parents=True, exist_ok=True)
+        np.random.seed(seed)  # zeus draws from numpy's global state
+        moves = (zeus.moves.DifferentialMove() if kind == "differential"
+                 else [(zeus.moves.DifferentialMove(), 0.8), (zeus.moves.GlobalMove(), 0.2)])
+        sampler = zeus.EnsembleSampler(start.shape[0], start.shape[1], counted, moves=moves, verbose=False)
+        t0 = time.perf_counter()
+        state = start
+        while calls[0] < evaluations:
+            sampler.run_mcmc(state, 100, progress=False)
+            state = sampler.get_last_sample()
+        np.save(out / "chain.npy", sampler.get_chain())
+        (out / "calls.txt").write_text(f"{calls[0]} {time.perf_counter() - t0:.1f}\n")
+    chain = np.load(out / "chain.npy")
+    n_calls, seconds = (out / "calls.txt").read_text().split()
+    kept = chain[len(chain) // 3:]
+    per_step = int(n_calls) / (chain.shape[0] * chain.shape[1])
+    tau = [float(emcee.autocorr.integrated_time(kept[:, :, i], quiet=True)[0]) for i in range(chain.shape[2])]
+    moved = float(np.mean(np.any(np.diff(kept, axis=0) != 0, axis=2)))
+    return {"walkers": chain.shape[1], "steps": len(chain), "moved": moved, "tau": tau, "tau_max": max(tau),
+            "evaluations_per_tau": max(tau) * chain.shape[1] * per_step, "seconds": float(seconds),
+            "per_step": per_step}
+
+
+def geometry(model, coords, chain: np.ndarray, pairs: int, rng: np.random.Generator) -> list[dict]:
+    """The midpoint, bent-ridge and independence-proposal rows of one chain."""
+    d = chain.shape[2]
+    fit_draws = chain[len(chain) // 3:].reshape(-1, d)
+    stationary = chain[len(chain) // 2:].reshape(-1, d)
+
+    log_post = posterior_in(model, coords)
     rows = []
     a = stationary[rng.integers(len(stationary), size=pairs)]
     b = stationary[rng.integers(len(stationary), size=pairs)]
@@ -126,6 +184,8 @@ def main(argv=None) -> int:
                     help="walkers of the second chain, for as many evaluations (0: no second chain)")
     ap.add_argument("--transport", action="store_true",
                     help="a third chain, its independence move after the triangular map (Adaptation(transport=True))")
+    ap.add_argument("--slice", choices=("differential", "global"),
+                    help="a chain of ensemble slice sampling (zeus-mcmc) from the first chain's last walkers")
     ap.add_argument("--pairs", type=int, default=300)
     ap.add_argument("--out", default=str(ROOT / "results" / "chain-geometry"))
     ap.add_argument("--fits", default=str(ROOT / "runs" / "chain-geometry"))
@@ -154,11 +214,6 @@ def main(argv=None) -> int:
     if args.transport:
         runs["transport map"] = fit(record, fits / f"seed{args.seed}_{args.replicate}_transport", args.steps, None,
                                     args.replicate, Adaptation(transport=True))
-    for name, r in runs.items():
-        rows.append({**base, "variant": name, "statistic": "largest tau (steps) x walkers",
-                     "value": r["evaluations_per_tau"], "value2": r["tau_max"], "steps": r["steps"],
-                     "walkers": r["walkers"], "moved": round(r["moved"], 4), "seconds": r["seconds"],
-                     "tau": " ".join(f"{k}={v:.0f}" for k, v in sorted(r["tau"].items(), key=lambda kv: -kv[1]))})
     stored = stored_identity(first / "chain.h5") or {}
     reference = stored.get("reference")
     model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=LikelihoodSettings(residual="motion"))
@@ -167,10 +222,25 @@ def main(argv=None) -> int:
     # the chain's own coordinates: the sampler falls back from the impedance ones where
     # the start lies outside their domain
     coords = default_coordinates(model, (stored.get("coordinates") or {}).get("kind", "impedance"))
+    if args.slice:
+        chain = read_chain(first / "chain.h5")
+        r = slice_chain(posterior_in(model, coords), chain[-1], chain.shape[0] * chain.shape[1], args.slice,
+                        args.seed * 1000 + args.replicate, fits / f"seed{args.seed}_{args.replicate}_slice_{args.slice}")
+        print(f"ensemble slice ({args.slice}): tau {r['tau_max']:.0f} steps, {r['per_step']:.2f} evaluations a "
+              f"walker step", flush=True)
+        runs[f"ensemble slice, {args.slice} (zeus)"] = {**r, "tau": dict(zip(model.names, r["tau"]))}
+    for name, r in runs.items():
+        statistic = ("largest tau (steps) x walkers x evaluations per walker step" if "slice" in name
+                     else "largest tau (steps) x walkers")
+        rows.append({**base, "variant": name, "statistic": statistic,
+                     "value": r["evaluations_per_tau"], "value2": r["tau_max"], "steps": r["steps"],
+                     "walkers": r["walkers"], "moved": round(r["moved"], 4), "seconds": r["seconds"],
+                     "tau": " ".join(f"{k}={v:.0f}" for k, v in sorted(r["tau"].items(), key=lambda kv: -kv[1]))})
     for row in geometry(model, coords, read_chain(first / "chain.h5"), args.pairs, np.random.default_rng(args.seed)):
         rows.append({**base, "variant": "default", **row})
-    others = [r for r in read_rows(out / "geometry.csv")  # other replicates' rows kept
-              if (r["seed"], r["replicate"]) != (str(args.seed), str(args.replicate))]
+    made = {row["variant"] for row in rows}  # other replicates' rows kept, and this one's other variants
+    others = [r for r in read_rows(out / "geometry.csv")
+              if (r["seed"], r["replicate"]) != (str(args.seed), str(args.replicate)) or r["variant"] not in made]
     write_rows(out / "geometry.csv", [{k: row.get(k, "") for k in FIELDS} for row in others + rows])
     return 0
 
