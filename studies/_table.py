@@ -1,8 +1,8 @@
 """What the studies' scripts share: read a record named SETTING:FREQUENCY, walk the
 paper's grid in the coverage studies' order (``device.grid_case``), run jobs on local processes, write rows of
 results to a CSV file and print them (and the run's entry into the folder's
-manifest.json: ``bayes_inerter.study.manifest``), name the commit a run loaded, and the
-adaptive samplers they compare by name."""
+manifest.json: ``bayes_inerter.study.manifest``), name the commit a run loaded, the
+adaptive samplers they compare by name, and the model a stored chain sampled."""
 
 import csv
 import subprocess
@@ -12,6 +12,8 @@ from pathlib import Path
 from bayes_inerter.device import setting_and_frequency
 from bayes_inerter.executor import make_executor
 from bayes_inerter.inference.sampling.adaptation import NAMED
+from bayes_inerter.inference.sampling.checkpoint import stored_identity
+from bayes_inerter.inference.sampling.coordinates import default_coordinates
 from bayes_inerter.study.manifest import script_configuration, write_manifest
 
 #: The paper's drive frequencies, Hz.
@@ -52,6 +54,18 @@ def sbc_design_records(seed: int, replicates):
     for k in replicates:
         dev = replicate_device(cs, k)
         yield k, cs.frequencies[k % len(cs.frequencies)], dev.records[0], dev.truth["b"]
+
+
+def sampled_model(model, checkpoint):
+    """(``model`` with the likelihood's reference point that the chain in ``checkpoint``
+    was sampled with, where it took one; the coordinates the chain walked in): what a
+    probe needs to evaluate the posterior a stored chain sampled. The sampler falls back
+    from the impedance coordinates where the start lies outside their domain, so they are
+    read from the checkpoint's identity, not assumed."""
+    stored = stored_identity(checkpoint) or {}
+    if stored.get("reference") is not None:
+        model = model.with_reference(stored["reference"])
+    return model, default_coordinates(model, (stored.get("coordinates") or {}).get("kind", "impedance"))
 
 
 def git_commit(folder) -> str:

@@ -53,11 +53,10 @@ from pathlib import Path
 import emcee
 import numpy as np
 
-from _table import git_commit, read_rows, write_rows
+from _table import git_commit, read_rows, sampled_model, write_rows
 from bayes_inerter.inference import LikelihoodSettings, PosteriorModel, fit_record
 from bayes_inerter.inference.sampling.adaptation import Adaptation
-from bayes_inerter.inference.sampling.checkpoint import read_chain, stored_identity
-from bayes_inerter.inference.sampling.coordinates import default_coordinates
+from bayes_inerter.inference.sampling.checkpoint import read_chain
 from bayes_inerter.inference.sampling.moves import IndependenceMove
 from bayes_inerter.inference.sampling.transport import TriangularScores, quadratic_features
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
@@ -214,14 +213,8 @@ def main(argv=None) -> int:
     if args.transport:
         runs["transport map"] = fit(record, fits / f"seed{args.seed}_{args.replicate}_transport", args.steps, None,
                                     args.replicate, Adaptation(transport=True))
-    stored = stored_identity(first / "chain.h5") or {}
-    reference = stored.get("reference")
-    model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=LikelihoodSettings(residual="motion"))
-    if reference is not None:
-        model = model.with_reference(reference)
-    # the chain's own coordinates: the sampler falls back from the impedance ones where
-    # the start lies outside their domain
-    coords = default_coordinates(model, (stored.get("coordinates") or {}).get("kind", "impedance"))
+    model, coords = sampled_model(PosteriorModel(record, priors=STUDY_SBC_PRIORS,
+                                                 likelihood=LikelihoodSettings(residual="motion")), first / "chain.h5")
     if args.slice:
         chain = read_chain(first / "chain.h5")
         r = slice_chain(posterior_in(model, coords), chain[-1], chain.shape[0] * chain.shape[1], args.slice,

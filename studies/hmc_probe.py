@@ -34,11 +34,10 @@ from pathlib import Path
 
 import numpy as np
 
-from _table import git_commit, read_rows, write_rows
+from _table import git_commit, read_rows, sampled_model, write_rows
 from bayes_inerter.inference import LikelihoodSettings, PosteriorModel
-from bayes_inerter.inference.sampling.checkpoint import read_chain, stored_identity
+from bayes_inerter.inference.sampling.checkpoint import read_chain
 from bayes_inerter.inference.sampling.convergence import integrated_time
-from bayes_inerter.inference.sampling.coordinates import default_coordinates
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -123,11 +122,8 @@ def main(argv=None) -> int:
     cs = replace(StudyCalibration(), steps=None, seed=args.seed, single=True,
                  likelihood=LikelihoodSettings(residual="motion"), frequencies=(0.5, 1.0, 1.5))
     record = replicate_device(cs, args.replicate).records[0]
-    stored = stored_identity(first / "chain.h5") or {}
-    model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=LikelihoodSettings(residual="motion"))
-    if stored.get("reference") is not None:
-        model = model.with_reference(stored["reference"])
-    coords = default_coordinates(model, (stored.get("coordinates") or {}).get("kind", "impedance"))
+    model, coords = sampled_model(PosteriorModel(record, priors=STUDY_SBC_PRIORS,
+                                                 likelihood=LikelihoodSettings(residual="motion")), first / "chain.h5")
     chain = read_chain(first / "chain.h5")
     draws = chain[len(chain) // 3:].reshape(-1, chain.shape[2])
     info = json.loads((first / "fit.json").read_text())

@@ -44,23 +44,21 @@ import json
 import sys
 import time
 import zlib
-from dataclasses import replace
 from pathlib import Path
 
 import emcee
 import numpy as np
 
-from _table import git_commit, read_rows, write_rows
+from _table import git_commit, read_rows, sampled_model, sbc_design_records, write_rows
 from bayes_inerter.inference import LikelihoodSettings, PosteriorModel, fit_record
-from bayes_inerter.inference.sampling.checkpoint import read_chain, stored_identity
+from bayes_inerter.inference.sampling.checkpoint import read_chain
 from bayes_inerter.inference.sampling.convergence import Convergence, Monitor, why_not
-from bayes_inerter.inference.sampling.coordinates import default_coordinates
 from bayes_inerter.inference.sampling.sampler import default_moves
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 from bayes_inerter.study.noise_free import NOISE_FREE, grid_case
 from bayes_inerter.study.noise_free import device as noise_free_device
-from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
+from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The noise-free records' plate-mode damping ratio, results/noise-free-chains-v3's.
@@ -74,11 +72,8 @@ def record_of(spec: str):
     """(record, priors or None, likelihood, b's truth) of a ``--record`` spec."""
     kind, *rest = spec.split(":")
     if kind == "sbc" and len(rest) == 2:
-        likelihood = LikelihoodSettings(residual="motion")
-        cs = replace(StudyCalibration(), steps=None, seed=int(rest[0]), single=True, likelihood=likelihood,
-                     frequencies=(0.5, 1.0, 1.5))
-        device = replicate_device(cs, int(rest[1]))
-        return device.records[0], STUDY_SBC_PRIORS, likelihood, float(device.records[0].metadata["true_parameters"]["b"])
+        _, _, record, b_true = next(sbc_design_records(int(rest[0]), [int(rest[1])]))
+        return record, STUDY_SBC_PRIORS, LikelihoodSettings(residual="motion"), float(b_true)
     if kind == "paper" and len(rest) == 3:
         rec = paper_like_record(rest[1], float(rest[2]), seed=int(rest[0]),
                                 device=PaperLike(base=GeneratorSettings(duration=10.0)))
@@ -238,11 +233,8 @@ def setup(spec: str, steps: int, fits: Path):
     # the replicate's, the laboratory's or the grid record's, as their studies seed them
     seed = int(spec.split(":")[2 if spec.startswith("sbc") else 1])
     default_fit(record, priors, likelihood, out, steps, seed)
-    stored = stored_identity(out / "chain.h5") or {}
-    model = PosteriorModel(record, likelihood=likelihood, **({} if priors is None else {"priors": priors}))
-    if stored.get("reference") is not None:
-        model = model.with_reference(stored["reference"])
-    coords = default_coordinates(model, (stored.get("coordinates") or {}).get("kind", "impedance"))
+    model, coords = sampled_model(
+        PosteriorModel(record, likelihood=likelihood, **({} if priors is None else {"priors": priors})), out / "chain.h5")
     default_tau = max(float(t) for t in json.loads((out / "fit.json").read_text())["tau"].values())
     return model, coords, read_chain(out / "chain.h5"), default_tau, b_true, record.metadata.get("drive_frequency_hz")
 
