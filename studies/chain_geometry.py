@@ -50,13 +50,13 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-import emcee
 import numpy as np
 
 from _table import git_commit, read_rows, sampled_model, write_rows
 from bayes_inerter.inference import LikelihoodSettings, PosteriorModel, fit_record
 from bayes_inerter.inference.sampling.adaptation import Adaptation
 from bayes_inerter.inference.sampling.checkpoint import read_chain
+from bayes_inerter.inference.sampling.convergence import integrated_time
 from bayes_inerter.inference.sampling.moves import IndependenceMove
 from bayes_inerter.inference.sampling.transport import TriangularScores, quadratic_features
 from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS, StudyCalibration, replicate_device
@@ -125,7 +125,7 @@ def slice_chain(log_post, start: np.ndarray, evaluations: int, kind: str, seed: 
     n_calls, seconds = (out / "calls.txt").read_text().split()
     kept = chain[len(chain) // 3:]
     per_step = int(n_calls) / (chain.shape[0] * chain.shape[1])
-    tau = [float(emcee.autocorr.integrated_time(kept[:, :, i], quiet=True)[0]) for i in range(chain.shape[2])]
+    tau = [float(t) for t in integrated_time(kept)]
     moved = float(np.mean(np.any(np.diff(kept, axis=0) != 0, axis=2)))
     return {"walkers": chain.shape[1], "steps": len(chain), "moved": moved, "tau": tau, "tau_max": max(tau),
             "evaluations_per_tau": max(tau) * chain.shape[1] * per_step, "seconds": float(seconds),
@@ -215,8 +215,8 @@ def main(argv=None) -> int:
                                     args.replicate, Adaptation(transport=True))
     model, coords = sampled_model(PosteriorModel(record, priors=STUDY_SBC_PRIORS,
                                                  likelihood=LikelihoodSettings(residual="motion")), first / "chain.h5")
+    chain = read_chain(first / "chain.h5")
     if args.slice:
-        chain = read_chain(first / "chain.h5")
         r = slice_chain(posterior_in(model, coords), chain[-1], chain.shape[0] * chain.shape[1], args.slice,
                         args.seed * 1000 + args.replicate, fits / f"seed{args.seed}_{args.replicate}_slice_{args.slice}")
         print(f"ensemble slice ({args.slice}): tau {r['tau_max']:.0f} steps, {r['per_step']:.2f} evaluations a "
@@ -229,7 +229,7 @@ def main(argv=None) -> int:
                      "value": r["evaluations_per_tau"], "value2": r["tau_max"], "steps": r["steps"],
                      "walkers": r["walkers"], "moved": round(r["moved"], 4), "seconds": r["seconds"],
                      "tau": " ".join(f"{k}={v:.0f}" for k, v in sorted(r["tau"].items(), key=lambda kv: -kv[1]))})
-    for row in geometry(model, coords, read_chain(first / "chain.h5"), args.pairs, np.random.default_rng(args.seed)):
+    for row in geometry(model, coords, chain, args.pairs, np.random.default_rng(args.seed)):
         rows.append({**base, "variant": "default", **row})
     made = {row["variant"] for row in rows}  # other replicates' rows kept, and this one's other variants
     others = [r for r in read_rows(out / "geometry.csv")

@@ -52,7 +52,7 @@ import numpy as np
 from _table import git_commit, read_rows, sampled_model, sbc_design_records, write_rows
 from bayes_inerter.inference import LikelihoodSettings, PosteriorModel, fit_record
 from bayes_inerter.inference.sampling.checkpoint import read_chain
-from bayes_inerter.inference.sampling.convergence import Convergence, Monitor, why_not
+from bayes_inerter.inference.sampling.convergence import Convergence, Monitor, integrated_time, why_not
 from bayes_inerter.inference.sampling.sampler import default_moves
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
@@ -220,11 +220,6 @@ def b_quantiles(model, coords, chain: np.ndarray) -> list[float]:
     return [float(q) for q in np.quantile(b, [0.03, 0.5, 0.97])]
 
 
-def largest_tau(chain: np.ndarray) -> np.ndarray:
-    kept = chain[len(chain) // 3:]
-    return np.array([emcee.autocorr.integrated_time(kept[:, :, i], quiet=True)[0] for i in range(chain.shape[2])])
-
-
 def setup(spec: str, steps: int, fits: Path):
     """(model, coordinates, the default chain, its largest tau, b's truth, frequency) of
     a record, its default fit made first where it is not in ``fits``."""
@@ -249,7 +244,7 @@ def probe(spec: str, temps: int, beta_min: float, steps: int, fits: Path, commit
     cold, swap = tempered_chain(target, default_moves(model, coordinates=coords),
                                 [base[-1 - 250 * k] for k in range(temps)], betas, steps // temps,
                                 f"{spec}-{temps}-{beta_min}")
-    tau = largest_tau(cold)
+    tau = integrated_time(cold[len(cold) // 3:])  # each parameter's, on the last two thirds
     per_step = target.calls / len(cold)
     row = {"record": spec, "freq_hz": freq, "commit": commit, "temps": temps,
            "beta_min": beta_min, "steps": len(cold), "walkers": walkers, "evaluations": target.calls,
