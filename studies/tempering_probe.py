@@ -162,22 +162,21 @@ def tempered_chain(target, moves, starts: list, betas: np.ndarray, steps: int, s
             return np.array(cold), swaps / steps
 
 
-def tempered_to_rule(target, moves, starts, betas, seed: str, coords, max_steps: int):
-    """The cold chain run until the package's convergence rule holds on it (checked every
-    ``Convergence.check_every`` steps, in theta) or ``max_steps``: (chain, log posterior,
+def tempered_to_rule(target, moves, starts, betas, seed: str, coords, conv: Convergence):
+    """The cold chain run until the package's convergence rule ``conv`` holds on it
+    (checked every ``conv.check_every`` steps, in theta) or ``conv.max_steps``: (chain,
     the last check, converged, swap rates)."""
-    conv = Convergence(max_steps=max_steps)
     monitor = Monitor(conv)
     cold, lp = [], []
     for state, swaps in tempered_steps(target, moves, starts, betas, seed):
         cold.append(state.coords.copy())
         lp.append(state.log_prob.copy())
         n = len(cold)
-        if n % conv.check_every == 0 or n >= max_steps:
+        if n % conv.check_every == 0 or n >= conv.max_steps:
             chain = np.array(cold)
             check, ok = monitor.check(coords.to_theta(chain), np.array(lp))
-            if ok or n >= max_steps:
-                return chain, np.array(lp), check, ok, swaps / n
+            if ok or n >= conv.max_steps:
+                return chain, check, ok, swaps / n
 
 
 class Bimodal:
@@ -213,11 +212,12 @@ def bimodal_check(seed: str, steps: int = 4000, walkers: int = 16) -> dict:
             "share": round(float(np.mean(cold[steps // 4:, :, 0] > 0.0)), 4), "swap_rates": " ".join(f"{s:.3f}" for s in swap)}
 
 
-def b_quantiles(model, coords, chain: np.ndarray) -> list[float]:
-    """b's 3, 50 and 97 % quantiles over the chain's last two thirds."""
-    kept = chain[len(chain) // 3:].reshape(-1, chain.shape[2])
-    b = model.to_values(coords.transform(kept)[0])[:, list(model.names).index("b")]
-    return [float(q) for q in np.quantile(b, [0.03, 0.5, 0.97])]
+def b_quantiles(model, coords, draws: np.ndarray) -> dict:
+    """b's 3, 50 and 97 % quantiles, kg, over ``draws`` (steps, walkers, d; sampler
+    coordinates), by name ("3", "50", "97")."""
+    theta = coords.transform(draws.reshape(-1, draws.shape[2]))[0]
+    b = model.to_values(theta)[:, list(model.names).index("b")]
+    return {q: round(float(v), 1) for q, v in zip(("3", "50", "97"), np.quantile(b, [0.03, 0.5, 0.97]))}
 
 
 def setup(spec: str, steps: int, fits: Path):
@@ -253,9 +253,8 @@ def probe(spec: str, temps: int, beta_min: float, steps: int, fits: Path, commit
            "evaluations_per_tau": round(float(tau.max()) * per_step), "swap_rates": " ".join(f"{s:.3f}" for s in swap),
            "b_truth": round(b_true, 1), "seconds": round(time.perf_counter() - t0, 1)}
     row["ratio"] = round(row["evaluations_per_tau"] / row["default_evaluations_per_tau"], 3)
-    for name, chain in (("default_b", base), ("b", cold)):
-        for q, v in zip(("3", "50", "97"), b_quantiles(model, coords, chain)):
-            row[f"{name}_{q}"] = round(v, 1)
+    for name, chain in (("default_b", base), ("b", cold)):  # each chain's last two thirds
+        row.update({f"{name}_{q}": v for q, v in b_quantiles(model, coords, chain[len(chain) // 3:]).items()})
     return row
 
 
@@ -271,21 +270,27 @@ def probe_rule(spec: str, temps: int, beta_min: float, steps: int, max_steps: in
     betas = np.geomspace(1.0, beta_min, temps)
     target = Tempered(model, coords)
     t0 = time.perf_counter()
-    chain, _, check, ok, swap = tempered_to_rule(target, default_moves(model, coordinates=coords),
-                                                 [base[-1 - 250 * k] for k in range(temps)], betas,
-                                                 f"{spec}-{temps}-{beta_min}-rule", coords, max_steps)
-    kept = chain[check.warmup:]
+    conv = Convergence(max_steps=max_steps)
+    chain, check, ok, swap = tempered_to_rule(target, default_moves(model, coordinates=coords),
+                                              [base[-1 - 250 * k] for k in range(temps)], betas,
+                                              f"{spec}-{temps}-{beta_min}-rule", coords, conv)
     tau = np.asarray(check.tau, dtype=float)
     row = {"record": spec, "freq_hz": freq, "commit": commit, "temps": temps, "beta_min": beta_min,
-           "converged": bool(ok), "reason": "converged" if ok else why_not(len(chain), check, Convergence(max_steps=max_steps)),
+           "converged": bool(ok), "reason": "converged" if ok else why_not(len(chain), check, conv),
            "steps": len(chain), "walkers": chain.shape[1], "evaluations": target.calls, "default_steps": len(base),
            "tau": round(float(np.nanmax(tau)), 1), "slowest": list(model.names)[int(np.nanargmax(tau))],
            "swap_rates": " ".join(f"{s:.3f}" for s in swap), "b_truth": round(b_true, 1),
            "seconds": round(time.perf_counter() - t0, 1)}
-    b = model.to_values(coords.transform(kept.reshape(-1, kept.shape[2]))[0])[:, list(model.names).index("b")]
-    for q, v in zip(("3", "50", "97"), np.quantile(b, [0.03, 0.5, 0.97])):  # the draws after the warm-up
-        row[f"b_{q}"] = round(float(v), 1)
+    row.update({f"b_{q}": v for q, v in b_quantiles(model, coords, chain[check.warmup:]).items()})  # after the warm-up
     return row
+
+
+def replace_row(path: Path, fields, row: dict) -> None:
+    """Write ``row`` into the CSV file ``path`` in place of an earlier row of the same
+    record and ladder (the other rows kept)."""
+    key = (row["record"], str(row["temps"]), str(row["beta_min"]))
+    kept = [r for r in read_rows(path) if (r["record"], r["temps"], r["beta_min"]) != key]
+    write_rows(path, [{k: r.get(k, "") for k in fields} for r in kept + [row]])
 
 
 def main(argv=None) -> int:
@@ -316,26 +321,20 @@ def main(argv=None) -> int:
             print(f"bimodal check, seed {r['seed']}: share in the lighter mode {r['share']} (expected "
                   f"{r['expected']}); swaps {r['swap_rates']}", flush=True)
         write_rows(Path(args.out) / "tempering_check.csv", rows)
-    path = Path(args.out) / "tempering.csv"
     for spec in args.record:
         if args.converge:
             row = probe_rule(spec, args.temps, args.beta_min, args.steps, args.converge, Path(args.fits), commit)
             print(f"{spec}: {row['reason']} after {row['steps']} cold steps, {row['evaluations']} evaluations, "
                   f"{row['seconds']} s; tau {row['tau']} ({row['slowest']}); swaps {row['swap_rates']}; b {row['b_50']} "
                   f"({row['b_3']} to {row['b_97']}), truth {row['b_truth']}", flush=True)
-            rule = Path(args.out) / "tempering_rule.csv"
-            kept = [r for r in read_rows(rule) if (r["record"], r["temps"], r["beta_min"]) !=
-                    (spec, str(args.temps), str(args.beta_min))]
-            write_rows(rule, [{k: r.get(k, "") for k in RULE_FIELDS} for r in kept + [row]])
+            replace_row(Path(args.out) / "tempering_rule.csv", RULE_FIELDS, row)
             continue
         row = probe(spec, args.temps, args.beta_min, args.steps, Path(args.fits), commit)
         print(f"{spec}: tau {row['tau']} steps ({row['slowest']}), {row['evaluations_per_tau']} evaluations per tau "
               f"against the default's {row['default_evaluations_per_tau']} (ratio {row['ratio']}); swaps "
               f"{row['swap_rates']}; b {row['b_50']} ({row['b_3']} to {row['b_97']}), default {row['default_b_50']}, "
               f"truth {row['b_truth']}", flush=True)
-        kept = [r for r in read_rows(path) if (r["record"], r["temps"], r["beta_min"]) !=
-                (spec, str(args.temps), str(args.beta_min))]
-        write_rows(path, [{k: r.get(k, "") for k in FIELDS} for r in kept + [row]])
+        replace_row(Path(args.out) / "tempering.csv", FIELDS, row)
     return 0
 
 
