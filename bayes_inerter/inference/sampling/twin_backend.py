@@ -11,7 +11,8 @@ Here (:class:`TwinBackend`) the steps go to ``chain.h5`` as they are taken, at m
 :data:`TWIN_EVERY` steps and when the run ends, to ``chain.twin.h5``. Each write *seals*
 its file in the same open: one attribute that holds the number of steps it vouches for,
 a sha256 chained over those steps (positions, log probabilities, blobs), the acceptance
-counts and the sampler's random state after the last of them. A kill can damage at most
+counts and the sampler's random state after the last of them (and the sha256 of any
+state of its own the sampler stores beside them, :data:`EXTRA`). A kill can damage at most
 the one file being written at that moment; the other is intact, and at most
 ``TWIN_EVERY`` steps behind. Opening, checking and recovering the pair is
 :mod:`.checkpoint`'s.
@@ -31,12 +32,16 @@ import emcee
 import numpy as np
 
 __all__ = ["TwinBackend", "twin_path", "TWIN_EVERY", "WRITE_SECONDS", "check_write_seconds", "write_empty",
-           "sealed_steps", "restore_seal", "GROUP", "SEAL"]
+           "sealed_steps", "restore_seal", "read_extra", "GROUP", "SEAL", "EXTRA"]
 
 #: The HDF5 group that holds the chain (emcee's ``name``).
 GROUP = "mcmc"
 #: The attribute of the seal (see module docstring).
 SEAL = "bayes_inerter_seal"
+#: The chain group's subgroup of the sampler's own state after the last sealed step
+#: (named arrays, overwritten in place at each write, their sha256 in the seal): a
+#: tempered run's hot ensembles (:mod:`.tempering`).
+EXTRA = "sampler_state"
 
 
 def twin_path(path) -> Path:
@@ -139,6 +144,14 @@ class TwinBackend(_Backend):
         return _Backend.random_state.fget(self)
 
     @property
+    def extra(self) -> dict | None:
+        """The sampler's extra state after the last step (:meth:`save_step`), None where
+        the run stores none."""
+        self._write_held()
+        with self.open() as f:
+            return read_extra(f[GROUP])
+
+    @property
     def shape(self):
         return self._fact("shape", lambda: tuple(int(v) for v in _Backend.shape.fget(self)))
 
@@ -156,10 +169,14 @@ class TwinBackend(_Backend):
         self._facts.pop("has_blobs", None)  # the first growth with blobs sets it (after asking)
         self.twin.grow(ngrow, blobs)
 
-    def save_step(self, state, accepted):
+    def save_step(self, state, accepted, extra: dict | None = None):
+        """Hold the step ``state`` (emcee's); ``extra``: named arrays of the sampler's own
+        state after it (same names and shapes at every step of a run), written and sealed
+        with it (:data:`EXTRA`; what a tempered run's hot ensembles need to go on)."""
         self._check(state, accepted)
         row = (np.array(state.coords), np.array(state.log_prob),
-               None if state.blobs is None else np.array(state.blobs), np.asarray(accepted), state.random_state)
+               None if state.blobs is None else np.array(state.blobs), np.asarray(accepted), state.random_state,
+               extra)
         self._held.append(row)
         if time.monotonic() - self._last_write >= self.write_seconds:
             self._write_held()
@@ -215,8 +232,15 @@ class TwinBackend(_Backend):
             random_state = rows[-1][4]
             for i, v in enumerate(random_state):
                 g.attrs[f"random_state_{i}"] = v
+            extra = rows[-1][5]
+            extra_sum = None
+            if extra is not None:
+                for name, values in extra.items():
+                    values = np.asarray(values)
+                    g.require_dataset(f"{EXTRA}/{name}", values.shape, values.dtype, exact=True)[...] = values
+                extra_sum = _extra_hash(g)
             g.attrs["iteration"] = need
-            g.attrs[SEAL] = _seal_text(need, h, accepted, random_state)
+            g.attrs[SEAL] = _seal_text(need, h, accepted, random_state, extra_sum)
             self._sums[filename] = h
         if filename == self.filename:
             self._facts["iteration"] = need
@@ -235,14 +259,35 @@ def _rows_hash(g, start: int, stop: int, h: bytes) -> bytes:
     return h
 
 
-def _seal_text(steps: int, h: bytes, accepted, random_state) -> str:
+def _seal_text(steps: int, h: bytes, accepted, random_state, extra_sum: str | None = None) -> str:
     """The seal attribute: the steps it vouches for, their running sha256, the acceptance
-    counts and numpy's random state after the last of them (None before any step)."""
+    counts and numpy's random state after the last of them (None before any step), and
+    the sha256 of the sampler's extra state (:data:`EXTRA`) where it has one."""
     rs = None if random_state is None else [
         str(random_state[0]), np.asarray(random_state[1]).tolist(), int(random_state[2]), int(random_state[3]),
         float(random_state[4])]
-    return json.dumps({"steps": steps, "sha256": h.hex(), "accepted": np.asarray(accepted).tolist(),
-                       "random_state": rs})
+    seal = {"steps": steps, "sha256": h.hex(), "accepted": np.asarray(accepted).tolist(), "random_state": rs}
+    if extra_sum is not None:
+        seal["extra_sha256"] = extra_sum
+    return json.dumps(seal)
+
+
+def _extra_hash(g) -> str:
+    """The sha256 over the sampler's extra state in the chain group ``g`` (its arrays in
+    name order)."""
+    h = hashlib.sha256()
+    for name in sorted(g[EXTRA]):
+        h.update(name.encode() + np.ascontiguousarray(g[EXTRA][name][...]).tobytes())
+    return h.hexdigest()
+
+
+def read_extra(g) -> dict | None:
+    """The sampler's extra state that the seal of the chain group ``g`` vouches for (named
+    arrays), None where it has none."""
+    seal = json.loads(g.attrs[SEAL])
+    if "extra_sha256" not in seal:
+        return None
+    return {name: g[EXTRA][name][...] for name in g[EXTRA]}
 
 
 def write_empty(path, nwalkers: int, ndim: int, attrs: dict) -> None:
@@ -263,6 +308,8 @@ def sealed_steps(g) -> int | None:
     seal = json.loads(g.attrs[SEAL])
     n = int(seal["steps"])
     if n > g["chain"].shape[0] or _rows_hash(g, 0, n, b"").hex() != seal["sha256"]:
+        return None
+    if "extra_sha256" in seal and (EXTRA not in g or _extra_hash(g) != seal["extra_sha256"]):
         return None
     return n
 
