@@ -27,14 +27,16 @@ CHECKPOINT_FORMAT = 2
 _FRESH = "run with --fresh to start over, or use another --out"
 
 
-def run_identity(model, coordinates, adaptation, moves, nwalkers: int) -> dict:
+def run_identity(model, coordinates, adaptation, moves, nwalkers: int, tempering=None) -> dict:
     """The identity of a run (see module docstring) as plain JSON data: the sha256 of each
     record's arrays, the model's name, parameters, masses, likelihood settings and priors,
     the sampler coordinates (``None``: theta itself), ``adaptation``'s settings (None:
     none), the ensemble ``moves`` ((move, weight) pairs) by name and weight, and the
-    walkers. ``model``: a ``PosteriorModel`` or a ``JointModel`` (``model.parts``)."""
+    walkers, and the tempering ladder where there is one (``tempering.Tempering``; the
+    field is left out without one, so checkpoints written before it existed match).
+    ``model``: a ``PosteriorModel`` or a ``JointModel`` (``model.parts``)."""
     parts = getattr(model, "parts", None) or [model]
-    return {
+    identity = {
         "format": CHECKPOINT_FORMAT,
         "records": [{k: _sha256(getattr(p.record, k)) for k in ("time", "force", "accel")} for p in parts],
         "model": {"name": "joint" if getattr(model, "parts", None) else model.model, "parameters": list(model.names)},
@@ -49,6 +51,9 @@ def run_identity(model, coordinates, adaptation, moves, nwalkers: int) -> dict:
         "reference": _plain(getattr(model, "reference", None)),
         "deviations": [_deviations(p) for p in parts],
     }
+    if tempering is not None:
+        identity["tempering"] = _plain(dataclasses.asdict(tempering))
+    return identity
 
 
 def _deviations(part):
@@ -131,6 +136,7 @@ _NAMES = {
     "ndim": "for another number of parameters",
     "reference": "with its likelihood's normaliser at another reference point",
     "deviations": "with another basis of its likelihood's marginalised deviations",
+    "tempering": "with another tempering ladder",
 }
 
 
@@ -194,6 +200,11 @@ def _say(key: str, path: tuple, then, now, single: bool) -> Mismatch:
     if key == "nwalkers":
         return Mismatch(key, f"for {then} walkers (this run has {now})",
                         "use the same --walkers, or --fresh to start over, or another --out")
+    if key == "tempering" and not path:  # with and without tempering
+        then, now = ("no tempering" if v is None else f"{v['temps']} temperatures to beta {v['beta_min']:g}"
+                     for v in (then, now))
+        return Mismatch(key, f"{name} ({then} then, {now} now)",
+                        "run with the same --tempering setting, or --fresh to start over, or another --out")
     if key == "adaptation":
         if not path:  # with and without adaptation
             then, now = ("no adaptation" if v is None else "adaptation" + _show(v) for v in (then, now))

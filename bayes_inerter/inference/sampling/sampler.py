@@ -45,8 +45,9 @@ from ..posterior.model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
 from .optimize import find_start, laplace_ensemble, mirrored_modes
 from .target import Target, objective_at
+from .tempering import Tempering, sample_tempered, swap_rates
 
-__all__ = ["Convergence", "Adaptation", "CheckpointError", "SamplerRun", "SamplerStatus", "sample", "run_sampler",
+__all__ = ["Convergence", "Adaptation", "Tempering", "CheckpointError", "SamplerRun", "SamplerStatus", "sample", "run_sampler",
            "check_run_options", "default_moves", "default_walkers", "transient", "WARMUP"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
@@ -126,6 +127,10 @@ class SamplerRun:
     #: the model the chain sampled: the one given, with its likelihood's reference point
     #: where it takes one (``PosteriorModel.with_reference``)
     model: object = None
+    #: the tempering ladder (:class:`.tempering.Tempering`; None: none)
+    tempering: Tempering | None = None
+    #: each adjacent pair of temperatures' share of accepted swaps over the whole chain
+    swap_rates: tuple = ()
 
     @property
     def iteration(self) -> int:
@@ -192,7 +197,8 @@ def sample(target: Target, backend, state: emcee.State, *, schedule: Schedule, i
 def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = None, steps: int | None = None,
                 seed: int = 0, fresh: bool = False, processes: int = 1, convergence: Convergence | None = None,
                 moves=None, progress=None, report=None, start=None, coordinates: str | Coordinates = "impedance",
-                adaptation: Adaptation | None = Adaptation(), checkpoint_seconds: float = WRITE_SECONDS) -> SamplerRun:
+                adaptation: Adaptation | None = Adaptation(), checkpoint_seconds: float = WRITE_SECONDS,
+                tempering: Tempering | None = None) -> SamplerRun:
     """Sample the posterior of ``model`` into the HDF5 file ``checkpoint``.
 
     Parameters
@@ -218,6 +224,10 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
         moves alone.
     checkpoint_seconds : steps are written to the checkpoint at most this many seconds
         apart (``checkpoint.WRITE_SECONDS``; 0: every step); a kill loses at most that.
+    tempering : parallel tempering's ladder (:class:`.tempering.Tempering`); None (the
+        default): the posterior's ensemble alone. ``steps`` and the convergence rule
+        count the cold ensemble's steps; each costs the ladder's temperatures times the
+        evaluations of an untempered one.
     """
     conv = convergence or Convergence()
     nwalkers = check_run_options(model.ndim, nwalkers, steps)
@@ -232,17 +242,27 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
             coords = _reachable(model, coords, start, stored)
     target = Target(model, coords)
     schedule = Schedule(moves or default_moves(model, coordinates=coords), adaptation)
-    identity = run_identity(model, coords, adaptation, schedule.base, nwalkers)
+    identity = run_identity(model, coords, adaptation, schedule.base, nwalkers, tempering)
     backend, done, recovered = _open(Path(checkpoint), identity, fresh, checkpoint_seconds)
     if report:
         report(SamplerStatus(done, done, steps))
     # Ctrl-C in the start search's compiled code: a KeyboardInterrupt, not numba's SystemError
     with make_executor(processes, state=target) as executor, interrupt_raised():
         try:
-            state, start_theta = (_first_walkers(target, nwalkers, seed, start, executor, searched) if done == 0 else
-                                  (backend.get_last_sample(), None))
-            stepping = sample(target, backend, state, schedule=schedule, executor=executor,
-                              iterations=max(0, (steps if steps is not None else conv.max_steps) - done))
+            temps = 1 if tempering is None else tempering.temps
+            state, start_theta = (_first_walkers(target, nwalkers * temps, seed, start, executor, searched)
+                                  if done == 0 else (backend.get_last_sample(), None))
+            # each temperature's first walkers: every temps-th of those drawn, so each has its share of each mode
+            state, hot_starts = (emcee.State(state.coords[::temps], random_state=state.random_state),
+                                 [state.coords[k::temps] for k in range(1, temps)]) if done == 0 else (state, None)
+            iterations = max(0, (steps if steps is not None else conv.max_steps) - done)
+            if tempering is None:
+                stepping = sample(target, backend, state, schedule=schedule, executor=executor,
+                                  iterations=iterations)
+            else:
+                stepping = sample_tempered(target, backend, state, tempering=tempering, schedule=schedule,
+                                           iterations=iterations, seed=seed, executor=executor,
+                                           hot_starts=hot_starts)
             if steps is not None:
                 check, ok = _take_steps(stepping, backend, coords, conv, progress, steps)
             else:
@@ -250,8 +270,9 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
             reason = "converged" if ok else why_not(backend.iteration, check, conv)
             sampler = emcee.EnsembleSampler(nwalkers, model.ndim, target.batch, vectorize=True, backend=backend,
                                             blobs_dtype=float)
+            rates = tuple(swap_rates(backend.extra, backend.iteration)) if tempering is not None else ()
             return SamplerRun(sampler, ok, check.tau, reason, start_theta, recovered, schedule.used(), coords,
-                              check.transient, done, check.warmup, model)
+                              check.transient, done, check.warmup, model, tempering, rates)
         finally:
             try:  # a run stopped by Ctrl-C or an error: bring the twin up to date if possible
                 with interrupts_held():

@@ -1,0 +1,97 @@
+"""Parallel tempering in the sampler: the cold chain puts each mode's weight where it
+belongs though every walker starts in one; a continued tempered run is the
+uninterrupted one; a checkpoint continues only with its own ladder."""
+
+import numpy as np
+import pytest
+from conftest import normal_posterior
+from scipy import stats
+
+from bayes_inerter.inference.sampling.checkpoint import CheckpointError
+from bayes_inerter.inference.sampling.sampler import run_sampler
+from bayes_inerter.inference.sampling.tempering import Tempering
+
+#: The lighter mode's weight in the two-mode target.
+WEIGHT = 0.3
+
+
+@pytest.fixture(scope="module")
+def bimodal():
+    """A record's model with its posterior swapped for a flat prior within the model's
+    bounds and a likelihood of the first parameter alone: two normals weighted WEIGHT
+    and 1 - WEIGHT, 24 sds apart (the valley between them 72 nats down);
+    ``test_start`` the lighter mode's centre."""
+    pm = normal_posterior(duration=1.5, ramp=0.5)
+    lo, hi = pm.bounds().T
+    centre = pm.test_start[0]
+    sd = min(hi[0] - centre[0], centre[0] - lo[0]) / 30
+    light, heavy = centre.copy(), centre.copy()
+    light[0] -= 12 * sd
+    heavy[0] += 12 * sd
+
+    def log_prior(theta):
+        return 0.0 if np.all((theta > lo) & (theta < hi)) else -np.inf
+
+    def log_prob(theta):
+        theta = np.asarray(theta, dtype=float)
+        if not np.isfinite(log_prior(theta)):
+            return -np.inf, np.nan
+        z = (theta[0] - np.array([light[0], heavy[0]])) / sd
+        return float(np.logaddexp(*(np.log([WEIGHT, 1 - WEIGHT]) - 0.5 * z * z))), 0.0
+
+    pm.log_prior, pm.log_prob = log_prior, log_prob
+    pm.test_start = (light, log_prob(light)[0])
+    pm.test_split = centre[0]
+    return pm
+
+
+def _light_share(run, model) -> float:
+    chain = run.chain(discard=run.iteration // 4)
+    return float(np.mean(chain[..., 0] < model.test_split))
+
+
+def test_the_cold_chain_finds_the_weight_of_a_mode_no_walker_started_in(bimodal, tmp_path):
+    common = dict(nwalkers=24, steps=800, seed=5, start=bimodal.test_start, adaptation=None,
+                  coordinates="unconstrained")
+    alone = run_sampler(bimodal, tmp_path / "alone.h5", **common)
+    tempered = run_sampler(bimodal, tmp_path / "pt.h5", tempering=Tempering(temps=4, beta_min=0.01), **common)
+    # the ensemble moves alone stay in the mode the walkers started in
+    assert _light_share(alone, bimodal) > 0.95
+    # tempered, the cold chain's share of the light mode is its weight; the tolerance is
+    # four times the binomial sd of a few dozen independent draws
+    assert abs(_light_share(tempered, bimodal) - WEIGHT) < 0.15
+    assert len(tempered.swap_rates) == 3 and all(0.0 < r <= 1.0 for r in tempered.swap_rates)
+
+
+def test_a_continued_tempered_run_is_the_uninterrupted_one(bimodal, tmp_path):
+    common = dict(nwalkers=24, seed=7, start=bimodal.test_start, tempering=Tempering(temps=3, beta_min=0.2),
+                  coordinates="unconstrained")
+    whole = run_sampler(bimodal, tmp_path / "whole.h5", steps=90, **common)
+    run_sampler(bimodal, tmp_path / "cut.h5", steps=37, **common)
+    again = run_sampler(bimodal, tmp_path / "cut.h5", steps=90, **common)
+    assert again.resumed_at == 37 and again.iteration == 90
+    assert np.array_equal(again.sampler.get_chain(), whole.sampler.get_chain())
+    assert np.array_equal(again.sampler.get_log_prob(), whole.sampler.get_log_prob())
+    assert again.swap_rates == whole.swap_rates
+
+
+def test_a_tempered_checkpoint_continues_only_with_its_own_ladder(bimodal, tmp_path):
+    common = dict(nwalkers=24, seed=7, start=bimodal.test_start, coordinates="unconstrained", steps=5)
+    run_sampler(bimodal, tmp_path / "c.h5", tempering=Tempering(temps=3, beta_min=0.2), **common)
+    with pytest.raises(CheckpointError, match="no tempering now"):
+        run_sampler(bimodal, tmp_path / "c.h5", **{**common, "steps": 8})
+    with pytest.raises(CheckpointError, match="tempering ladder"):
+        run_sampler(bimodal, tmp_path / "c.h5", tempering=Tempering(temps=4, beta_min=0.2), **{**common, "steps": 8})
+
+
+@pytest.mark.parametrize("kwargs, message", [({"temps": 1}, "at least 2"), ({"beta_min": 0.0}, "in \\(0, 1\\)"),
+                                             ({"beta_min": 1.0}, "in \\(0, 1\\)")])
+def test_a_ladder_that_cannot_temper_is_refused(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        Tempering(**kwargs)
+
+
+def test_the_ladder_is_geometric_from_the_posterior_down():
+    betas = Tempering(temps=4, beta_min=0.1).betas
+    assert betas[0] == 1.0 and np.isclose(betas[-1], 0.1)
+    assert np.allclose(betas[1:] / betas[:-1], betas[1] / betas[0])
