@@ -23,7 +23,7 @@ def cmd_fit(args) -> int:
     from ..inference.sampling.convergence import Convergence
     from ..inference.posterior.model import LikelihoodSettings
     from ..inference.summaries.results import every_nth
-    from ..inference.sampling.sampler import Adaptation
+    from ..inference.sampling.sampler import Adaptation, Tempering
     from .status import EXIT_OK, CliError, check_interrupt
     from .records import load_record
 
@@ -41,7 +41,8 @@ def cmd_fit(args) -> int:
                    likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample, delay_sd=args.delay_sd),
                    coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
                    checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
-                   name=Path(args.record).name, convergence=convergence)
+                   name=Path(args.record).name, convergence=convergence,
+                   tempering=None if args.tempering is None else Tempering(args.tempering, args.hottest_beta))
     if args.model == "compare":
         return _compare(rec, args, options)
     bar = StepProgress("sampling", total=args.steps, check_interrupt=check_interrupt, cap=convergence.max_steps)
@@ -64,6 +65,9 @@ def cmd_fit(args) -> int:
     print(f"phi = {phi['mean']:.2%} (94 % HDI {_percent_interval(phi['hdi_3%'], phi['hdi_97%'])})")
     print(f"kept: the draws after step {result.burn_in} (a warm-up of {result.warmup} steps, then 2 tau), "
           f"{every_nth(result.thin)}")
+    if result.tempering is not None:
+        rates = ", ".join(f"{r:.0%}" for r in result.tempering["swap_rates"])
+        print(f"{result.tempering['ladder']}; swaps accepted between neighbours: {rates}")
     for w in result.warnings:  # fit.json keeps the same lines
         print(f"warning: {w.message}")
     if result.converged:

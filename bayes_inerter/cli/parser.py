@@ -31,6 +31,8 @@ _positive_float = _number_type(float, lambda v: 0 < v < float("inf"), "a positiv
 _non_negative_float = _number_type(float, lambda v: 0 <= v < float("inf"), "a non-negative number")
 _positive_int = _number_type(int, lambda v: v >= 1, "at least 1", "whole number")
 _non_negative_int = _number_type(int, lambda v: v >= 0, "0 or more", "whole number")
+_at_least_two = _number_type(int, lambda v: v >= 2, "at least 2", "whole number")
+_open_unit = _number_type(float, lambda v: 0 < v < 1, "between 0 and 1 (both left out)")
 #: ``inference.sampling.checkpoint.WRITE_SECONDS``, written out for the same reason as the
 #: coordinates below; a test keeps the two equal.
 CHECKPOINT_SECONDS = 2.0
@@ -153,6 +155,12 @@ def _add_fit(sub) -> argparse.ArgumentParser:
                    help="where the walkers move (%(default)s; the outputs are the same parameters either way)")
     p.add_argument("--no-adaptation", action="store_true",
                    help="emcee's ensemble moves alone, without the independence move fitted to the chain")
+    p.add_argument("--tempering", type=_at_least_two, metavar="TEMPS",
+                   help="parallel tempering with this many temperatures (default: none); each step then costs "
+                        "TEMPS times the evaluations, and hot copies of the posterior carry the walkers between "
+                        "its humps (docs/inference.md)")
+    p.add_argument("--hottest-beta", type=_open_unit, default=0.1, metavar="BETA",
+                   help="with --tempering: the hottest copy's power of the likelihood, in (0, 1) (%(default)s)")
     p.add_argument("--no-plots", action="store_true", help="write no figures (they take several seconds)")
     p.add_argument("--checkpoint-seconds", type=_non_negative_float, default=CHECKPOINT_SECONDS,
                    help="write the chain's steps at most this many seconds apart (%(default)s; 0: every step): "

@@ -32,7 +32,7 @@ from .summaries.interval import DEFAULT_INTERVAL, INTERVALS, IntervalSettings, i
 from .posterior.model import LikelihoodSettings, PosteriorModel
 from .sampling.optimize import laplace_covariance
 from .summaries.results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
-from .sampling.sampler import Adaptation, Convergence, check_run_options, run_sampler
+from .sampling.sampler import Adaptation, Convergence, Tempering, check_run_options, run_sampler
 
 __all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions", "DRAWS_FILE",
            "ALL_DRAWS_FILE"]
@@ -88,6 +88,8 @@ class FitResult:
     coordinates: str = ""
     #: the figures this fit drew into ``out``, by file name (none with ``plots=False``)
     figures: tuple = ()
+    #: the tempering ladder and its swap rates as fit.json holds them (None: untempered)
+    tempering: dict | None = None
 
     def row(self, name: str) -> dict:
         for r in self.summary:
@@ -139,7 +141,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                coordinates: str = "impedance", adaptation: Adaptation | None = Adaptation(),
                checkpoint_seconds: float = WRITE_SECONDS,
                interval: str | IntervalSettings | None = None, freq: float | None = None,
-               name: str | None = None, modal: bool | None = None, masses: Masses | None = None) -> FitResult:
+               name: str | None = None, modal: bool | None = None, masses: Masses | None = None,
+               tempering: Tempering | None = None) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
     ``modal``: the bearing's damper sampled as the plate mode's damping ratio under its
@@ -157,7 +160,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     in the model's parameters whichever is used). ``adaptation``: the fitted independence
     move (``sampler.Adaptation``; None: the ensemble moves alone). ``checkpoint_seconds``:
     the steps reach chain.h5 at most this far apart (0: every step; ``run_sampler``).
-    ``progress``, ``report``: ``run_sampler``'s callbacks. The folder is locked for the run
+    ``tempering``: parallel tempering's ladder (``sampler.Tempering``; None, the default:
+    none); fit.json gives it and its swap rates. ``progress``, ``report``: ``run_sampler``'s callbacks. The folder is locked for the run
     (``lock.folder_lock``): a second run into it is refused at once.
 
     ``m_s``, ``m_B``, ``device`` (a ``device_file.DeviceFile``): the masses, resolved by
@@ -200,7 +204,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         t0 = time.perf_counter()
         got = _sample_into(out, pm, nwalkers=walkers, steps=steps, seed=seed, fresh=fresh, processes=processes,
                            convergence=convergence, progress=progress, report=report, coordinates=coords,
-                           adaptation=adaptation, checkpoint_seconds=checkpoint_seconds)
+                           adaptation=adaptation, checkpoint_seconds=checkpoint_seconds, tempering=tempering)
         run, sample, pm = got.run, got.sample, got.model
         idata, sims = to_inference_data(pm, sample, rng=np.random.default_rng(seed + 1))
         t_post = time.perf_counter() - t0 - got.seconds
@@ -226,7 +230,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                          info["timings_s"], got.shrink, run.recovered, warnings=got.ended, masses=masses,
                          b_theory=b_theory, b_interval=b_interval, drive=drive, burn_in=sample.burn,
                          warmup=int(run.warmup), thin=sample.thin, loo=loo, tau_by_parameter=info["tau"],
-                         coordinates=info["coordinates"], figures=figures)
+                         coordinates=info["coordinates"], figures=figures, tempering=info["tempering"])
 
 
 def _interval_settings(interval) -> IntervalSettings:
@@ -384,6 +388,9 @@ def _run_info(name: str, model, got: _Sampled, seed: int, extra: dict) -> dict:
         "acceptance_fraction": float(np.mean(run.sampler.acceptance_fraction)),
         "moves": list(run.moves),
         "coordinates": run.coordinates.describe(),
+        "tempering": None if run.tempering is None else {
+            "ladder": run.tempering.describe(), "betas": run.tempering.betas.tolist(),
+            "swap_rates": list(run.swap_rates)},
         "coordinates_domain_edge": got.edge,
         "contraction": got.shrink,
         "versions": versions(),
