@@ -2,7 +2,8 @@
 records of a device richer than the fitted model, beside records of the model itself.
 
 Run by hand from the project root: ``python benchmarks/bench_misfit.py [--setting A3]
-[--freqs 0.5 1.0 1.5] [--seed 0] [--cap-seconds 360] [--max-steps N]``.
+[--freqs 0.5 1.0 1.5] [--seed 0] [--cap-seconds 360] [--max-steps N] [--tempering TEMPS
+[--hottest-beta 0.1]]``.
 
 For each frequency, two 10 s records of the setting: the model's own (today's default,
 ``records.generator.paper_record``, grid seed ``--seed``) and a paper-like one
@@ -26,6 +27,13 @@ posterior.nc keeps) and 94 % HDI against the true b, and whether it met the issu
 target: converged in under 120 s end to end. The 1-minute load average before and
 after each fit is printed and kept; the machine is shared, so seconds are only
 comparable within one run. One row per fit goes to results/performance/misfit.csv.
+
+With ``--tempering TEMPS`` each record is fitted twice, side by side in the same run:
+with the default sampler and with parallel tempering (``sampler.Tempering``, TEMPS
+temperatures down to ``--hottest-beta``); the evaluations of the log posterior after the
+start search (steps x walkers x temperatures), the swap rates and the ratio of the
+tempered fit's wall time to the default's are printed, and the rows go to
+results/performance/misfit_tempering.csv instead.
 """
 
 import argparse
@@ -40,6 +48,7 @@ from _timing import record_row, supported_theta
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import Convergence, PosteriorModel, fit_record
+from bayes_inerter.inference.sampling.sampler import Tempering
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.records.generator import paper_record
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
@@ -55,8 +64,9 @@ class _Capped(Exception):
         self.steps, self.seconds = steps, seconds
 
 
-def fit_capped(record, out: Path, *, seed: int, cap_s: float, convergence) -> dict:
-    """Fit ``record`` into ``out`` until converged or ``cap_s`` seconds; what the row needs."""
+def fit_capped(record, out: Path, *, seed: int, cap_s: float, convergence, tempering=None) -> dict:
+    """Fit ``record`` into ``out`` until converged or ``cap_s`` seconds (``tempering``:
+    the sampler's ladder, None: none); what the row needs."""
     t0 = time.perf_counter()
 
     def progress(iteration, target):
@@ -67,12 +77,12 @@ def fit_capped(record, out: Path, *, seed: int, cap_s: float, convergence) -> di
     capped = None
     try:
         res = fit_record(record, out, seed=seed, processes=1, plots=False, convergence=convergence,
-                         progress=progress)
+                         progress=progress, tempering=tempering)
     except _Capped as stop:
         capped = stop
         # the checkpoint holds the steps taken: write the outputs from it, sampling nothing more
         res = fit_record(record, out, seed=seed, processes=1, plots=False, convergence=convergence,
-                         steps=stop.steps)
+                         steps=stop.steps, tempering=tempering)
     wall = time.perf_counter() - t0
     tau = json.loads((out / "fit.json").read_text())["tau"]
     b = res.row("b")
@@ -90,6 +100,9 @@ def fit_capped(record, out: Path, *, seed: int, cap_s: float, convergence) -> di
         "b_3": b["hdi_3%"],
         "b_97": b["hdi_97%"],
         "met": converged and wall < TARGET_S,
+        "evaluations": int(res.iterations) * int(res.idata.posterior.sizes["chain"])
+        * (1 if tempering is None else tempering.temps),
+        "swap_rates": [] if res.tempering is None else res.tempering["swap_rates"],
     }
 
 
@@ -104,8 +117,15 @@ def main():
     ap.add_argument("--max-steps", type=int, default=None,
                     help="stop a chain here if not converged (default: the package's 20,000)")
     ap.add_argument("--truths", nargs="+", choices=("model", "paper-like"), default=["model", "paper-like"])
+    ap.add_argument("--tempering", type=int, default=None, metavar="TEMPS",
+                    help="also fit each record with parallel tempering of this many temperatures, side by side")
+    ap.add_argument("--hottest-beta", type=float, default=0.1, help="the tempering ladder's hottest beta")
     ap.add_argument("--no-row", action="store_true", help="print only; write no CSV row (trial runs)")
     args = ap.parse_args()
+    samplers = [("default", None)]
+    if args.tempering:
+        ladder = Tempering(args.tempering, args.hottest_beta)
+        samplers.append((f"tempered {ladder.temps} to {ladder.beta_min:g}", ladder))
 
     conv = Convergence(max_steps=args.max_steps) if args.max_steps else None
     device = PaperLike(base=GeneratorSettings(duration=10.0))
@@ -123,27 +143,34 @@ def main():
         for truth in args.truths:
             rec = makers[truth](freq)
             b_true = rec.metadata["true_parameters"]["b"]
-            load0 = os.getloadavg()[0]
-            with tempfile.TemporaryDirectory() as d:
-                got = fit_capped(rec, Path(d) / "fit", seed=args.seed, cap_s=args.cap_seconds, convergence=conv)
-            load1 = os.getloadavg()[0]
-            slow = sorted(got["tau"].items(), key=lambda kv: -kv[1])
-            got.update(truth=truth, freq=freq, b_true=b_true, load=(load0, load1), slow=slow)
-            results.append(got)
-            print(f"  {truth} {freq:g} Hz: {'converged' if got['converged'] else 'NOT converged: ' + got['reason']}, "
-                  f"{got['steps']} steps, {got['wall_s']:.0f} s; tau " +
-                  ", ".join(f"{n} {t:.0f}" for n, t in slow[:3]) + f"; load {load0:.2f} -> {load1:.2f}", flush=True)
-            if not args.no_row:
-                record_row("misfit", {
-                    "setting": args.setting, "freq_hz": freq, "truth": truth, "seed": args.seed,
-                    "processes": 1, "cap_s": args.cap_seconds, "converged": got["converged"],
-                    "reason": got["reason"], "steps": got["steps"], "walkers": got["walkers"],
-                    "max_tau": round(slow[0][1], 1), "slowest": slow[0][0], "second": slow[1][0],
-                    "sampling_s": round(got["sampling_s"], 1), "wall_s": round(got["wall_s"], 1),
-                    "b_3%": round(got["b_3"], 1), "b_50%": round(got["b_median"], 1),
-                    "b_97%": round(got["b_97"], 1), "b_truth": round(b_true, 1),
-                    "covers": got["b_3"] <= b_true <= got["b_97"], "under_120s": got["met"],
-                    "load_before": round(load0, 2), "load_after": round(load1, 2)})
+            for sampler, ladder in samplers:
+                load0 = os.getloadavg()[0]
+                with tempfile.TemporaryDirectory() as d:
+                    got = fit_capped(rec, Path(d) / "fit", seed=args.seed, cap_s=args.cap_seconds, convergence=conv,
+                                     tempering=ladder)
+                load1 = os.getloadavg()[0]
+                slow = sorted(got["tau"].items(), key=lambda kv: -kv[1])
+                got.update(truth=truth, freq=freq, b_true=b_true, load=(load0, load1), slow=slow, sampler=sampler)
+                results.append(got)
+                print(f"  {truth} {freq:g} Hz, {sampler}: "
+                      f"{'converged' if got['converged'] else 'NOT converged: ' + got['reason']}, "
+                      f"{got['steps']} steps, {got['wall_s']:.0f} s; tau " +
+                      ", ".join(f"{n} {t:.0f}" for n, t in slow[:3]) + f"; load {load0:.2f} -> {load1:.2f}", flush=True)
+                if not args.no_row:
+                    row = {
+                        "setting": args.setting, "freq_hz": freq, "truth": truth, "seed": args.seed,
+                        "processes": 1, "cap_s": args.cap_seconds, "converged": got["converged"],
+                        "reason": got["reason"], "steps": got["steps"], "walkers": got["walkers"],
+                        "max_tau": round(slow[0][1], 1), "slowest": slow[0][0], "second": slow[1][0],
+                        "sampling_s": round(got["sampling_s"], 1), "wall_s": round(got["wall_s"], 1),
+                        "b_3%": round(got["b_3"], 1), "b_50%": round(got["b_median"], 1),
+                        "b_97%": round(got["b_97"], 1), "b_truth": round(b_true, 1),
+                        "covers": got["b_3"] <= b_true <= got["b_97"], "under_120s": got["met"],
+                        "load_before": round(load0, 2), "load_after": round(load1, 2)}
+                    if args.tempering:
+                        row.update(sampler=sampler, evaluations=got["evaluations"],
+                                   swap_rates=" ".join(f"{r:.3f}" for r in got["swap_rates"]))
+                    record_row("misfit_tempering" if args.tempering else "misfit", row)
 
     print()
     head = (f"{'record':>16} {'conv':>5} {'steps':>6} {'max tau':>8} {'slowest':>8} {'sampling s':>10} "
@@ -151,15 +178,21 @@ def main():
     print(head)
     print("-" * len(head))
     for r in results:
-        name = f"{r['truth']} {r['freq']:g} Hz"
+        name = f"{r['truth']} {r['freq']:g} Hz" + ("" if r["sampler"] == "default" else " PT")
         print(f"{name:>16} {'yes' if r['converged'] else 'no':>5} {r['steps']:>6} {r['slow'][0][1]:>8.0f} "
               f"{r['slow'][0][0]:>8} {r['sampling_s']:>10.0f} {r['wall_s']:>7.0f} {r['b_median']:>9.1f} "
               f"{r['b_3']:>8.1f}-{r['b_97']:<8.1f} {r['b_true']:>7.1f} {'yes' if r['met'] else 'no':>6} "
               f"{r['load'][0]:>5.2f}-{r['load'][1]:<5.2f}")
     print(f"\ntarget: converged in under {TARGET_S:.0f} s end to end on one process; conv 'no' = stopped by the cap "
           f"or max steps, not by the convergence rule")
+    if args.tempering:
+        print("\ntempered against default, same record and seed: wall-time ratio, evaluations ratio")
+        for plain, hot in zip(results[::2], results[1::2]):
+            print(f"  {plain['truth']} {plain['freq']:g} Hz: {hot['wall_s'] / plain['wall_s']:.2f}, "
+                  f"{hot['evaluations'] / plain['evaluations']:.2f}; swap rates "
+                  + ", ".join(f"{r:.0%}" for r in hot["swap_rates"]))
     if not args.no_row:
-        print("wrote rows to results/performance/misfit.csv")
+        print(f"wrote rows to results/performance/{'misfit_tempering' if args.tempering else 'misfit'}.csv")
 
 
 if __name__ == "__main__":
