@@ -5,7 +5,6 @@ uninterrupted one; a checkpoint continues only with its own ladder."""
 import numpy as np
 import pytest
 from conftest import normal_posterior
-from scipy import stats
 
 from bayes_inerter.inference.sampling.checkpoint import CheckpointError
 from bayes_inerter.inference.sampling.sampler import run_sampler

@@ -8,7 +8,7 @@ intervals, loops, figures). The commands' entry points sit on top: :mod:`.fit`
 from .fit import FitResult, fit_joint, fit_record
 from .posterior.model import MODELS, LikelihoodSettings, PosteriorModel
 from .posterior.priors import DEFAULT_PRIORS, LogNormal, LogUniform
-from .sampling.sampler import Adaptation, CheckpointError, Convergence, run_sampler
+from .sampling.sampler import Adaptation, CheckpointError, Convergence, Tempering, run_sampler
 
 __all__ = [
     "FitResult",
@@ -23,5 +23,6 @@ __all__ = [
     "CheckpointError",
     "Convergence",
     "Adaptation",
+    "Tempering",
     "run_sampler",
 ]

@@ -245,7 +245,8 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
               steps: int | None = None, seed: int = 0, processes: int = 1, likelihood: LikelihoodSettings | None = None,
               priors: dict | None = None, convergence: Convergence | None = None, progress=None, report=None,
               plots: bool = True, coordinates: str = "impedance",
-              adaptation: Adaptation | None = Adaptation(), all_draws: bool = False) -> FitResult:
+              adaptation: Adaptation | None = Adaptation(), all_draws: bool = False,
+              tempering: Tempering | None = None) -> FitResult:
     """Sample the joint posterior of several records (``joint.JointModel``: shared
     frictions and deformations, one b per flywheel setting) into ``out``: chain.h5,
     summary.csv, fit.json, b_draws.npz (``DRAWS_FILE``), corner.png (the b's), trace.png.
@@ -263,6 +264,8 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
     medians of the records' centres are far from the joint optimum (about 1,000 nats
     below where the chain settles on the 27 records of the full study), so the walkers
     would otherwise spend their first hundreds of steps getting there.
+
+    ``tempering``: parallel tempering's ladder (``sampler.Tempering``; None: none).
     """
     from .posterior.joint import JointModel, pooled_log_prob
     from .sampling.optimize import NM_RESTARTS, find_start, local_optimum
@@ -291,7 +294,7 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
 
         got = _sample_into(out, jm, nwalkers=walkers, steps=steps, seed=seed, processes=processes,
                            convergence=convergence, progress=progress, report=report, start=start,
-                           coordinates=coords, adaptation=adaptation)
+                           coordinates=coords, adaptation=adaptation, tempering=tempering)
         jm = got.model if got.model is not None else jm  # with its reference point, if it took one
         got = _finish(out, jm, got, steps, convergence)
         run, sample = got.run, got.sample

@@ -62,6 +62,7 @@ import numpy as np
 
 from ..device import TABLE_I, paper_parameters
 from ..inference.sampling.convergence import Convergence
+from ..inference.sampling.tempering import Tempering
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
 from ..inference.posterior.likelihood import LikelihoodSettings
 from ..inference.posterior.model import PosteriorModel
@@ -117,6 +118,7 @@ class StudyCalibration:
         the committed results/study-calibration replicates were made with, so that a
         folder saved before this option existed is continued under its own likelihood).
     max_steps : the cap of a chain run to the convergence rule.
+    tempering : the fits' parallel tempering (``sampler.Tempering``; None: none).
     """
 
     setting: str = "A3"
@@ -128,6 +130,7 @@ class StudyCalibration:
     single: bool = False
     likelihood: LikelihoodSettings = field(default_factory=lambda: LikelihoodSettings(residual="ar1"))
     max_steps: int = 6000
+    tempering: Tempering | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
@@ -153,7 +156,7 @@ class StudyCalibration:
                 f"joint fits of {len(self.frequencies)} records,")
         return (f"{what} {', '.join(f'{f:g}' for f in self.frequencies)} Hz ({self.generator.duration:g} s, masses "
                 f"of {self.setting}, the {self.likelihood.residual} likelihood), {steps}, ranks among {self.draws} "
-                f"draws, seed {self.seed}")
+                f"draws, seed {self.seed}" + ("" if self.tempering is None else f", {self.tempering.describe()}"))
 
 
 @dataclass(frozen=True)
@@ -207,13 +210,15 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     convergence = dataclasses.replace(Convergence(), max_steps=cs.max_steps)
     if cs.single:
         res = fit_record(records[0], out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=STUDY_SBC_PRIORS,
-                         plots=False, likelihood=cs.likelihood, convergence=convergence, interval="posterior")
+                         plots=False, likelihood=cs.likelihood, convergence=convergence, interval="posterior",
+                         tempering=cs.tempering)
         post = res.idata.posterior
         kept = {n: np.asarray(post[n]).ravel() for n in post.data_vars}
         kept[f"b_{cs.setting}"] = kept.pop("b")
     else:
         res = fit_joint(records, out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=STUDY_SBC_PRIORS,
-                        plots=False, all_draws=True, likelihood=cs.likelihood, convergence=convergence)
+                        plots=False, all_draws=True, likelihood=cs.likelihood, convergence=convergence,
+                        tempering=cs.tempering)
         with np.load(out / ALL_DRAWS_FILE) as f:
             kept = {n: f[n].ravel() for n in f.files}
     return rng, truth, records, redraws, res, kept
@@ -521,6 +526,7 @@ class Config:
         (``LikelihoodSettings.law_sampled``; the motion-in likelihood).
     converge : each chain to the convergence rule, at most ``max_steps``.
     max_steps : the cap of a chain run to the rule.
+    tempering : parallel tempering with this many temperatures, to beta 0.1 (None: none).
     freqs : the drive frequencies, Hz (None: the study's).
     work : where each replicate's fit runs until done, continued by the next run
         (None: the output folder's ``.running``).
@@ -541,6 +547,8 @@ class Config:
         "help": "sample the friction law's deviations' scale (LikelihoodSettings.law_sampled)"})
     converge: bool = field(default=False, metadata={"help": "each chain to the convergence rule"})
     max_steps: int = field(default=StudyCalibration.max_steps, metadata={"help": "the cap of a chain run to the rule"})
+    tempering: int | None = field(default=None, metadata={
+        "help": "fit with parallel tempering of this many temperatures (default: none)"})
     freqs: tuple[float, ...] | None = field(default=None, metadata={"help": "drive frequencies, Hz"})
     work: str | None = field(default=None, metadata={
         "help": "where each replicate's fit runs until done (default: OUT/.running)"})
@@ -564,6 +572,8 @@ class Config:
                 **({"law_sampled": True} if self.law_sampled else {}))
         if self.freqs:
             extra["frequencies"] = tuple(self.freqs)
+        if self.tempering is not None:
+            extra["tempering"] = Tempering(self.tempering)
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 
