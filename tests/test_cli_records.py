@@ -291,3 +291,25 @@ def test_progress_of_a_stopped_run_does_not_say_done():
     bar.step(3, 40)
     bar.close(done=False)
     assert log.getvalue().splitlines()[-1] == "sampling: step 3 of 40 (stopped)"
+
+
+def test_a_tempered_fit_prints_its_ladder_and_swap_rates(tmp_path, capsys):
+    p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
+    out = tmp_path / "fit"
+    assert main(["fit", str(p), *MAP, "--out", str(out), "--steps", "4", "--processes", "1", "--walkers", "24",
+                 "--no-plots", "--tempering", "3", "--hottest-beta", "0.25"]) == 0
+    text = capsys.readouterr().out
+    info = json.loads((out / "fit.json").read_text())["tempering"]
+    assert info["betas"] == pytest.approx([1.0, 0.5, 0.25])
+    assert len(info["swap_rates"]) == 2 and all(0.0 <= r <= 1.0 for r in info["swap_rates"])
+    rates = ", ".join(f"{r:.0%}" for r in info["swap_rates"])
+    assert f"{info['ladder']}; swaps accepted between neighbours: {rates}" in text.splitlines()
+
+
+def test_a_hottest_beta_without_tempering_is_refused_before_the_folder_is_touched(tmp_path, capsys):
+    p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
+    out = tmp_path / "fit"
+    assert main(["fit", str(p), *MAP, "--out", str(out), "--steps", "4", "--hottest-beta", "0.2"]) != 0
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "\n" not in err and "--tempering TEMPS" in err
+    assert not out.exists()

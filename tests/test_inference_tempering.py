@@ -2,12 +2,14 @@
 belongs though every walker starts in one; a continued tempered run is the
 uninterrupted one; a checkpoint continues only with its own ladder."""
 
+import json
+
 import numpy as np
 import pytest
 from conftest import normal_posterior
 
 from bayes_inerter.inference.sampling.checkpoint import CheckpointError
-from bayes_inerter.inference.sampling.sampler import run_sampler
+from bayes_inerter.inference.sampling.sampler import Adaptation, run_sampler
 from bayes_inerter.inference.sampling.tempering import Tempering
 
 #: The lighter mode's weight in the two-mode target.
@@ -62,16 +64,44 @@ def test_the_cold_chain_finds_the_weight_of_a_mode_no_walker_started_in(bimodal,
     assert len(tempered.swap_rates) == 3 and all(0.0 < r <= 1.0 for r in tempered.swap_rates)
 
 
-def test_a_continued_tempered_run_is_the_uninterrupted_one(bimodal, tmp_path):
+@pytest.mark.parametrize("damage", [False, True])
+def test_a_continued_tempered_run_is_the_uninterrupted_one(bimodal, tmp_path, damage):
+    # refits every 20 steps (the cut falls between two, the continuation crosses three),
+    # every step written; with ``damage`` the stopped run's chain.h5 is spoilt, so the
+    # run goes on from its twin
     common = dict(nwalkers=24, seed=7, start=bimodal.test_start, tempering=Tempering(temps=3, beta_min=0.2),
-                  coordinates="unconstrained")
+                  coordinates="unconstrained", adaptation=Adaptation(every=20), checkpoint_seconds=0)
     whole = run_sampler(bimodal, tmp_path / "whole.h5", steps=90, **common)
     run_sampler(bimodal, tmp_path / "cut.h5", steps=37, **common)
+    if damage:
+        (tmp_path / "cut.h5").write_bytes(b"not HDF5")
     again = run_sampler(bimodal, tmp_path / "cut.h5", steps=90, **common)
     assert again.resumed_at == 37 and again.iteration == 90
+    assert bool(again.recovered) == damage
     assert np.array_equal(again.sampler.get_chain(), whole.sampler.get_chain())
     assert np.array_equal(again.sampler.get_log_prob(), whole.sampler.get_log_prob())
     assert again.swap_rates == whole.swap_rates
+
+
+def test_a_write_of_the_hot_ensembles_cut_short_leaves_the_sealed_state_whole(bimodal, tmp_path):
+    import h5py
+
+    from bayes_inerter.inference.sampling.checkpoint import read_chain
+    from bayes_inerter.inference.sampling.twin_backend import EXTRA, GROUP, SEAL
+
+    common = dict(nwalkers=24, seed=7, start=bimodal.test_start, tempering=Tempering(temps=3, beta_min=0.2),
+                  coordinates="unconstrained", steps=6, checkpoint_seconds=0)  # a write a step: both slots used
+    run_sampler(bimodal, tmp_path / "c.h5", **common)
+    with h5py.File(tmp_path / "c.h5", "a") as f:
+        g = f[GROUP]
+        sealed = json.loads(g.attrs[SEAL])["extra_slot"]
+        other = g[EXTRA][str(1 - int(sealed))]["hot_coords"]  # a kill inside the next write's slot
+        other[...] = np.nan
+    assert read_chain(tmp_path / "c.h5").shape[0] == 6  # still intact: the sealed slot is whole
+    with h5py.File(tmp_path / "c.h5", "a") as f:
+        f[GROUP][EXTRA][sealed]["hot_coords"][...] = 0.0  # the sealed slot spoilt: the file is damaged
+    again = run_sampler(bimodal, tmp_path / "c.h5", **{**common, "steps": 8})
+    assert "c.h5" in again.recovered and again.resumed_at == 6
 
 
 def test_a_tempered_checkpoint_continues_only_with_its_own_ladder(bimodal, tmp_path):

@@ -159,8 +159,8 @@ def _add_fit(sub) -> argparse.ArgumentParser:
                    help="parallel tempering with this many temperatures (default: none); each step then costs "
                         "TEMPS times the evaluations, and hot copies of the posterior carry the walkers between "
                         "its humps (docs/inference.md)")
-    p.add_argument("--hottest-beta", type=_open_unit, default=0.1, metavar="BETA",
-                   help="with --tempering: the hottest copy's power of the likelihood, in (0, 1) (%(default)s)")
+    p.add_argument("--hottest-beta", type=_open_unit, metavar="BETA",
+                   help="with --tempering: the hottest copy's power of the likelihood, in (0, 1) (default 0.1)")
     p.add_argument("--no-plots", action="store_true", help="write no figures (they take several seconds)")
     p.add_argument("--checkpoint-seconds", type=_non_negative_float, default=CHECKPOINT_SECONDS,
                    help="write the chain's steps at most this many seconds apart (%(default)s; 0: every step): "

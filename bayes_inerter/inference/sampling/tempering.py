@@ -18,9 +18,11 @@ weights are known (tests/test_inference_tempering.py).
 
 The cold ensemble's steps go to the checkpoint as every run's do; the hot ensembles'
 states (walkers, their log-likelihoods and random states), the swaps' random state and
-the swap counts go into the seal of each write (:class:`.twin_backend.TwinBackend`'s
-``extra``), so a continued tempered run is the chain the uninterrupted one gives. The
-ladder is part of the run's identity (:func:`.identity.run_identity`).
+the swap counts are written beside them with each write, and its seal vouches for them
+(:class:`.twin_backend.TwinBackend`'s ``extra``), so a continued tempered run is the
+chain the uninterrupted one gives. The ladder is part of the run's identity
+(:func:`.identity.run_identity`). The run's acceptance fraction counts the cold
+ensemble's moves, not its swaps.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import emcee
 import numpy as np
 
 from ...executor import Executor, interrupts_held
+from .checkpoint import CheckpointError
 from .target import Target
 
 __all__ = ["Tempering", "TemperedTarget", "sample_tempered", "swap_rates"]
@@ -104,7 +107,7 @@ def _extra(states: list, swap_rng: np.random.RandomState, swaps: np.ndarray) -> 
             "hot_blobs": np.array([h.blobs for h in hot]), "cold_loglik": np.array(states[0].blobs[:, 0]),
             "random_keys": np.array([rs[1] for rs in rss], dtype=np.uint32),
             "random_rest": np.array([[rs[2], rs[3], rs[4]] for rs in rss], dtype=float),
-            "swaps": np.asarray(swaps, dtype=np.int64)}
+            "swaps": np.array(swaps, dtype=np.int64)}
 
 
 def _random_state(extra: dict, k: int) -> tuple:
@@ -138,10 +141,12 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
     nwalkers, ndim = np.shape(state.coords)
     stored = backend.extra if backend.iteration > 0 else None
     if backend.iteration > 0 and stored is None:
-        raise ValueError("the checkpoint holds no tempering state to continue from")
+        raise CheckpointError("the checkpoint holds no tempering state to continue from (it was damaged or "
+                              "written untempered); run with --fresh to start over, or use another --out")
     if stored is not None:
         if len(stored["hot_coords"]) != len(betas) - 1:
-            raise ValueError("the checkpoint's tempering state is of another ladder")
+            raise CheckpointError("the checkpoint's tempering state is of another ladder; run with --fresh to "
+                                  "start over, or use another --out")
         hot = [emcee.State(np.array(c), log_prob=np.array(lp), blobs=np.array(bl), random_state=_random_state(stored, k))
                for k, (c, lp, bl) in enumerate(zip(stored["hot_coords"], stored["hot_log_prob"], stored["hot_blobs"]))]
         swap_rng = np.random.RandomState()
@@ -206,7 +211,7 @@ def _swap(a: emcee.State, b: emcee.State, beta_a: float, beta_b: float, rng: np.
     pair = rng.permutation(n)
     la, lb = a.blobs[:, 0], b.blobs[pair, 0]
     gain = (beta_a - beta_b) * (lb - la)
-    take = np.isfinite(gain) & (np.log(rng.uniform(size=n)) < gain)
+    take = ~np.isnan(gain) & (np.log(rng.uniform(size=n)) < gain)
     for i in np.flatnonzero(take):
         j = pair[i]
         prior_i = a.log_prob[i] - beta_a * a.blobs[i, 0]

@@ -39,8 +39,9 @@ GROUP = "mcmc"
 #: The attribute of the seal (see module docstring).
 SEAL = "bayes_inerter_seal"
 #: The chain group's subgroup of the sampler's own state after the last sealed step
-#: (named arrays, overwritten in place at each write, their sha256 in the seal): a
-#: tempered run's hot ensembles (:mod:`.tempering`).
+#: (named arrays; a tempered run's hot ensembles, :mod:`.tempering`), in two slots
+#: written in turn, each overwritten in place: the seal names the slot of its step and
+#: holds its sha256, so a kill while one slot is written leaves the sealed one whole.
 EXTRA = "sampler_state"
 
 
@@ -233,14 +234,15 @@ class TwinBackend(_Backend):
             for i, v in enumerate(random_state):
                 g.attrs[f"random_state_{i}"] = v
             extra = rows[-1][5]
-            extra_sum = None
-            if extra is not None:
+            extra_seal = None
+            if extra is not None:  # into the slot the seal does not vouch for: a kill here leaves the file intact
+                slot = str(1 - int(json.loads(g.attrs[SEAL]).get("extra_slot", 1)))
                 for name, values in extra.items():
                     values = np.asarray(values)
-                    g.require_dataset(f"{EXTRA}/{name}", values.shape, values.dtype, exact=True)[...] = values
-                extra_sum = _extra_hash(g)
+                    g.require_dataset(f"{EXTRA}/{slot}/{name}", values.shape, values.dtype, exact=True)[...] = values
+                extra_seal = (slot, _extra_hash(g[EXTRA][slot]))
             g.attrs["iteration"] = need
-            g.attrs[SEAL] = _seal_text(need, h, accepted, random_state, extra_sum)
+            g.attrs[SEAL] = _seal_text(need, h, accepted, random_state, extra_seal)
             self._sums[filename] = h
         if filename == self.filename:
             self._facts["iteration"] = need
@@ -259,35 +261,42 @@ def _rows_hash(g, start: int, stop: int, h: bytes) -> bytes:
     return h
 
 
-def _seal_text(steps: int, h: bytes, accepted, random_state, extra_sum: str | None = None) -> str:
+def _seal_text(steps: int, h: bytes, accepted, random_state, extra: tuple | None = None) -> str:
     """The seal attribute: the steps it vouches for, their running sha256, the acceptance
     counts and numpy's random state after the last of them (None before any step), and
-    the sha256 of the sampler's extra state (:data:`EXTRA`) where it has one."""
+    where the sampler stores state of its own (:data:`EXTRA`), the slot that holds it and
+    its sha256 (``extra``: (slot, sha256))."""
     rs = None if random_state is None else [
         str(random_state[0]), np.asarray(random_state[1]).tolist(), int(random_state[2]), int(random_state[3]),
         float(random_state[4])]
     seal = {"steps": steps, "sha256": h.hex(), "accepted": np.asarray(accepted).tolist(), "random_state": rs}
-    if extra_sum is not None:
-        seal["extra_sha256"] = extra_sum
+    if extra is not None:
+        seal["extra_slot"], seal["extra_sha256"] = extra
     return json.dumps(seal)
 
 
-def _extra_hash(g) -> str:
-    """The sha256 over the sampler's extra state in the chain group ``g`` (its arrays in
-    name order)."""
+def _extra_hash(slot) -> str:
+    """The sha256 over one slot of the sampler's extra state (its arrays in name order)."""
     h = hashlib.sha256()
-    for name in sorted(g[EXTRA]):
-        h.update(name.encode() + np.ascontiguousarray(g[EXTRA][name][...]).tobytes())
+    for name in sorted(slot):
+        h.update(name.encode() + np.ascontiguousarray(slot[name][...]).tobytes())
     return h.hexdigest()
+
+
+def _sealed_slot(g, seal: dict):
+    """The extra state's slot that ``seal`` vouches for, or None where it has none or the
+    slot does not match its sha256."""
+    slot = seal.get("extra_slot")
+    if slot is None or EXTRA not in g or slot not in g[EXTRA]:
+        return None
+    return g[EXTRA][slot] if _extra_hash(g[EXTRA][slot]) == seal["extra_sha256"] else None
 
 
 def read_extra(g) -> dict | None:
     """The sampler's extra state that the seal of the chain group ``g`` vouches for (named
     arrays), None where it has none."""
-    seal = json.loads(g.attrs[SEAL])
-    if "extra_sha256" not in seal:
-        return None
-    return {name: g[EXTRA][name][...] for name in g[EXTRA]}
+    slot = _sealed_slot(g, json.loads(g.attrs[SEAL]))
+    return None if slot is None else {name: slot[name][...] for name in slot}
 
 
 def write_empty(path, nwalkers: int, ndim: int, attrs: dict) -> None:
@@ -309,7 +318,7 @@ def sealed_steps(g) -> int | None:
     n = int(seal["steps"])
     if n > g["chain"].shape[0] or _rows_hash(g, 0, n, b"").hex() != seal["sha256"]:
         return None
-    if "extra_sha256" in seal and (EXTRA not in g or _extra_hash(g) != seal["extra_sha256"]):
+    if "extra_sha256" in seal and _sealed_slot(g, seal) is None:
         return None
     return n
 
