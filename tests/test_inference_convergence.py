@@ -60,6 +60,27 @@ def test_a_falling_tau_counts_as_settled_but_a_growing_one_does_not():
                              ess=np.array([2000.0]), conv=conv)
 
 
+def test_growth_judged_against_the_largest_tau_ignores_a_small_taus_wander():
+    good = dict(rhat=np.array([1.01, 1.01]), ess=np.array([2000.0, 2000.0]))
+    each, largest = Convergence(), Convergence(growth="largest")
+    # the largest tau steady, a parameter with a fifth of it grown 10 % of itself (2 % of the largest)
+    tau, previous = np.array([60.0, 13.2]), np.array([60.0, 12.0])
+    assert not is_converged(5000, tau, previous, conv=each, **good)
+    assert is_converged(5000, tau, previous, conv=largest, **good)
+    # a small tau that grew by more than 5 % of the largest: not settled either way
+    tau = np.array([60.0, 15.5])
+    assert not is_converged(5000, tau, previous, conv=largest, **good)
+    # the largest tau grown 10 %: both wait
+    tau = np.array([66.0, 12.0])
+    assert not is_converged(5000, tau, previous, conv=each, **good)
+    assert not is_converged(5000, tau, previous, conv=largest, **good)
+
+
+def test_an_unknown_growth_judgement_is_refused():
+    with pytest.raises(ValueError, match="growth must be one of each, largest"):
+        Convergence(growth="median")
+
+
 @pytest.mark.parametrize("steps", [7, 300, 1000])
 def test_integrated_time_is_emcees(steps):
     """The batched estimate gives emcee's tau on AR(1) chains of several colours, and NaN

@@ -27,12 +27,15 @@ import emcee
 import numpy as np
 import scipy.fft
 
-__all__ = ["Convergence", "Check", "Monitor", "WARMUP", "transient", "check_chain", "steps_for", "tau_settled",
+__all__ = ["Convergence", "Check", "Monitor", "WARMUP", "GROWTH", "transient", "check_chain", "steps_for", "tau_settled",
            "is_converged", "why_not", "integrated_time"]
 
 #: Share of a chain left out as warm-up before its convergence is judged and its draws
 #: kept (:class:`Convergence`), unless its transient is longer.
 WARMUP = 1 / 3
+
+#: The ways :class:`Convergence` can judge tau's growth between two checks (its ``growth``).
+GROWTH = ("each", "largest")
 
 
 @dataclass(frozen=True)
@@ -62,8 +65,16 @@ class Convergence:
     check_every: int = 250
     max_steps: int = 20_000
     warmup: float = WARMUP
+    #: how tau's growth since the last check is judged (:data:`GROWTH`): "each" (the
+    #: default), every parameter's tau against its own last value; "largest", every
+    #: parameter's growth against the largest last tau, the one the chain's length
+    #: must exceed 50 times (a parameter whose tau is a fraction of the largest may
+    #: wander by more than ``tau_rtol`` of itself without the chain being too short).
+    growth: str = "each"
 
     def __post_init__(self) -> None:
+        if self.growth not in GROWTH:
+            raise ValueError(f"convergence setting growth must be one of {', '.join(GROWTH)}, got {self.growth!r}")
         if not 0.0 <= self.warmup <= 0.5:
             raise ValueError(f"convergence setting warmup (a share of the chain) must lie in [0, 0.5], "
                              f"got {self.warmup}")
@@ -174,7 +185,8 @@ def tau_settled(iteration, tau, previous, conv: Convergence) -> bool:
         # a tau that grows is not yet to be trusted; one that falls (an early stretch of
         # slow exploration weighing less as the chain grows) is, but the chain must also
         # be long enough for the last check's larger estimate
-        if np.max((tau - previous) / previous) > conv.tau_rtol or iteration < conv.n_tau * np.max(previous):
+        scale = previous if conv.growth == "each" else np.max(previous)
+        if np.max((tau - previous) / scale) > conv.tau_rtol or iteration < conv.n_tau * np.max(previous):
             return False
     return True
 
