@@ -3,7 +3,7 @@ records of a device richer than the fitted model, beside records of the model it
 
 Run by hand from the project root: ``python benchmarks/bench_misfit.py [--setting A3]
 [--freqs 0.5 1.0 1.5] [--seed 0] [--cap-seconds 360] [--max-steps N] [--tempering TEMPS
-[--hottest-beta 0.1]]``.
+[--hottest-beta 0.1] [--growth each|largest]]``.
 
 For each frequency, two 10 s records of the setting: the model's own (today's default,
 ``records.generator.paper_record``, grid seed ``--seed``) and a paper-like one
@@ -30,13 +30,15 @@ comparable within one run. One row per fit goes to results/performance/misfit.cs
 
 With ``--tempering TEMPS`` each record is fitted twice, side by side in the same run:
 with the default sampler and with parallel tempering (``sampler.Tempering``, TEMPS
-temperatures down to ``--hottest-beta``); the evaluations of the log posterior after the
+temperatures down to ``--hottest-beta``, its convergence rule judging tau's growth as
+``--growth`` says, ``Convergence.growth``); the evaluations of the log posterior after the
 start search (steps x walkers x temperatures), the swap rates and the ratio of the
 tempered fit's wall time to the default's are printed, and the rows go to
 results/performance/misfit_tempering.csv instead.
 """
 
 import argparse
+import dataclasses
 import json
 import os
 import tempfile
@@ -48,6 +50,7 @@ from _timing import record_row, supported_theta
 
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import Convergence, PosteriorModel, fit_record
+from bayes_inerter.inference.sampling.convergence import GROWTH
 from bayes_inerter.inference.sampling.sampler import Tempering
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.records.generator import paper_record
@@ -120,14 +123,20 @@ def main():
     ap.add_argument("--tempering", type=int, default=None, metavar="TEMPS",
                     help="also fit each record with parallel tempering of this many temperatures, side by side")
     ap.add_argument("--hottest-beta", type=float, default=0.1, help="the tempering ladder's hottest beta")
+    ap.add_argument("--growth", choices=GROWTH, default=None,
+                    help="the tempered fits' judgement of tau's growth (Convergence.growth; default: the package's)")
     ap.add_argument("--no-row", action="store_true", help="print only; write no CSV row (trial runs)")
     args = ap.parse_args()
-    samplers = [("default", None)]
+    conv = Convergence(max_steps=args.max_steps) if args.max_steps else None
+    samplers = [("default", None, conv)]
     if args.tempering:
         ladder = Tempering(args.tempering, args.hottest_beta)
-        samplers.append((f"tempered {ladder.temps} to {ladder.beta_min:g}", ladder))
+        hot_conv = conv
+        if args.growth is not None:
+            hot_conv = dataclasses.replace(conv or Convergence(), growth=args.growth)
+        name = f"tempered {ladder.temps} to {ladder.beta_min:g}" + (f", growth {args.growth}" if args.growth else "")
+        samplers.append((name, ladder, hot_conv))
 
-    conv = Convergence(max_steps=args.max_steps) if args.max_steps else None
     device = PaperLike(base=GeneratorSettings(duration=10.0))
     makers = {"model": lambda f: paper_record(args.setting, f, seed=args.seed),
               "paper-like": lambda f: paper_like_record(args.setting, f, seed=args.seed, device=device)}
@@ -143,10 +152,10 @@ def main():
         for truth in args.truths:
             rec = makers[truth](freq)
             b_true = rec.metadata["true_parameters"]["b"]
-            for sampler, ladder in samplers:
+            for sampler, ladder, rule in samplers:
                 load0 = os.getloadavg()[0]
                 with tempfile.TemporaryDirectory() as d:
-                    got = fit_capped(rec, Path(d) / "fit", seed=args.seed, cap_s=args.cap_seconds, convergence=conv,
+                    got = fit_capped(rec, Path(d) / "fit", seed=args.seed, cap_s=args.cap_seconds, convergence=rule,
                                      tempering=ladder)
                 load1 = os.getloadavg()[0]
                 slow = sorted(got["tau"].items(), key=lambda kv: -kv[1])
