@@ -9,7 +9,10 @@ is the textbook answer to such shapes: besides the posterior (beta = 1), ensembl
 after every step each walker of one temperature is offered a swap with a walker of the
 next hotter one (a random pairing), accepted with probability
 min(1, exp((beta_k - beta_k+1) (log L_j - log L_i))), which leaves the product of the
-tempered targets invariant. The cold ensemble's chain is the posterior's.
+tempered targets invariant. The cold ensemble's chain is the posterior's. The sampler
+has since taken it in as an option (``sampler.Tempering``, ``fit --tempering``); this
+probe keeps its own loop so that results/chain-geometry's rows can be made again as
+they were.
 
 For each record, a default fit of ``--steps`` steps (``fit_record`` as the command line
 runs it, seeded by the replicate, the laboratory or the grid record, as results/chain-geometry's,
