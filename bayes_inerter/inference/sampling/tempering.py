@@ -136,7 +136,8 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
     A new chain's hot ensembles start from ``hot_starts`` (walkers x ndim each, drawn as
     the first walkers are, and apart from them: an ensemble whose walkers coincide
     cannot move by differential evolution), each with a random state of its own drawn
-    from ``seed``; a continued one takes them from the checkpoint's seal. Ctrl-C comes out between steps, after the step it came in is stored."""
+    from ``seed``; a continued one takes them from the checkpoint (the state its seal
+    vouches for). Ctrl-C comes out between steps, after the step it came in is stored."""
     betas = tempering.betas
     nwalkers, ndim = np.shape(state.coords)
     stored = backend.extra if backend.iteration > 0 else None
