@@ -102,7 +102,8 @@ def main():
                         "evaluations": evaluations or "", "max_tau": round(float(np.max(check.tau)), 1),
                         "b_3%": round(got[0], 1), "b_50%": round(got[1], 1), "b_97%": round(got[2], 1),
                         "ref_b_3%": round(ref[0], 1), "ref_b_50%": round(ref[1], 1),
-                        "ref_b_97%": round(ref[2], 1), "b_truth": round(float(rec.metadata["true_parameters"]["b"]), 1)})
+                        "ref_b_97%": round(ref[2], 1),
+                        "b_truth": round(float(rec.metadata["true_parameters"]["b"]), 1)})
     if not args.no_row:
         print(f"wrote rows to results/performance/{args.out}.csv")
 

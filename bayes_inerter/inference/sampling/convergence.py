@@ -27,7 +27,8 @@ import emcee
 import numpy as np
 import scipy.fft
 
-__all__ = ["Convergence", "Check", "Monitor", "WARMUP", "GROWTH", "transient", "check_chain", "steps_for", "tau_settled",
+__all__ = ["Convergence", "Check", "Monitor", "WARMUP", "GROWTH", "transient", "check_chain", "steps_for",
+           "tau_settled",
            "is_converged", "why_not", "integrated_time"]
 
 #: Share of a chain left out as warm-up before its convergence is judged and its draws

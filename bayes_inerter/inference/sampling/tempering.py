@@ -148,7 +148,8 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
         if len(stored["hot_coords"]) != len(betas) - 1:
             raise CheckpointError("the checkpoint's tempering state is of another ladder; run with --fresh to "
                                   "start over, or use another --out")
-        hot = [emcee.State(np.array(c), log_prob=np.array(lp), blobs=np.array(bl), random_state=_random_state(stored, k))
+        hot = [emcee.State(np.array(c), log_prob=np.array(lp), blobs=np.array(bl),
+                           random_state=_random_state(stored, k))
                for k, (c, lp, bl) in enumerate(zip(stored["hot_coords"], stored["hot_log_prob"], stored["hot_blobs"]))]
         swap_rng = np.random.RandomState()
         swap_rng.set_state(_random_state(stored, len(hot)))
