@@ -28,8 +28,7 @@ import numpy as np
 import scipy.fft
 
 __all__ = ["Convergence", "Check", "Monitor", "WARMUP", "GROWTH", "transient", "check_chain", "steps_for",
-           "tau_settled",
-           "is_converged", "why_not", "integrated_time"]
+           "tau_settled", "is_converged", "why_not", "integrated_time"]
 
 #: Share of a chain left out as warm-up before its convergence is judged and its draws
 #: kept (:class:`Convergence`), unless its transient is longer.
