@@ -293,6 +293,7 @@ def test_progress_of_a_stopped_run_does_not_say_done():
     assert log.getvalue().splitlines()[-1] == "sampling: step 3 of 40 (stopped)"
 
 
+@pytest.mark.slow  # a fit with its start search (9 s); the sampler's tempering is tested quickly on its own
 def test_a_tempered_fit_prints_its_ladder_and_swap_rates(tmp_path, capsys):
     p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
     out = tmp_path / "fit"
