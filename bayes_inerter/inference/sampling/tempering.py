@@ -72,18 +72,16 @@ class TemperedTarget:
     """``target`` at inverse temperature ``beta``: log prior (with the coordinates'
     Jacobian) + ``beta`` x log-likelihood, for a batch of walkers (emcee's
     ``vectorize``), each with the blobs (log-likelihood, phi). The model is evaluated as
-    :meth:`.target.Target.batch` evaluates it (on the executor's workers); the prior,
-    cheap, here, and the log-likelihood is the difference. At beta = 1 the value is the
+    :meth:`.target.Target.batch` evaluates it (on the executor's workers; the coordinates'
+    map once, :meth:`.target.Target.evaluate`); the prior, cheap, here, and the
+    log-likelihood is the difference. At beta = 1 the value is the
     target's own."""
 
     target: Target
     beta: float
 
     def batch(self, us, executor: Executor | None = None) -> list:
-        us = np.atleast_2d(np.asarray(us, dtype=float))
-        got = self.target.batch(us, executor=executor)
-        thetas, logj = self.target.coords.transform(us)
-        logj = np.broadcast_to(logj, us.shape[:1])
+        thetas, logj, got = self.target.evaluate(us, executor)
         out = []
         for (lp, phi), theta, lj in zip(got, thetas, logj):
             if not math.isfinite(lp):
