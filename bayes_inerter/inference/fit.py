@@ -161,8 +161,9 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     move (``sampler.Adaptation``; None: the ensemble moves alone). ``checkpoint_seconds``:
     the steps reach chain.h5 at most this far apart (0: every step; ``run_sampler``).
     ``tempering``: parallel tempering's ladder (``sampler.Tempering``; None, the default:
-    none); fit.json gives it and its swap rates. ``progress``, ``report``: ``run_sampler``'s callbacks. The folder is locked for the run
-    (``lock.folder_lock``): a second run into it is refused at once.
+    none); fit.json gives it and its swap rates. ``progress``, ``report``:
+    ``run_sampler``'s callbacks. The folder is locked for the run (``lock.folder_lock``):
+    a second run into it is refused at once.
 
     ``m_s``, ``m_B``, ``device`` (a ``device_file.DeviceFile``): the masses, resolved by
     ``masses.resolve_masses`` (option, metadata, device file, paper default); fit.json

@@ -47,8 +47,8 @@ from .optimize import find_start, laplace_ensemble, mirrored_modes
 from .target import Target, objective_at
 from .tempering import Tempering, sample_tempered, swap_rates
 
-__all__ = ["Convergence", "Adaptation", "Tempering", "CheckpointError", "SamplerRun", "SamplerStatus", "sample", "run_sampler",
-           "check_run_options", "default_moves", "default_walkers", "transient", "WARMUP"]
+__all__ = ["Convergence", "Adaptation", "Tempering", "CheckpointError", "SamplerRun", "SamplerStatus", "sample",
+           "run_sampler", "check_run_options", "default_moves", "default_walkers", "transient", "WARMUP"]
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
@@ -249,12 +249,14 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     # Ctrl-C in the start search's compiled code: a KeyboardInterrupt, not numba's SystemError
     with make_executor(processes, state=target) as executor, interrupt_raised():
         try:
-            temps = 1 if tempering is None else tempering.temps
-            state, start_theta = (_first_walkers(target, nwalkers * temps, seed, start, executor, searched)
-                                  if done == 0 else (backend.get_last_sample(), None))
-            # each temperature's first walkers: every temps-th of those drawn, so each has its share of each mode
-            state, hot_starts = (emcee.State(state.coords[::temps], random_state=state.random_state),
-                                 [state.coords[k::temps] for k in range(1, temps)]) if done == 0 else (state, None)
+            if done == 0:
+                temps = 1 if tempering is None else tempering.temps
+                drawn, start_theta = _first_walkers(target, nwalkers * temps, seed, start, executor, searched)
+                # each temperature's first walkers: every temps-th drawn, so each has its share of each mode
+                state = emcee.State(drawn.coords[::temps], random_state=drawn.random_state)
+                hot_starts = [drawn.coords[k::temps] for k in range(1, temps)]
+            else:
+                state, start_theta, hot_starts = backend.get_last_sample(), None, None
             iterations = max(0, (steps if steps is not None else conv.max_steps) - done)
             if tempering is None:
                 stepping = sample(target, backend, state, schedule=schedule, executor=executor,
