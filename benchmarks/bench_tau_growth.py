@@ -16,7 +16,7 @@ Each record (``SETTING:LABORATORY:FREQ``, a 10 s paper-like record,
 default sampler and for ``--tempered-steps`` cold steps with ``--temps`` temperatures
 (``run_sampler``, one process, seeded by the laboratory, from the start search); the
 chains are kept in ``--work`` and reused. On each chain the checks of ``run_sampler``'s
-open-ended loop are replayed (every ``check_every`` steps, ``convergence.Monitor``)
+open-ended loop are replayed (every ``check_every`` steps, ``bench_warmup.replay``)
 under ``Convergence(growth="each")`` (the default) and ``growth="largest"``: the same
 chain, so the rules differ only in where they stop it. Per stop: the step, the
 evaluations of the log posterior to it (steps x walkers x temperatures; the start
@@ -31,24 +31,14 @@ from pathlib import Path
 
 import numpy as np
 from _timing import record_row
+from bench_warmup import replay
 
 from bayes_inerter.inference import Convergence, PosteriorModel, Tempering, run_sampler
-from bayes_inerter.inference.sampling.convergence import GROWTH, Monitor
+from bayes_inerter.inference.sampling.convergence import GROWTH
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def stop_of(chain, log_prob, conv):
-    """(step, check) where the open-ended loop stops ``chain`` under ``conv``; (None, last
-    check) where no check holds."""
-    monitor, check = Monitor(conv), None
-    for step in range(conv.check_every, len(chain) + 1, conv.check_every):
-        check, ok = monitor.check(chain[:step], log_prob[:step])
-        if ok:
-            return step, check
-    return None, check
 
 
 def quantiles(values) -> tuple:
@@ -86,7 +76,7 @@ def main():
             temps = 1 if tempering is None else tempering.temps
             ref = quantiles(b[len(chain) // 2:])
             for growth in GROWTH:
-                step, check = stop_of(chain, log_prob, Convergence(growth=growth))
+                step, check = replay(chain, log_prob, Convergence(growth=growth))
                 got = (np.nan,) * 3
                 if step is not None:
                     burn = check.warmup + int(2 * np.max(check.tau))
