@@ -14,7 +14,10 @@ COMMITTED = Path(__file__).resolve().parents[1] / "results" / "noise-free-chains
 
 
 @pytest.mark.parametrize("changes, cause", [({"records": 28}, "1 to 27"), ({"zeta_B": 1.5}, "damping ratio"),
-                                            ({"max_steps": 10}, "at least 100")])
+                                            ({"max_steps": 10}, "at least 100"),
+                                            ({"tempering": 1}, "at least 2 temperatures"),
+                                            ({"tempering": 4, "hottest_beta": 0.0}, "hottest beta"),
+                                            ({"only": (3, 27)}, "0 to 26")])
 def test_the_configuration_names_what_it_refuses(changes, cause):
     with pytest.raises(ValueError, match=cause):
         Config(**changes)
@@ -33,6 +36,8 @@ def test_summarise_remakes_the_committed_table_and_a_folder_keeps_one_damping(tm
     assert len(got.lines) == 27 and not got.failed
     with pytest.raises(ValueError, match="holds records of zeta_B"):
         run(Config(summarise=True), tmp_path, Serial())
+    with pytest.raises(ValueError, match="holds records of ladder"):  # untempered chains, not a tempered run's
+        run(Config(zeta_B=0.02, tempering=4, summarise=True), tmp_path, Serial())
 
 
 def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):

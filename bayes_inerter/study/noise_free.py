@@ -32,6 +32,7 @@ import numpy as np
 from ..device import grid_case, paper_parameters
 from ..inference.fit import fit_record
 from ..inference.sampling.convergence import Convergence
+from ..inference.sampling.tempering import Tempering
 from ..inference.summaries.results import hdi
 from ..records import GeneratorSettings, generate_record
 from .manifest import source_commit
@@ -49,13 +50,20 @@ class Config:
     ----------
     records : how many records of the paper's grid (1 to 27, from record 0).
     zeta_B : the generator's plate-mode damping ratio (None: Table I's c_B).
-    max_steps : each chain's cap.
+    max_steps : each chain's cap (cold steps where tempered).
+    tempering : parallel tempering's temperatures (``sampler.Tempering``; None: the
+        default sampler). A folder keeps one ladder.
+    hottest_beta : the tempering ladder's hottest beta.
+    only : fit these records alone (None: records 0 to ``records`` - 1).
     summarise : only write chains.csv from the records already there.
     """
 
     records: int = field(default=27, metadata={"help": "records of the paper's grid, 1 to 27"})
     zeta_B: float | None = field(default=None, metadata={"help": "the plate mode's damping ratio (default: Table I's c_B)"})
     max_steps: int = field(default=20000, metadata={"help": "each chain's cap"})
+    tempering: int | None = field(default=None, metadata={"help": "parallel tempering's temperatures (default: none)"})
+    hottest_beta: float = field(default=0.1, metadata={"help": "the tempering ladder's hottest beta"})
+    only: tuple[int, ...] | None = field(default=None, metadata={"help": "fit these records alone"})
     summarise: bool = field(default=False, metadata={"help": "only write chains.csv from the records there"})
 
     def __post_init__(self) -> None:
@@ -65,6 +73,14 @@ class Config:
             raise ValueError(f"zeta_B is a damping ratio in (0, 1), got {self.zeta_B}")
         if not (isinstance(self.max_steps, int) and self.max_steps >= 100):
             raise ValueError(f"max_steps must be a whole number of at least 100, got {self.max_steps!r}")
+        if self.tempering is not None:
+            self.ladder()  # its own check of the ladder
+        if self.only is not None and not all(0 <= k < 27 for k in self.only):
+            raise ValueError(f"only names records of the paper's grid, 0 to 26, got {list(self.only)}")
+
+    def ladder(self) -> Tempering | None:
+        """The fit's tempering (None: the default sampler)."""
+        return None if self.tempering is None else Tempering(temps=self.tempering, beta_min=self.hottest_beta)
 
 
 def device(setting: str, zeta_b: float | None):
@@ -88,7 +104,8 @@ def fit_one(job) -> dict:
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(rec, Path(tmp) / "fit", seed=k, plots=False,
-                         convergence=replace(Convergence(), max_steps=config.max_steps))
+                         convergence=replace(Convergence(), max_steps=config.max_steps),
+                         tempering=config.ladder())
     b = np.asarray(res.idata.posterior["b"]).ravel()
     lo, hi = hdi(b)
     tau = np.asarray(res.tau, dtype=float)
@@ -99,8 +116,19 @@ def fit_one(job) -> dict:
            "converged": bool(res.converged), "steps": int(res.iterations),
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
            "seconds": round(time.perf_counter() - t0, 1), "commit": commit}
+    if config.tempering is not None:  # absent for the default sampler: the rows before it have no such keys
+        row.update(tempering=config.tempering, hottest_beta=config.hottest_beta,
+                   swap_rates=res.tempering["swap_rates"])
     write_json(path, row, indent=1)
     return row
+
+
+def _ladder(config: Config) -> tuple | None:
+    return None if config.tempering is None else (config.tempering, config.hottest_beta)
+
+
+def _row_ladder(row: dict) -> tuple | None:
+    return (row["tempering"], row["hottest_beta"]) if "tempering" in row else None
 
 
 def _line(r: dict) -> str:
@@ -111,18 +139,21 @@ def _line(r: dict) -> str:
 
 def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     """The records not yet in ``out``/records fitted on ``executor`` (one each), then
-    chains.csv from every record there. A folder keeps one ``zeta_B``: a run asking
-    another is refused (ValueError). ``lines``: one per record fitted or read."""
+    chains.csv from every record there. A folder keeps one ``zeta_B`` and one ladder: a
+    run asking another is refused (ValueError). ``lines``: one per record fitted or read."""
     out = Path(out)
     (out / "records").mkdir(parents=True, exist_ok=True)
-    kept = {json.loads(p.read_text())["zeta_B"] for p in (out / "records").glob("*.json")}
-    if kept - {config.zeta_B}:
-        raise ValueError(f"{out} holds records of zeta_B {sorted(kept, key=str)}, not {config.zeta_B}; "
-                         "choose another folder")
+    kept = [json.loads(p.read_text()) for p in (out / "records").glob("*.json")]
+    for key, want, of in (("zeta_B", config.zeta_B, lambda r: r["zeta_B"]), ("ladder", _ladder(config), _row_ladder)):
+        have = {of(r) for r in kept}
+        if have - {want}:
+            raise ValueError(f"{out} holds records of {key} {sorted(have, key=str)}, not {want}; "
+                             "choose another folder")
     failed = []
     if not config.summarise:
         commit = source_commit() or ""  # the code this run loaded: HEAD may move while it runs
-        jobs = [(k, out, config, commit) for k in range(config.records)]
+        ks = range(config.records) if config.only is None else sorted(set(config.only))
+        jobs = [(k, out, config, commit) for k in ks]
         if progress:
             progress(0, len(jobs))
         for i, got in enumerate(executor.as_completed(fit_one, jobs), 1):
