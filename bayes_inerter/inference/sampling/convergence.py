@@ -9,7 +9,8 @@ equilibrium, none for a chain that starts there) or its first ``warmup`` share,
 whichever is longer; converged when the chain after the warm-up is longer than
 ``n_tau`` times the largest tau (and than ``n_tau`` times the last check's, if that was
 larger), tau grew by less than ``tau_rtol`` since the last check (a tau that still grows
-with the chain is underestimated), and, after discarding 2 tau more, R-hat <
+with the chain is underestimated; so a run never stops at its first check, where tau has
+nothing to be compared with, as in emcee's own recipe), and, after discarding 2 tau more, R-hat <
 ``max_rhat`` and bulk ESS >= ``min_ess`` (arviz, treating walkers as chains: they are
 not independent, so R-hat here is a check that no walker is stuck apart from the
 others, not a proof). Or stops at ``max_steps``. The draws kept for the posterior
@@ -212,8 +213,8 @@ def why_not(iteration, check: Check, conv: Convergence) -> str:
         parts.append(f"max R-hat {np.nanmax(rhat):.3f} >= {conv.max_rhat}")
     if not np.nanmin(ess) >= conv.min_ess:
         parts.append(f"min bulk ESS {np.nanmin(ess):.0f} < {conv.min_ess:g}")
-    return "not converged: " + ("; ".join(parts) if parts else "tau still growing, or the chain shorter than "
-                                f"{conv.n_tau:g} times the last check's tau")
+    return "not converged: " + ("; ".join(parts) if parts else "tau still growing (or not yet compared with an "
+                                f"earlier check), or the chain shorter than {conv.n_tau:g} times the last check's tau")
 
 
 class Monitor:
@@ -239,7 +240,11 @@ class Monitor:
         computed only where tau says they could decide something, or at ``max_steps``."""
         n, previous, conv = len(chain), self.previous, self.conv
         last = n >= conv.max_steps  # its message names R-hat and ESS too
-        check = check_chain(chain, log_prob, conv, rhat_if=lambda k, t: last or tau_settled(k, t, previous, conv))
-        ok = is_converged(n - check.warmup, check.tau, previous, check.rhat, check.ess, conv)
+        # the first check cannot stop the run: a tau from a chain of one check's length
+        # (a tempered cold chain's was 3.2 steps at 250) has not been seen to settle
+        compared = previous is not None
+        check = check_chain(chain, log_prob, conv,
+                            rhat_if=lambda k, t: last or (compared and tau_settled(k, t, previous, conv)))
+        ok = compared and is_converged(n - check.warmup, check.tau, previous, check.rhat, check.ess, conv)
         self.previous = check.tau
         return check, ok
