@@ -17,7 +17,8 @@ COMMITTED = Path(__file__).resolve().parents[1] / "results" / "coverage-paper-li
 @pytest.mark.parametrize("changes, cause", [
     ({"family": "nonsense"}, "unknown family"), ({"freq": 2.0}, "freq must be one of"),
     ({"likelihood": "input_noise"}, "name=value pairs"), ({"likelihood": "no_such=1"}, "not a likelihood setting"),
-    ({"replicates": 0}, "replicates must be")])
+    ({"replicates": 0}, "replicates must be"), ({"tempering": 1}, "at least 2 temperatures"),
+    ({"tempering": 4, "hottest_beta": 1.0}, "hottest beta")])
 def test_the_configuration_names_what_it_refuses(changes, cause):
     with pytest.raises(ValueError, match=cause):
         Config(**changes)
@@ -31,7 +32,7 @@ def test_summarise_remakes_the_committed_tables(tmp_path):
     assert got.values["coverage"][-1]["freq_hz"] == "all" and not got.failed
 
 
-def test_a_folder_keeps_one_family_and_one_likelihood(tmp_path):
+def test_a_folder_keeps_one_family_one_likelihood_and_one_sampler(tmp_path):
     (tmp_path / "replicates").mkdir()
     one = json.loads(next((COMMITTED / "replicates").glob("*.json")).read_text())
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps(one))
@@ -39,6 +40,15 @@ def test_a_folder_keeps_one_family_and_one_likelihood(tmp_path):
         run(Config(family="backlash"), tmp_path, Serial())
     with pytest.raises(ValueError, match="other likelihood settings"):
         run(Config(likelihood="input_noise=3"), tmp_path, Serial())
+    today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood)}
+    (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
+    with pytest.raises(ValueError, match="another sampler than parallel tempering, 4 temperatures"):
+        run(Config(tempering=4), tmp_path, Serial())
+    (tmp_path / "replicates" / "0000.json").write_text(json.dumps({**today, "tempering": [4, 0.1]}))
+    with pytest.raises(ValueError, match="another sampler than the default sampler"):
+        run(Config(), tmp_path, Serial())
+    with pytest.raises(ValueError, match="tempering, 4 temperatures, beta 1, 0.215, 0.0464, 0.01; choose"):
+        run(Config(tempering=4, hottest_beta=0.01), tmp_path, Serial())  # the same temperatures, a hotter end
 
 
 def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):

@@ -27,7 +27,9 @@ sensors' delays unequal); a folder keeps one family. ``likelihood`` (``name=valu
 fits with those of ``LikelihoodSettings`` changed (``input_noise=16``,
 ``law_beyond_viscous=false``), a candidate beside the default on the same seeds; a
 folder keeps one likelihood, its every setting recorded in each replicate (a change of
-the library's default starts a new folder). ``freq`` F runs only the replicates driven at F Hz.
+the library's default starts a new folder). ``tempering`` T fits with parallel tempering
+(``sampler.Tempering``, T temperatures down to ``hottest_beta``) where the default sampler
+does not; a folder keeps one sampler. ``freq`` F runs only the replicates driven at F Hz.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ from ..device import FREQUENCIES_HZ, grid_case, paper_parameters
 from ..inference.fit import fit_record
 from ..inference.posterior.likelihood import LikelihoodSettings, settings_changes
 from ..inference.sampling.convergence import Convergence
+from ..inference.sampling.tempering import Tempering
 from ..inference.summaries.results import hdi
 from ..records.paper_like import PaperLike, laboratory, paper_like_record
 from .manifest import source_commit
@@ -75,7 +78,7 @@ def likelihood_settings(text: str) -> dict:
 
 
 def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
-              likelihood: str = "default") -> dict:
+              likelihood: str = "default", tempering: Tempering | None = None) -> dict:
     setting, freq = grid_case(k)
     seed = seed0 + k
     rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family])
@@ -84,7 +87,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(rec, Path(tmp) / "fit", seed=seed, plots=False,
                          likelihood=LikelihoodSettings(**settings_changes(likelihood)),
-                         convergence=replace(Convergence(), max_steps=max_steps))
+                         convergence=replace(Convergence(), max_steps=max_steps), tempering=tempering)
     b = np.asarray(res.idata.posterior["b"]).ravel()
     tau = np.asarray(list(res.tau.values()) if isinstance(res.tau, dict) else res.tau, dtype=float)
     out = {"replicate": k, "setting": setting, "freq_hz": freq, "seed": seed, "b_true": b_true,
@@ -93,6 +96,8 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
            "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
            "likelihood_settings": likelihood_settings(likelihood)}
+    if tempering is not None:  # absent for the default sampler, as in the replicates written before the option
+        out.update(tempering=[tempering.temps, tempering.beta_min], swap_rates=res.tempering["swap_rates"])
     for level in LEVELS:
         lo, hi = hdi(b, level)
         key = round(100 * level)
@@ -108,7 +113,7 @@ def _file(out: Path, k: int) -> Path:
 
 def _run(job) -> dict:
     k, out, config, commit = job
-    got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood)
+    got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder())
     path = _file(out, k)
     write_json(path, got, indent=1)
     return got
@@ -233,6 +238,8 @@ class Config:
     likelihood: str = field(default="default", metadata={
         "help": "LikelihoodSettings changed from the default, NAME=VALUE,... (values as JSON)"})
     freq: float | None = field(default=None, metadata={"help": "only the replicates driven at this frequency, Hz"})
+    tempering: int | None = field(default=None, metadata={"help": "parallel tempering's temperatures (default: none)"})
+    hottest_beta: float = field(default=0.1, metadata={"help": "the tempering ladder's hottest beta"})
     summarise: bool = field(default=False, metadata={"help": "only write the tables from the replicates there"})
     against: str | None = field(default=None, metadata={
         "help": "with summarise: a folder of the same replicates fitted otherwise; also writes pairs.csv and "
@@ -247,10 +254,16 @@ class Config:
             raise ValueError(f"freq must be one of {', '.join(f'{f:g}' for f in FREQUENCIES_HZ)} Hz, got {self.freq:g}")
         if self.against is not None and not self.summarise:
             raise ValueError("against compares finished replicates: give it with summarise")
+        self.ladder()  # its own check of the ladder
         try:
             settings_changes(self.likelihood)
         except ValueError as exc:
             raise ValueError(f"likelihood {self.likelihood!r}: {exc}") from None
+
+
+    def ladder(self) -> Tempering | None:
+        """The fit's tempering (None: the default sampler)."""
+        return None if self.tempering is None else Tempering(temps=self.tempering, beta_min=self.hottest_beta)
 
 
 def _table_line(row: dict) -> str:
@@ -267,7 +280,8 @@ def _line(r: dict) -> str:
 def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     """The replicates not yet in ``out``/replicates fitted on ``executor`` (one each),
     then replicates.csv and coverage.csv from every replicate there. A folder keeps one
-    family and one likelihood's settings: a run asking others is refused (ValueError).
+    family, one likelihood's settings and one sampler: a run asking others is refused
+    (ValueError).
     ``lines``: one per replicate fitted, then the coverage rows."""
     out = Path(out)
     (out / "replicates").mkdir(parents=True, exist_ok=True)
@@ -280,6 +294,10 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     if not config.summarise and any(r.get("likelihood_settings") != want for r in found):
         raise ValueError(f"{out} holds replicates fitted with other likelihood settings than {config.likelihood!r} "
                          "gives today (or made before replicates recorded them); choose another folder")
+    ladder = None if config.tempering is None else [config.tempering, config.hottest_beta]
+    if not config.summarise and any(r.get("tempering") != ladder for r in found):
+        asked = "the default sampler" if ladder is None else config.ladder().describe()
+        raise ValueError(f"{out} holds replicates fitted with another sampler than {asked}; choose another folder")
     lines, failed = [], []
     if not config.summarise:
         commit = source_commit() or ""  # the code this run loaded, read once: HEAD may move while it runs
