@@ -43,3 +43,30 @@ def test_summarise_remakes_the_committed_table_and_a_folder_keeps_one_damping(tm
 def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):
     with pytest.raises(ValueError, match="run without summarise first"):
         run(Config(summarise=True), tmp_path, Serial())
+
+
+def test_a_tempered_record_is_fitted_with_the_ladder_asked_and_says_so(tmp_path, monkeypatch):
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from bayes_inerter.study import noise_free
+
+    calls = []
+
+    def fake_fit(record, out, **options):  # the plumbing is tested, not a fit
+        calls.append(options)
+        b = np.random.default_rng(0).normal(paper_parameters("A0").b, 1.0, size=(2, 100))
+        return SimpleNamespace(idata=SimpleNamespace(posterior={"b": b}), converged=True, iterations=500,
+                               tau=np.array([3.0]), b_interval=SimpleNamespace(identified=True),
+                               tempering={"swap_rates": [0.4]})
+
+    monkeypatch.setattr(noise_free, "fit_record", fake_fit)
+    config = Config(tempering=2, hottest_beta=0.01, only=(0,))
+    (tmp_path / "records").mkdir()  # as run() makes it
+    row = noise_free.fit_one((0, tmp_path, config, "abc"))
+    assert calls[0]["tempering"] == config.ladder() and calls[0]["tempering"].beta_min == 0.01
+    assert row["tempering"] == 2 and row["hottest_beta"] == 0.01 and row["swap_rates"] == [0.4]
+    assert (tmp_path / "records" / "0000.json").exists()
+    with pytest.raises(ValueError, match="holds records of ladder"):  # the folder now keeps this ladder
+        run(Config(summarise=True), tmp_path, Serial())

@@ -85,3 +85,31 @@ def test_pairs_set_each_replicate_beside_the_same_record_fitted_otherwise(tmp_pa
         run(Config(summarise=True, against=str(tmp_path / "a")), tmp_path / "b", Serial())
     with pytest.raises(ValueError, match="give it with summarise"):
         Config(against=str(tmp_path / "a"))
+
+
+def _fake_fit(calls):
+    """A stand-in for ``fit_record`` that keeps the options it was called with and gives
+    a posterior of b around the true A0's (the plumbing is tested, not a fit)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    def fit(record, out, **options):
+        calls.append(options)
+        b = np.random.default_rng(0).normal(753.34, 5.0, size=(2, 200))
+        return SimpleNamespace(idata=SimpleNamespace(posterior={"b": b}), converged=True, iterations=750,
+                               tau=np.array([4.0, 6.0]), b_interval=SimpleNamespace(identified=True, phi=0.9),
+                               tempering=None if options.get("tempering") is None else {"swap_rates": [0.3, 0.2]})
+    return fit
+
+
+def test_a_tempered_replicate_is_fitted_tempered_and_says_so(tmp_path, monkeypatch):
+    from bayes_inerter.study import paper_like_coverage as plc
+
+    calls = []
+    monkeypatch.setattr(plc, "fit_record", _fake_fit(calls))
+    got = plc.replicate(0, 6000, 500, tempering=Config(tempering=3, hottest_beta=0.2).ladder())
+    assert calls[0]["tempering"].temps == 3 and calls[0]["tempering"].beta_min == 0.2
+    assert got["tempering"] == [3, 0.2] and got["swap_rates"] == [0.3, 0.2]
+    untempered = plc.replicate(0, 6000, 500)
+    assert calls[1]["tempering"] is None and "tempering" not in untempered and "swap_rates" not in untempered
