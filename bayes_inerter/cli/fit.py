@@ -44,8 +44,7 @@ def cmd_fit(args) -> int:
                    coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
                    checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
                    name=Path(args.record).name, convergence=convergence,
-                   tempering=None if args.tempering is None else Tempering(
-                       args.tempering, **({} if args.hottest_beta is None else {"beta_min": args.hottest_beta})))
+                   tempering=Tempering.of(args.tempering, args.hottest_beta))
     if args.model == "compare":
         return _compare(rec, args, options)
     bar = StepProgress("sampling", total=args.steps, check_interrupt=check_interrupt, cap=convergence.max_steps)

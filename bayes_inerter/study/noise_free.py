@@ -62,7 +62,7 @@ class Config:
     zeta_B: float | None = field(default=None, metadata={"help": "the plate mode's damping ratio (default: Table I's c_B)"})
     max_steps: int = field(default=20000, metadata={"help": "each chain's cap"})
     tempering: int | None = field(default=None, metadata={"help": "parallel tempering's temperatures (default: none)"})
-    hottest_beta: float = field(default=0.1, metadata={"help": "the tempering ladder's hottest beta"})
+    hottest_beta: float = field(default=Tempering.beta_min, metadata={"help": "the tempering ladder's hottest beta"})
     only: tuple[int, ...] | None = field(default=None, metadata={"help": "fit these records alone"})
     summarise: bool = field(default=False, metadata={"help": "only write chains.csv from the records there"})
 
@@ -80,7 +80,7 @@ class Config:
 
     def ladder(self) -> Tempering | None:
         """The fit's tempering (None: the default sampler)."""
-        return None if self.tempering is None else Tempering(temps=self.tempering, beta_min=self.hottest_beta)
+        return Tempering.of(self.tempering, self.hottest_beta)
 
 
 def device(setting: str, zeta_b: float | None):

@@ -97,7 +97,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
            "likelihood_settings": likelihood_settings(likelihood)}
     if tempering is not None:  # absent for the default sampler, as in the replicates written before the option
-        out.update(tempering=[tempering.temps, tempering.beta_min], swap_rates=res.tempering["swap_rates"])
+        out.update(tempering=_ladder_entry(tempering), swap_rates=res.tempering["swap_rates"])
     for level in LEVELS:
         lo, hi = hdi(b, level)
         key = round(100 * level)
@@ -105,6 +105,11 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
         out[f"covered{key}"] = bool(lo <= b_true <= hi)
         out[f"width{key}_pct"] = 100.0 * (hi - lo) / b_true
     return out
+
+
+def _ladder_entry(tempering: Tempering | None) -> list | None:
+    """A replicate's ``tempering`` entry: [temps, hottest beta], or None untempered."""
+    return None if tempering is None else [tempering.temps, tempering.beta_min]
 
 
 def _file(out: Path, k: int) -> Path:
@@ -239,7 +244,7 @@ class Config:
         "help": "LikelihoodSettings changed from the default, NAME=VALUE,... (values as JSON)"})
     freq: float | None = field(default=None, metadata={"help": "only the replicates driven at this frequency, Hz"})
     tempering: int | None = field(default=None, metadata={"help": "parallel tempering's temperatures (default: none)"})
-    hottest_beta: float = field(default=0.1, metadata={"help": "the tempering ladder's hottest beta"})
+    hottest_beta: float = field(default=Tempering.beta_min, metadata={"help": "the tempering ladder's hottest beta"})
     summarise: bool = field(default=False, metadata={"help": "only write the tables from the replicates there"})
     against: str | None = field(default=None, metadata={
         "help": "with summarise: a folder of the same replicates fitted otherwise; also writes pairs.csv and "
@@ -260,10 +265,9 @@ class Config:
         except ValueError as exc:
             raise ValueError(f"likelihood {self.likelihood!r}: {exc}") from None
 
-
     def ladder(self) -> Tempering | None:
         """The fit's tempering (None: the default sampler)."""
-        return None if self.tempering is None else Tempering(temps=self.tempering, beta_min=self.hottest_beta)
+        return Tempering.of(self.tempering, self.hottest_beta)
 
 
 def _table_line(row: dict) -> str:
@@ -294,9 +298,9 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     if not config.summarise and any(r.get("likelihood_settings") != want for r in found):
         raise ValueError(f"{out} holds replicates fitted with other likelihood settings than {config.likelihood!r} "
                          "gives today (or made before replicates recorded them); choose another folder")
-    ladder = None if config.tempering is None else [config.tempering, config.hottest_beta]
-    if not config.summarise and any(r.get("tempering") != ladder for r in found):
-        asked = "the default sampler" if ladder is None else config.ladder().describe()
+    ladder = config.ladder()
+    if not config.summarise and any(r.get("tempering") != _ladder_entry(ladder) for r in found):
+        asked = "the default sampler" if ladder is None else ladder.describe()
         raise ValueError(f"{out} holds replicates fitted with another sampler than {asked}; choose another folder")
     lines, failed = [], []
     if not config.summarise:

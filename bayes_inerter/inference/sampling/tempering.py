@@ -60,6 +60,15 @@ class Tempering:
         if not 0.0 < self.beta_min < 1.0:
             raise ValueError(f"the hottest beta must lie in (0, 1), got {self.beta_min}")
 
+    @classmethod
+    def of(cls, temps: int | None, beta_min: float | None = None) -> Tempering | None:
+        """The ladder of ``temps`` temperatures down to ``beta_min`` (None: the default
+        hottest beta), or None where ``temps`` is None (the default sampler): what a
+        command line's ``--tempering`` and ``--hottest-beta`` ask for."""
+        if temps is None:
+            return None
+        return cls(temps) if beta_min is None else cls(temps, beta_min)
+
     @property
     def betas(self) -> np.ndarray:
         """The inverse temperatures, 1 first."""
