@@ -34,7 +34,18 @@ def test_stacked_draws_are_the_weighted_mixture():
         stack_draws(draws, {"a": 0.0, "b": 0.0}, np.random.default_rng(1))
 
 
-def test_a_likelihood_that_knows_none_of_the_models_is_refused(record, tmp_path):
+def _refusing(monkeypatch, refused):
+    """``compare``'s refusal, as a likelihood that does not know the models ``refused``
+    would give it (every model of the package is known to every likelihood today)."""
+    from bayes_inerter.inference import compare as compare_module
+
+    monkeypatch.setattr(compare_module, "refusal",
+                        lambda m, lk: f"the {lk.residual} likelihood does not know the {m} model" if m in refused
+                        else None)
+
+
+def test_a_likelihood_that_knows_none_of_the_models_is_refused(record, tmp_path, monkeypatch):
+    _refusing(monkeypatch, ("two-port-stribeck",))
     with pytest.raises(ValueError, match="no model of two-port-stribeck can be fitted under the motion"):
         compare_models(record, tmp_path / "c", models=("two-port-stribeck",))
     with pytest.raises(ValueError, match="unknown model"):
@@ -42,15 +53,17 @@ def test_a_likelihood_that_knows_none_of_the_models_is_refused(record, tmp_path)
     assert not (tmp_path / "c").exists()  # refused before any work
 
 
-def test_each_model_is_fitted_compared_and_stacked(record, tmp_path):
-    """The nested limits under the default likelihood, a richer model left out with the
-    reason: one row a model, weights that sum to one, and the stacked median between the
-    models' medians (a mixture's median lies between its components')."""
+def test_each_model_is_fitted_compared_and_stacked(record, tmp_path, monkeypatch):
+    """The nested limits under the default likelihood, a model the likelihood does not
+    know left out with the reason: one row a model, weights that sum to one, and the
+    stacked median between the models' medians (a mixture's median lies between its
+    components')."""
+    _refusing(monkeypatch, ("two-port-rich",))
     said = []
     c = compare_models(record, tmp_path / "c", models=("rigid", "linear", "two-port-rich"), steps=20,
                        plots=False, processes=1, on_model=lambda m, why: said.append((m, why)))
     assert [m for m, _ in said] == ["rigid", "linear", "two-port-rich"]
-    assert said[2][1] and "motion-in likelihood" in said[2][1] and not said[0][1]
+    assert said[2][1] and "motion likelihood" in said[2][1] and not said[0][1]
     fitted = c.fitted
     assert [f.model for f in fitted] == ["rigid", "linear"]
     assert sum(f.weight for f in fitted) == pytest.approx(1.0)
@@ -66,6 +79,16 @@ def test_each_model_is_fitted_compared_and_stacked(record, tmp_path):
         assert (tmp_path / "c" / m / "fit.json").is_file()
         kept = json.loads((tmp_path / "c" / m / "loo.json").read_text())  # each fit's own LOO, as compared
         assert (f.elpd_loo, f.elpd_se, f.pareto_k_max) == (kept["elpd_loo"], kept["elpd_se"], kept["pareto_k_max"])
+
+
+@pytest.mark.slow  # a fit of each of two models under the default likelihood
+def test_the_richer_models_are_compared_under_the_default_likelihood(record, tmp_path):
+    c = compare_models(record, tmp_path / "c", models=("two-port", "two-port-rich"), steps=20, plots=False,
+                       processes=1)
+    assert [f.model for f in c.fitted] == ["two-port", "two-port-rich"]
+    assert sum(f.weight for f in c.fitted) == pytest.approx(1.0)
+    rich = json.loads((tmp_path / "c" / "two-port-rich" / "fit.json").read_text())
+    assert rich["model"] == "two-port-rich"
 
 
 @pytest.mark.slow  # a fit of each of three models from the command line

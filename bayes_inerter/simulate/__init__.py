@@ -56,6 +56,7 @@ __all__ = [
     "run_stiff",
     "run_exact",
     "exact_runner",
+    "piecewise_runner",
     "contacts",
     "SimulationError",
     "MAX_EVENTS_PER_STEP",
@@ -246,6 +247,26 @@ def exact_runner(A, B, nodes, f0, mass, h, *, max_events=MAX_EVENTS_PER_STEP, sa
 
     def run(inputs, x0=None, store=False):
         out = kernel(Abar, n, n_in, nodes, f0, mass, _inputs(inputs, n_in), h, _initial(x0, n), 0, store, max_events)
+        return _outputs(out, h, max_events, sampling)
+
+    return run
+
+
+def piecewise_runner(compiled: CompiledNetwork, A, B, h, *, max_events=MAX_EVENTS_PER_STEP, sampling="instant"):
+    """:func:`run_piecewise_linear` with everything but the inputs fixed, as
+    :func:`exact_runner` is :func:`run_exact`'s: a callable ``run(inputs, x0=None,
+    store=False)``. The network's arrays and its kernel are formed once. ``A`` (n, n) may
+    carry states beyond the network's own (after its 2 N - 1), driven through ``B``."""
+    _check_sampling(sampling)
+    if not exact_applies(compiled):
+        raise ValueError("the exact kernel needs Coulomb laws or other piecewise-linear ones (Stribeck, "
+                         "PiecewiseLinear); the smooth law runs on method='stiff'")
+    shape, net = _piecewise.network_arrays(compiled, np.asarray(A, dtype=float), B, float(h))
+    kernel = _kernel.rich_kernel_for(shape)
+    max_events = int(max_events)
+
+    def run(inputs, x0=None, store=False):
+        out = kernel(net, _inputs(inputs, shape.n_in), _initial(x0, shape.n), store, max_events)
         return _outputs(out, h, max_events, sampling)
 
     return run

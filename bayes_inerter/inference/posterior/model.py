@@ -79,8 +79,10 @@ MODELS = {
     "linear": ("linear", ("b", "c_n", "k_n", "c_B", "k_B")),
     **{name: ("reduced", PHYSICAL + extra) for name, extra in EFFECTS.items()},
 }
-#: The models the motion-in likelihood knows: the two-port network and its limits.
-MOTION_MODELS = ("two-port", "rigid", "linear")
+#: The models the motion-in likelihood knows: the two-port network, its limits and the
+#: richer models (their plate's Stribeck friction a function of the measured motion,
+#: the rotation's and the nut's dead zone in the simulated drivetrain, ``motion``).
+MOTION_MODELS = ("two-port", "rigid", "linear", *EFFECTS)
 
 
 def refusal(model: str, likelihood: LikelihoodSettings) -> str | None:
@@ -88,8 +90,8 @@ def refusal(model: str, likelihood: LikelihoodSettings) -> str | None:
     if model not in MODELS:
         return f"unknown model {model!r}; choose one of {', '.join(MODELS)}"
     if likelihood.residual == "motion" and model not in MOTION_MODELS:
-        return (f"the motion-in likelihood knows the two-port network and its limits, not the {model} model's "
-                f"effects; fit it with --residual harmonic or ar1")
+        return (f"the motion-in likelihood does not know the {model} model; "
+                f"fit it with --residual harmonic or ar1")
     return None
 
 
@@ -185,10 +187,12 @@ class PosteriorModel:
             h, x = self.hyper(theta), self.field_vector(theta)
             draws = self.likelihood.input_noise_draws()
             if draws and self.motion is not None and self.likelihood.input_noise_form == "shapes":
-                self.motion = with_input_shapes(self.motion,
-                                                input_noise_shapes(self.motion, x, h["gain"], h["delay"], draws=draws))
+                shapes = input_noise_shapes(self.motion, x, h["gain"], h["delay"], draws=draws,
+                                            effects=self.effects(theta))
+                self.motion = with_input_shapes(self.motion, shapes)
             elif draws and self.motion is not None:
-                extra = input_noise_variance(self.motion, x, h["gain"], h["delay"], draws=draws)
+                extra = input_noise_variance(self.motion, x, h["gain"], h["delay"], draws=draws,
+                                             effects=self.effects(theta))
                 self.motion = with_input_noise(self.motion, extra)
                 self.harmonic = self.motion.harmonic
             if self.likelihood.normaliser == "reference":
@@ -480,7 +484,7 @@ class PosteriorModel:
             h = self.hyper(theta)
             terms, phi = motion_loglik(self.motion, x, h["tau"], h["alpha"], h["gain"], pointwise=True,
                                        reference=self.reference_noise, delay=h["delay"],
-                                       deviation_at=self.deviation_at, law=h.get("law"))
+                                       deviation_at=self.deviation_at, law=h.get("law"), effects=self.effects(theta))
         except (SimulationError, ValueError):
             return None
         return (terms, phi) if np.all(np.isfinite(terms)) else None
@@ -491,7 +495,7 @@ class PosteriorModel:
         (``motion.fundamental_misfit``)."""
         h = self.hyper(theta)
         return fundamental_misfit(self.motion, self.field_vector(theta), h["gain"], h["tau"], h["alpha"], h["delay"],
-                                  deviation_at=self.deviation_at, law=h.get("law"))
+                                  deviation_at=self.deviation_at, law=h.get("law"), effects=self.effects(theta))
 
     def accel_error_variance(self, theta) -> np.ndarray:
         """The variance of each harmonic's error as the likelihood sees it (noise and

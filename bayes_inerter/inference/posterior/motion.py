@@ -122,9 +122,12 @@ import numpy as np
 import threadpoolctl
 from numba import njit
 
+from ...friction import Coulomb, Stribeck
+from ...network import CompiledNetwork
 from ...networks import FIELDS
 from ...records.record import Record
-from ...simulate import exact_runner
+from ...simulate import exact_runner, piecewise_runner
+from .effects import NO_EFFECT
 from .harmonic import HarmonicData, at_times, harmonic_data
 from .likelihood import REVERSAL_SCALES
 from . import friction_law
@@ -132,7 +135,7 @@ from .reversals import SD, deviations_mean, switched_sign, reversal_correction, 
 
 __all__ = ["MotionData", "motion_data", "predicted_force", "bearing_force", "motion_variance", "motion_loglik",
            "input_noise_variance", "input_noise_shapes", "with_input_noise", "with_input_shapes", "INPUT_NOISE_SEED",
-           "fundamental_misfit", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
+           "fundamental_misfit", "plate_hump", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
            "DRIVE_MAX_PERIODS", "ORDER", "FUNDAMENTAL_MAX"]
 
 #: **Assumption** of the reporting: b is called identified only where the fit reproduces
@@ -193,6 +196,12 @@ class MotionData:
     #: and the variance of each one's period mean, (m/s^2)^2 (:func:`input_noise_variance`)
     fine_omega: np.ndarray | None = None
     fine_var: np.ndarray | None = None
+
+    @functools.cached_property
+    def drive_sign(self) -> np.ndarray:
+        """sgn of ``drive`` with one switch in each reversal window (``sign``'s square
+        wave on the drivetrain's grid): where the plate's Stribeck hump switches."""
+        return switched_sign(self.drive, self.windows)
 
     @functools.cached_property
     def period_input(self) -> np.ndarray:
@@ -281,10 +290,12 @@ def _screw(iw, V, F2, x):
 
 
 @njit(cache=True)
-def _predicted(x, gain, omega, velocity, sign, bearing, simulated, delay):
+def _predicted(x, gain, omega, velocity, sign, bearing, simulated, delay, hump):
     """(F^_k, Y_k) of the module docstring for the parameters ``x`` in :data:`ORDER`;
     with ``simulated``, the bearing's force is ``bearing`` (the drivetrain's simulation);
-    both as the force channel records them ``delay`` s after the acceleration channel."""
+    ``hump`` the plate's friction beyond its Coulomb square wave (a Stribeck law's, N;
+    zeros for the paper's law); both as the force channel records them ``delay`` s after
+    the acceleration channel."""
     m_B, f1_0, c_f1, f2_0 = x[2], x[7], x[8], x[9]
     K = omega.shape[0]
     F = np.empty(K, dtype=np.complex128)
@@ -293,7 +304,7 @@ def _predicted(x, gain, omega, velocity, sign, bearing, simulated, delay):
         iw = 1j * omega[k]
         V = velocity[k] / gain
         V_s, z_B, _, _, den = _screw(iw, V, f2_0 * sign[k], x)
-        plate = (iw * m_B + c_f1) * V + f1_0 * sign[k]
+        plate = (iw * m_B + c_f1) * V + f1_0 * sign[k] + hump[k]
         late = np.exp(-iw * delay) if delay != 0.0 else 1.0 + 0.0j
         F[k] = (plate + (bearing[k] if simulated else z_B * (V - V_s))) * late
         Y[k] = (iw * m_B + c_f1 + z_B * (1.0 - z_B / den)) / iw / gain * late
@@ -329,12 +340,12 @@ def _factors(data: MotionData, law: float | None) -> np.ndarray:
 
 
 @njit(cache=True)
-def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, basis, scale, force, var_force, var_accel,
-           cov, periods, reference, delay, sd_at, factor):
+def _terms(x, tau, alpha, gain, omega, velocity, sign, bearing, simulated, hump, basis, scale, force, var_force,
+           var_accel, cov, periods, reference, delay, sd_at, factor):
     """Each harmonic's log-likelihood term (the reversals' marginal in equal shares), and
     the squared residuals' and the force's sums; the deviations' prior sd is taken at
     the parameters ``sd_at`` (``x`` itself, or a reference point's), times ``factor``."""
-    F, Y = _predicted(x, gain, omega, velocity, sign, bearing, simulated, delay)
+    F, Y = _predicted(x, gain, omega, velocity, sign, bearing, simulated, delay, hump)
     V_all = _variance(Y, tau, alpha, var_force, var_accel, cov, periods)
     K = omega.shape[0]
     ok = True
@@ -361,14 +372,61 @@ def _vector(p) -> np.ndarray:
     return p if isinstance(p, np.ndarray) else np.array([float(p[n]) for n in ORDER])
 
 
-def bearing_force(data: MotionData, p, gain: float = 1.0):
+def _effects(effects) -> tuple[float, float, float]:
+    """(r_s, v_s, gap) of the richer models' ``effects`` (a dict; what it lacks, and
+    None, as ``effects.NO_EFFECT``: the paper's Coulomb law, no backlash)."""
+    e = {**NO_EFFECT, **(effects or {})}
+    return float(e["r_s"]), float(e["v_s"]), float(e["gap"])
+
+
+def plate_hump(data: MotionData, p, gain: float = 1.0, effects=None) -> np.ndarray:
+    """(K,) complex, N: the harmonics of the plate's friction beyond its Coulomb square
+    wave f1_0 sgn(v) under the richer models' Stribeck law (``effects``' r_s, v_s; zeros
+    for r_s = 1): f1_0 (g(|v|) - 1) sgn(v), g the law over its Coulomb level in the
+    simulator's piecewise-linear form (``friction.Stribeck.piecewise``), v the measured
+    plate velocity on the drivetrain's grid and the sign switched as ``sign``'s is
+    (``MotionData.drive_sign``). The plate's motion is measured, so its friction is a
+    known function of it and needs no simulation."""
+    r_s, v_s, _ = _effects(effects)
+    x = _vector(p)
+    K = data.harmonics
+    if r_s <= 1.0 or x[7] <= 0.0:
+        return np.zeros(K, dtype=np.complex128)
+    law = Stribeck(1.0, r_s, v_s).piecewise()
+    level = np.interp(np.abs(data.drive / gain), law.speeds, law.forces) - 1.0  # beyond the last knot: 0
+    wave = x[7] * level * data.drive_sign
+    return np.fft.rfft(wave)[1: K + 1] / wave.shape[0] * 2.0
+
+
+def _drivetrain_runner(x, A, B, h, r_s, v_s, gap):
+    """The drivetrain's simulation (``exact_runner``'s callable): the Coulomb kernel for
+    the paper's law, else the exact kernel's piecewise-linear form with the rotation's
+    Stribeck law (break-away r_s f2_0, over v_s) and the nut's dead zone of half-width
+    ``gap`` (the drivetrain's states are a chain's: screw, rotation, the nut's
+    deflection, then the bearing's)."""
+    b, m_s, c_n, k_n, f2_0, c_f2 = x[0], x[1], x[3], x[4], x[9], x[10]
+    if r_s <= 1.0 and gap <= 0.0:
+        return exact_runner(A, B, _ROTATION, np.array([f2_0]), np.array([b]), h)
+    law = Stribeck(f2_0, r_s * f2_0, v_s, c_f2) if r_s > 1.0 else Coulomb(f2_0, c_f2)
+    chain = CompiledNetwork(np.array([m_s, b]), np.array([c_n]), np.array([k_n]), np.array([gap]),
+                            ((), (law,) if f2_0 > 0.0 else ()), name="drivetrain")
+    return piecewise_runner(chain, A, B, h)
+
+
+def bearing_force(data: MotionData, p, gain: float = 1.0, effects=None):
     """The bearing's force z_B (V - V_s) at the harmonics 1..K from the simulated
     drivetrain (see module docstring), or None where the rotation has no Coulomb force
-    (f2_0 = 0: the algebra is then exact). ``p`` as for :func:`predicted_force`;
-    ``simulate.SimulationError`` where the rotation's contact chatters."""
+    and the nut no backlash (f2_0 = 0, gap = 0: the algebra is then exact). ``p`` as for
+    :func:`predicted_force`; ``effects``: the richer models' (``plate_hump``), whose
+    rotation's Stribeck law and nut's dead zone the simulation takes, the Newton steps'
+    monodromy then the Coulomb law's at the break-away force with the nut closed (an
+    approximation: a step is kept only where it brings the period's end nearer, else
+    the periods are simulated one by one). ``simulate.SimulationError`` where the
+    rotation's contact chatters."""
     x = _vector(p)
     b, c_B, k_B, f2_0 = x[0], x[5], x[6], x[9]
-    if f2_0 <= 0.0:
+    r_s, v_s, gap = _effects(effects)
+    if f2_0 <= 0.0 and gap <= 0.0:
         return None
     v = data.drive / gain
     N = v.shape[0]
@@ -377,7 +435,8 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
     A, B = _drivetrain(x)
     u = data.period_input / gain
     T = 1.0 / freq
-    run = exact_runner(A, B, _ROTATION, np.array([f2_0]), np.array([b]), T / N)
+    run = _drivetrain_runner(x, A, B, T / N, r_s, v_s, gap)
+    f_jump = max(r_s, 1.0) * f2_0  # the rotation's friction just after it reverses
     start = x0
     for _ in range(DRIVE_SETTLE - 1):
         start = run(u, x0=start, store=True)[1][-1]
@@ -385,7 +444,7 @@ def bearing_force(data: MotionData, p, gain: float = 1.0):
     periods, last, newton, before_step, got = DRIVE_SETTLE, math.inf, True, None, None
     while True:
         if newton and periods < DRIVE_MAX_PERIODS:
-            ok, target, miss = _newton(A, f2_0, b, c_B, k_B, states, T, start)
+            ok, target, miss = _newton(A, f_jump, b, c_B, k_B, states, T, start)
             if ok and miss <= DRIVE_TOL / 2:  # the next period is the periodic one, within DRIVE_TOL / 2
                 _, states = run(u, x0=states[-1], store=True)
                 return _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
@@ -510,20 +569,22 @@ def _periodic_state(x, gain, omega, velocity, sign):
     return out
 
 
-def _inputs(data: MotionData, p, gain):
-    """The compiled kernels' parameter vector and bearing-force arguments."""
+def _inputs(data: MotionData, p, gain, effects):
+    """The compiled kernels' parameter vector, bearing-force arguments and plate hump."""
     x = _vector(p)
-    bearing = bearing_force(data, x, gain)
-    return x, (np.zeros(data.harmonics, dtype=np.complex128) if bearing is None else bearing), bearing is not None
+    bearing = bearing_force(data, x, gain, effects)
+    return (x, (np.zeros(data.harmonics, dtype=np.complex128) if bearing is None else bearing), bearing is not None,
+            plate_hump(data, x, gain, effects))
 
 
-def predicted_force(data: MotionData, p, gain: float = 1.0, delay: float = 0.0):
+def predicted_force(data: MotionData, p, gain: float = 1.0, delay: float = 0.0, effects=None):
     """(F^_k, Y_k): the model's force at the harmonics for the physical parameters ``p``
     (by name, or a vector in :data:`ORDER`), and its transfer from the measured
     acceleration, dF^_k / dA_k (the network linearised, the Coulomb forces out), as the
-    force channel records them ``delay`` s behind the acceleration channel."""
-    x, bearing, simulated = _inputs(data, p, gain)
-    return _predicted(x, float(gain), data.omega, data.velocity, data.sign, bearing, simulated, float(delay))
+    force channel records them ``delay`` s behind the acceleration channel; ``effects``
+    the richer models' (r_s, v_s, gap by name; None: the paper's model)."""
+    x, bearing, simulated, hump = _inputs(data, p, gain, effects)
+    return _predicted(x, float(gain), data.omega, data.velocity, data.sign, bearing, simulated, float(delay), hump)
 
 
 def motion_variance(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0, delay: float = 0.0):
@@ -531,18 +592,19 @@ def motion_variance(data: MotionData, p, tau: float, alpha: float, gain: float =
     discrepancy, N^2) and the model's transfer from the measured acceleration to the force
     (``p`` as for :func:`predicted_force`)."""
     h = data.harmonic
-    _, Y = _predicted(_vector(p), float(gain), data.omega, data.velocity, data.sign,
-                      np.zeros(data.harmonics, dtype=np.complex128), False, float(delay))
+    zeros = np.zeros(data.harmonics, dtype=np.complex128)
+    _, Y = _predicted(_vector(p), float(gain), data.omega, data.velocity, data.sign, zeros, False, float(delay), zeros)
     return _variance(Y, float(tau), float(alpha), h.var_force, h.var_accel, h.cov, float(h.periods)), Y
 
 
-def _input_noise_draws(data: MotionData, x: np.ndarray, gain: float, delay: float, draws: int, seed: int):
+def _input_noise_draws(data: MotionData, x: np.ndarray, gain: float, delay: float, draws: int, seed: int,
+                       effects=None):
     """(d, Y e) of each of ``draws`` draws e of the measured motion's noise (see
     :func:`input_noise_variance`): the predicted force's change beyond the linear term,
     and the linear term, each (K,) complex."""
     if data.fine_var is None:
         raise ValueError("this motion data keeps no noise of its plate motion; make it again with motion_data")
-    F0, Y = predicted_force(data, x, gain, delay)
+    F0, Y = predicted_force(data, x, gain, delay, effects)
     K = data.harmonics
     n_fine = data.fine_omega.shape[0]
     t = np.arange(DRIVE_GRID) / (DRIVE_GRID * data.omega[0] / (2.0 * math.pi))
@@ -553,11 +615,11 @@ def _input_noise_draws(data: MotionData, x: np.ndarray, gain: float, delay: floa
         dv = e / (1j * data.fine_omega)  # the velocity's noise at each harmonic
         moved = dataclasses.replace(data, velocity=data.velocity + dv[:K], drive=data.drive + np.real(on_grid @ dv))
         linear = Y * e[:K]
-        yield predicted_force(moved, x, gain, delay)[0] - F0 - linear, linear
+        yield predicted_force(moved, x, gain, delay, effects)[0] - F0 - linear, linear
 
 
 def input_noise_variance(data: MotionData, p, gain: float = 1.0, delay: float = 0.0, *, draws: int = 16,
-                         seed: int = INPUT_NOISE_SEED) -> np.ndarray:
+                         seed: int = INPUT_NOISE_SEED, effects=None) -> np.ndarray:
     """(K,) N^2: the predicted force's variance from the measured motion's noise beyond
     the linear errors-in-variables term |Y_k|^2 s2_A,k / P (``LikelihoodSettings.input_noise``
     with ``input_noise_form="variance"``).
@@ -572,29 +634,33 @@ def input_noise_variance(data: MotionData, p, gain: float = 1.0, delay: float = 
     computed again; with d = F^(v + e) - F^(v) - Y e the part the linear term leaves
     out, the result is max(0, mean(|d|^2 + 2 Re(conj(Y e) d))), averaged over the
     harmonics within two of each (``pool``'s default). The plate's sign wave is left as
-    measured (its switch times' noise is the reversal windows' to carry)."""
+    measured (its switch times' noise is the reversal windows' to carry). ``effects``:
+    the richer models' (:func:`predicted_force`)."""
     K = data.harmonics
     total = np.zeros(K)
-    for d, linear in _input_noise_draws(data, _vector(p), gain, delay, draws, seed):
+    for d, linear in _input_noise_draws(data, _vector(p), gain, delay, draws, seed, effects):
         total += np.abs(d) ** 2 + 2.0 * np.real(np.conj(linear) * d)
     extra = np.maximum(total / draws, 0.0)
     return np.array([extra[max(0, k - 2): k + 3].mean() for k in range(K)])
 
 
 def input_noise_shapes(data: MotionData, p, gain: float = 1.0, delay: float = 0.0, *, draws: int = 16,
-                       seed: int = INPUT_NOISE_SEED) -> np.ndarray:
+                       seed: int = INPUT_NOISE_SEED, effects=None) -> np.ndarray:
     """(2K, draws) N: the draws d_j of :func:`input_noise_variance` (the predicted force's
     change beyond the linear term, real parts then imaginary parts), each over sqrt(draws),
     so that U U' is their sample covariance across the harmonics
     (``input_noise_form="shapes"``). A stuck rotation that slips a little earlier or later
     moves every harmonic at once; these shapes keep that coherence, which one variance
     per harmonic loses (docs/inference.md). None, (2K, 0), where the rotation has no
-    Coulomb force (f2_0 = 0): the model is then linear in the motion, the linear term
-    holds all of its noise."""
+    Coulomb force (f2_0 = 0), the nut no backlash and the plate no Stribeck hump: the
+    model is then linear in the motion, the linear term holds all of its noise.
+    ``effects``: the richer models' (:func:`predicted_force`)."""
     x = _vector(p)
-    if x[9] <= 0.0:  # no Coulomb force on the rotation: the model is linear in the motion, the shapes zero
+    r_s, _, gap = _effects(effects)
+    if x[9] <= 0.0 and gap <= 0.0 and (r_s <= 1.0 or x[7] <= 0.0):  # linear in the motion: the shapes are zero
         return np.zeros((2 * data.harmonics, 0))
-    cols = [np.concatenate([d.real, d.imag]) for d, _ in _input_noise_draws(data, x, gain, delay, draws, seed)]
+    cols = [np.concatenate([d.real, d.imag])
+            for d, _ in _input_noise_draws(data, x, gain, delay, draws, seed, effects)]
     return np.array(cols).T / math.sqrt(draws) if cols else np.zeros((2 * data.harmonics, 0))
 
 
@@ -617,7 +683,7 @@ def with_input_shapes(data: MotionData, shapes: np.ndarray) -> MotionData:
 
 def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1.0, *,
                   pointwise: bool = False, reference: np.ndarray | None = None, delay: float = 0.0,
-                  deviation_at=None, law: float | None = None):
+                  deviation_at=None, law: float | None = None, effects=None):
     """(log L, phi of the force at the harmonics) of the module docstring; with
     ``pointwise``, each harmonic's term (an array) instead of log L. ``p`` as for
     :func:`predicted_force`. ``reference``: each harmonic's noise variance (N^2) that
@@ -626,12 +692,13 @@ def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1
     ``deviation_at``: the parameters (as ``p``) whose Coulomb forces scale the
     marginalised deviations' prior sd; None: ``p``'s own. ``law``: the friction law's
     deviations' prior sd as a share of the Coulomb forces, where the likelihood samples
-    it (``LikelihoodSettings.law_sampled``); None: ``friction_law.SD``."""
+    it (``LikelihoodSettings.law_sampled``); None: ``friction_law.SD``. ``effects``:
+    the richer models' (:func:`predicted_force`)."""
     h = data.harmonic
-    x, bearing, simulated = _inputs(data, p, gain)
+    x, bearing, simulated, hump = _inputs(data, p, gain, effects)
     at = x if deviation_at is None else _vector(deviation_at)
     terms, sq, norm = _terms(x, float(tau), float(alpha), float(gain), data.omega, data.velocity, data.sign, bearing,
-                             simulated, data.basis, data.scale, h.force, h.var_force, h.var_accel, h.cov, float(h.periods),
+                             simulated, hump, data.basis, data.scale, h.force, h.var_force, h.var_accel, h.cov, float(h.periods),
                              np.full(data.harmonics, -1.0) if reference is None else np.asarray(reference, float),
                              float(delay), at, _factors(data, law))
     phi = 1.0 - math.sqrt(sq / norm)
@@ -639,15 +706,16 @@ def motion_loglik(data: MotionData, p, tau: float, alpha: float, gain: float = 1
 
 
 def fundamental_misfit(data: MotionData, p, gain: float = 1.0, tau: float | None = None,
-                       alpha: float = 0.0, delay: float = 0.0, deviation_at=None, law: float | None = None) -> float:
+                       alpha: float = 0.0, delay: float = 0.0, deviation_at=None, law: float | None = None,
+                       effects=None) -> float:
     """The fit's residual at the drive's fundamental in phase with the model's inertial
     force there, as a share of that force: |Re(r_1 / (Y_1 A_1 / g))| (see
     :data:`FUNDAMENTAL_MAX`). With ``tau`` (the discrepancy, N) the marginalised
     deviations' posterior mean (the reversals', the law's and the input noise's shapes,
     ``reversals.deviations_mean``) is taken from the residual first: what they explain
     the posterior has accounted for; None: the residual of the mean prediction alone.
-    ``deviation_at`` and ``law`` as for :func:`motion_loglik`."""
-    F, Y = predicted_force(data, p, gain, delay)
+    ``deviation_at``, ``law`` and ``effects`` as for :func:`motion_loglik`."""
+    F, Y = predicted_force(data, p, gain, delay, effects)
     r = data.harmonic.force - F
     if tau is not None and data.basis.shape[1]:
         h = data.harmonic

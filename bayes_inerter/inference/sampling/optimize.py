@@ -418,7 +418,8 @@ def _with_discrepancy_estimate(model: PosteriorModel, phys: np.ndarray) -> np.nd
     start = {"tau": 1e-4, "alpha": 0.0, "gain": 1.0, "delay": 0.0, "law": friction_law.SD}
     try:
         if model.motion is not None:
-            r = model.harmonic.force - predicted_force(model.motion, model.field_vector(theta))[0]
+            r = model.harmonic.force - predicted_force(model.motion, model.field_vector(theta),
+                                                       effects=model.effects(theta))[0]
         else:
             r = model.harmonic.accel - model.harmonic.mean_amplitudes(model.simulate_unfiltered(theta))
         if np.all(np.isfinite(r)):

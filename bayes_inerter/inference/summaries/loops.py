@@ -87,7 +87,7 @@ def period_loops(model, thetas, *, points: int = POINTS) -> PeriodLoops:
     for theta in np.atleast_2d(np.asarray(thetas, dtype=float)):
         h = model.hyper(theta)
         try:
-            F, _ = predicted_force(data, model.field_vector(theta), h["gain"], h["delay"])
+            F, _ = predicted_force(data, model.field_vector(theta), h["gain"], h["delay"], model.effects(theta))
         except (SimulationError, ValueError):
             continue
         if np.all(np.isfinite(F)):
