@@ -35,6 +35,12 @@ temperatures down to ``--hottest-beta``, its convergence rule judging tau's grow
 start search (steps x walkers x temperatures), the swap rates and the ratio of the
 tempered fit's wall time to the default's are printed, and the rows go to
 results/performance/misfit_tempering.csv instead.
+
+With ``--models M [M ...]`` each record is fitted under each of these models
+(``fit_record(model=...)``; for example ``two-port two-port-rich``), side by side in the
+same run with the default sampler; the ratio of each fit's wall time to the first
+model's is printed, and the rows, with their model, go to
+results/performance/misfit_models.csv instead.
 """
 
 import argparse
@@ -67,9 +73,10 @@ class _Capped(Exception):
         self.steps, self.seconds = steps, seconds
 
 
-def fit_capped(record, out: Path, *, seed: int, cap_s: float, convergence, tempering=None) -> dict:
-    """Fit ``record`` into ``out`` until converged or ``cap_s`` seconds (``tempering``:
-    the sampler's ladder, None: none); what the row needs."""
+def fit_capped(record, out: Path, *, seed: int, cap_s: float, convergence, tempering=None,
+               model: str = "two-port") -> dict:
+    """Fit ``record`` under ``model`` into ``out`` until converged or ``cap_s`` seconds
+    (``tempering``: the sampler's ladder, None: none); what the row needs."""
     t0 = time.perf_counter()
 
     def progress(iteration, target):
@@ -80,12 +87,12 @@ def fit_capped(record, out: Path, *, seed: int, cap_s: float, convergence, tempe
     capped = None
     try:
         res = fit_record(record, out, seed=seed, processes=1, plots=False, convergence=convergence,
-                         progress=progress, tempering=tempering)
+                         progress=progress, tempering=tempering, model=model)
     except _Capped as stop:
         capped = stop
         # the checkpoint holds the steps taken: write the outputs from it, sampling nothing more
         res = fit_record(record, out, seed=seed, processes=1, plots=False, convergence=convergence,
-                         steps=stop.steps, tempering=tempering)
+                         steps=stop.steps, tempering=tempering, model=model)
     wall = time.perf_counter() - t0
     tau = json.loads((out / "fit.json").read_text())["tau"]
     b = res.row("b")
@@ -125,8 +132,13 @@ def main():
     ap.add_argument("--hottest-beta", type=float, default=0.1, help="the tempering ladder's hottest beta")
     ap.add_argument("--growth", choices=GROWTH, default=None,
                     help="the tempered fits' judgement of tau's growth (Convergence.growth; default: the package's)")
+    ap.add_argument("--models", nargs="+", default=None, metavar="MODEL",
+                    help="fit each record under each of these models, side by side (default sampler only)")
     ap.add_argument("--no-row", action="store_true", help="print only; write no CSV row (trial runs)")
     args = ap.parse_args()
+    if args.models and args.tempering:
+        ap.error("--models and --tempering each compare fits side by side; give one of them")
+    models = args.models or ["two-port"]
     conv = Convergence(max_steps=args.max_steps) if args.max_steps else None
     samplers = [("default", None, conv)]
     if args.tempering:
@@ -152,16 +164,17 @@ def main():
         for truth in args.truths:
             rec = makers[truth](freq)
             b_true = rec.metadata["true_parameters"]["b"]
-            for sampler, ladder, rule in samplers:
+            for model, (sampler, ladder, rule) in [(m, s) for m in models for s in samplers]:
                 load0 = os.getloadavg()[0]
                 with tempfile.TemporaryDirectory() as d:
                     got = fit_capped(rec, Path(d) / "fit", seed=args.seed, cap_s=args.cap_seconds, convergence=rule,
-                                     tempering=ladder)
+                                     tempering=ladder, model=model)
                 load1 = os.getloadavg()[0]
                 slow = sorted(got["tau"].items(), key=lambda kv: -kv[1])
-                got.update(truth=truth, freq=freq, b_true=b_true, load=(load0, load1), slow=slow, sampler=sampler)
+                got.update(truth=truth, freq=freq, b_true=b_true, load=(load0, load1), slow=slow, sampler=sampler,
+                           model=model)
                 results.append(got)
-                print(f"  {truth} {freq:g} Hz, {sampler}: "
+                print(f"  {truth} {freq:g} Hz, {model if args.models else sampler}: "
                       f"{'converged' if got['converged'] else 'NOT converged: ' + got['reason']}, "
                       f"{got['steps']} steps, {got['wall_s']:.0f} s; tau " +
                       ", ".join(f"{n} {t:.0f}" for n, t in slow[:3]) + f"; load {load0:.2f} -> {load1:.2f}", flush=True)
@@ -179,7 +192,9 @@ def main():
                     if args.tempering:
                         row.update(sampler=sampler, evaluations=got["evaluations"],
                                    swap_rates=" ".join(f"{r:.3f}" for r in got["swap_rates"]))
-                    record_row("misfit_tempering" if args.tempering else "misfit", row)
+                    if args.models:
+                        row.update(model=model)
+                    record_row(_csv_name(args), row)
 
     print()
     head = (f"{'record':>16} {'conv':>5} {'steps':>6} {'max tau':>8} {'slowest':>8} {'sampling s':>10} "
@@ -187,7 +202,8 @@ def main():
     print(head)
     print("-" * len(head))
     for r in results:
-        name = f"{r['truth']} {r['freq']:g} Hz" + ("" if r["sampler"] == "default" else " PT")
+        name = (f"{r['truth']} {r['freq']:g} Hz" + ("" if r["sampler"] == "default" else " PT")
+                + (f" {r['model']}" if args.models else ""))
         print(f"{name:>16} {'yes' if r['converged'] else 'no':>5} {r['steps']:>6} {r['slow'][0][1]:>8.0f} "
               f"{r['slow'][0][0]:>8} {r['sampling_s']:>10.0f} {r['wall_s']:>7.0f} {r['b_median']:>9.1f} "
               f"{r['b_3']:>8.1f}-{r['b_97']:<8.1f} {r['b_true']:>7.1f} {'yes' if r['met'] else 'no':>6} "
@@ -200,8 +216,18 @@ def main():
             print(f"  {plain['truth']} {plain['freq']:g} Hz: {hot['wall_s'] / plain['wall_s']:.2f}, "
                   f"{hot['evaluations'] / plain['evaluations']:.2f}; swap rates "
                   + ", ".join(f"{r:.0%}" for r in hot["swap_rates"]))
+    if args.models:
+        print(f"\neach model against {models[0]}, same record and seed: wall-time ratio")
+        for i in range(0, len(results), len(models)):
+            first = results[i]
+            print(f"  {first['truth']} {first['freq']:g} Hz: " + ", ".join(
+                f"{r['model']} {r['wall_s'] / first['wall_s']:.2f}" for r in results[i + 1: i + len(models)]))
     if not args.no_row:
-        print(f"wrote rows to results/performance/{'misfit_tempering' if args.tempering else 'misfit'}.csv")
+        print(f"wrote rows to results/performance/{_csv_name(args)}.csv")
+
+
+def _csv_name(args) -> str:
+    return "misfit_tempering" if args.tempering else "misfit_models" if args.models else "misfit"
 
 
 if __name__ == "__main__":
