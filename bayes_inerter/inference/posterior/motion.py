@@ -126,7 +126,7 @@ from ...friction import Coulomb, Stribeck
 from ...network import CompiledNetwork
 from ...networks import FIELDS
 from ...records.record import Record
-from ...simulate import exact_runner, piecewise_runner
+from ...simulate import SimulationError, exact_runner, piecewise_runner
 from .effects import NO_EFFECT
 from .harmonic import HarmonicData, at_times, harmonic_data
 from .likelihood import REVERSAL_SCALES
@@ -171,6 +171,13 @@ DRIVE_SETTLE = 1
 #: percentile), the Newton steps 0.02 N at most (``docs/inference.md``).
 DRIVE_TOL = 0.005
 DRIVE_MAX_PERIODS = 8
+#: The richer models' drivetrain (a Stribeck law on the rotation, a dead zone in the
+#: nut): at most this many periods simulated, the finite differences' included
+#: (``_periodic_by_differences``), and each difference's step as a share of its state's
+#: largest value over the period (with ``_FD_FLOOR`` below it).
+DRIVE_MAX_PERIODS_EFFECTS = 40
+DRIVE_FD_STEP = 1e-6
+_FD_FLOOR = np.array([1e-6, 1e-6, 1e-12, 1e-12])  # m/s, m/s, m, m
 #: The seed of :func:`input_noise_variance`'s draws of the measured motion's noise
 #: (**assumption**: any fixed seed; the same record and reference give the same variance).
 INPUT_NOISE_SEED = 0
@@ -418,11 +425,9 @@ def bearing_force(data: MotionData, p, gain: float = 1.0, effects=None):
     drivetrain (see module docstring), or None where the rotation has no Coulomb force
     and the nut no backlash (f2_0 = 0, gap = 0: the algebra is then exact). ``p`` as for
     :func:`predicted_force`; ``effects``: the richer models' (``plate_hump``), whose
-    rotation's Stribeck law and nut's dead zone the simulation takes, the Newton steps'
-    monodromy then the Coulomb law's at the break-away force with the nut closed (an
-    approximation: a step is kept only where it brings the period's end nearer, else
-    the periods are simulated one by one). ``simulate.SimulationError`` where the
-    rotation's contact chatters."""
+    rotation's Stribeck law and nut's dead zone the simulation takes, its periodic state
+    then found with a Jacobian by finite differences (``_periodic_by_differences``).
+    ``simulate.SimulationError`` where the rotation's contact chatters."""
     x = _vector(p)
     b, c_B, k_B, f2_0 = x[0], x[5], x[6], x[9]
     r_s, v_s, gap = _effects(effects)
@@ -436,7 +441,9 @@ def bearing_force(data: MotionData, p, gain: float = 1.0, effects=None):
     u = data.period_input / gain
     T = 1.0 / freq
     run = _drivetrain_runner(x, A, B, T / N, r_s, v_s, gap)
-    f_jump = max(r_s, 1.0) * f2_0  # the rotation's friction just after it reverses
+    if r_s > 1.0 or gap > 0.0:
+        return _bearing_harmonics(_periodic_by_differences(run, u, x0, x, v, data.harmonics), v, c_B, k_B,
+                                  data.harmonics)
     start = x0
     for _ in range(DRIVE_SETTLE - 1):
         start = run(u, x0=start, store=True)[1][-1]
@@ -444,7 +451,7 @@ def bearing_force(data: MotionData, p, gain: float = 1.0, effects=None):
     periods, last, newton, before_step, got = DRIVE_SETTLE, math.inf, True, None, None
     while True:
         if newton and periods < DRIVE_MAX_PERIODS:
-            ok, target, miss = _newton(A, f_jump, b, c_B, k_B, states, T, start)
+            ok, target, miss = _newton(A, f2_0, b, c_B, k_B, states, T, start)
             if ok and miss <= DRIVE_TOL / 2:  # the next period is the periodic one, within DRIVE_TOL / 2
                 _, states = run(u, x0=states[-1], store=True)
                 return _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
@@ -464,6 +471,68 @@ def bearing_force(data: MotionData, p, gain: float = 1.0, effects=None):
         got = _bearing_harmonics(states[:-1], v, c_B, k_B, data.harmonics)
         if float(np.max(np.abs(got - before))) <= DRIVE_TOL or periods >= DRIVE_MAX_PERIODS:
             return got
+
+
+def _links_miss(r, x) -> float:
+    """A period's end less its start, ``r``, as the forces it leaves unbalanced in the
+    bearing and the nut (their springs and dampers), N."""
+    c_n, k_n, c_B, k_B = x[3], x[4], x[5], x[6]
+    return abs(c_B * r[0]) + abs(k_B * r[3]) + abs(c_n * (r[0] - r[1])) + abs(k_n * r[2])
+
+
+def _periodic_by_differences(run, u, start, x, v, K):
+    """One period of the richer models' drivetrain (states, rows from t = 0 to T) from its
+    periodic state. A Stribeck fall and a dead zone have no closed-form monodromy, so the
+    Newton steps on the period map P take its Jacobian by finite differences once
+    (``DRIVE_FD_STEP``, four further periods) and update it by Broyden's rank-one rule
+    after each step (in coordinates scaled by each state's largest value over the first
+    period); every step is taken (a first step may overshoot where the nut's gap opens
+    and closes, and the next ones come back). Where the period's end misses its start by
+    at most ``DRIVE_TOL`` in the links' forces (``_links_miss``), one more period is
+    simulated from the end and, where the two periods' bearing force agrees within
+    ``DRIVE_TOL`` at every harmonic, that period is returned. ``simulate.SimulationError``
+    where none is found within ``DRIVE_MAX_PERIODS_EFFECTS`` periods: where the flywheel
+    rattles in the nut's gap behind an almost undamped nut, no periodic state exists, and
+    the likelihood, which compares period means, takes such parameters as impossible
+    (an **assumption**: the device's steady response is periodic, as its records'
+    periods show by their scatter)."""
+    c_B, k_B = x[5], x[6]
+    _, states = run(u, x0=start, store=True)
+    periods = 1
+    scale = np.maximum(np.max(np.abs(states), axis=0), _FD_FLOOR)
+    J = None  # the Jacobian of P in the scaled coordinates
+    while periods + 2 <= DRIVE_MAX_PERIODS_EFFECTS:
+        G = states[-1] - start
+        if _links_miss(G, x) <= DRIVE_TOL:
+            _, after = run(u, x0=states[-1], store=True)
+            periods += 1
+            now = _bearing_harmonics(states[:-1], v, c_B, k_B, K)
+            if float(np.max(np.abs(_bearing_harmonics(after[:-1], v, c_B, k_B, K) - now))) <= DRIVE_TOL:
+                return after[:-1]
+            start, states = states[-1], after
+            continue
+        if J is None:
+            J = np.empty((4, 4))
+            for i in range(4):
+                moved = start.copy()
+                moved[i] += DRIVE_FD_STEP * scale[i]
+                J[:, i] = (run(u, x0=moved, store=True)[1][-1] - states[-1]) / scale / DRIVE_FD_STEP
+            periods += 4
+        try:
+            dz = np.linalg.solve(np.eye(4) - J, G / scale)
+        except np.linalg.LinAlgError:
+            dz = G / scale  # a plain period
+        target = start + dz * scale
+        _, tried = run(u, x0=target, store=True)
+        periods += 1
+        if not np.all(np.isfinite(tried)):
+            break
+        dP = (tried[-1] - states[-1]) / scale
+        if dz @ dz > 0.0:
+            J += np.outer(dP - J @ dz, dz) / (dz @ dz)
+        start, states = target, tried
+    raise SimulationError(f"the drivetrain found no periodic state in {DRIVE_MAX_PERIODS_EFFECTS} periods (the "
+                          f"flywheel rattles in the nut's gap?)")
 
 
 def _drivetrain(x):
