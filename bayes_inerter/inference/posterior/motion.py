@@ -442,7 +442,11 @@ def bearing_force(data: MotionData, p, gain: float = 1.0, effects=None):
     T = 1.0 / freq
     run = _drivetrain_runner(x, A, B, T / N, r_s, v_s, gap)
     if r_s > 1.0 or gap > 0.0:
-        return _bearing_harmonics(_periodic_by_differences(run, u, x0, x, v, data.harmonics), v, c_B, k_B,
+        def coulomb(states):  # the Coulomb monodromy at the break-away force, the nut closed: a first guess
+            ok, M = _monodromy(A, max(r_s, 1.0) * f2_0, b, states, T)
+            return M if ok and np.all(np.isfinite(M)) else None
+
+        return _bearing_harmonics(_periodic_by_differences(run, u, x0, x, v, data.harmonics, coulomb), v, c_B, k_B,
                                   data.harmonics)
     start = x0
     for _ in range(DRIVE_SETTLE - 1):
@@ -480,11 +484,12 @@ def _links_miss(r, x) -> float:
     return abs(c_B * r[0]) + abs(k_B * r[3]) + abs(c_n * (r[0] - r[1])) + abs(k_n * r[2])
 
 
-def _periodic_by_differences(run, u, start, x, v, K):
+def _periodic_by_differences(run, u, start, x, v, K, guess=None):
     """One period of the richer models' drivetrain (states, rows from t = 0 to T) from its
     periodic state. A Stribeck fall and a dead zone have no closed-form monodromy, so the
-    Newton steps on the period map P take its Jacobian by finite differences once
-    (``DRIVE_FD_STEP``, four further periods) and update it by Broyden's rank-one rule
+    Newton steps on the period map P start from ``guess(states)``'s Jacobian (the
+    Coulomb monodromy, where it can be formed), else take it by finite differences
+    (``DRIVE_FD_STEP``, four further periods), and update it by Broyden's rank-one rule
     after each step (in coordinates scaled by each state's largest value over the first
     period); every step is taken (a first step may overshoot where the nut's gap opens
     and closes, and the next ones come back). Where the period's end misses its start by
@@ -511,6 +516,11 @@ def _periodic_by_differences(run, u, start, x, v, K):
                 return after[:-1]
             start, states = states[-1], after
             continue
+        if J is None and guess is not None:
+            M = guess(states)
+            if M is not None:
+                J = M * scale[None, :] / scale[:, None]
+            guess = None
         if J is None:
             J = np.empty((4, 4))
             for i in range(4):
