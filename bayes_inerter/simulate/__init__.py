@@ -206,13 +206,7 @@ def run_piecewise_linear(
         nodes, f0, mass = _contacts(compiled)
         return run_exact(A, B, nodes, f0, mass, inputs, h, x0=x0, store=store, max_events=max_events,
                          sampling=sampling)
-    if not _piecewise.applies(compiled):
-        raise ValueError("the exact kernel needs Coulomb laws or other piecewise-linear ones (Stribeck, "
-                         "PiecewiseLinear); the smooth law runs on method='stiff'")
-    shape, net = _piecewise.network_arrays(compiled, np.asarray(A, dtype=float), B, float(h))
-    out = _kernel.rich_kernel_for(shape)(net, _inputs(inputs, shape.n_in), _initial(x0, shape.n), store,
-                                         int(max_events))
-    return _outputs(out, h, max_events, sampling)
+    return piecewise_runner(compiled, A, B, h, max_events=max_events, sampling=sampling)(inputs, x0=x0, store=store)
 
 
 def exact_applies(compiled: CompiledNetwork) -> bool:
