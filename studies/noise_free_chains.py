@@ -4,7 +4,8 @@ noise off, fitted as ``bayes-inerter fit`` fits it, each chain to the convergenc
 One JSON per record in --out/records (run again to go on), chains.csv from all.
 
     python studies/noise_free_chains.py [--records 27] [--out results/noise-free-chains]
-        [--zeta-B 0.02] [--max-steps 20000] [--processes 1] [--summarise]
+        [--zeta-B 0.02] [--max-steps 20000] [--tempering T [--hottest-beta B]] [--only K ...]
+        [--tau-floor N] [--processes 1] [--summarise]
 """
 
 import sys

@@ -17,7 +17,8 @@ COMMITTED = Path(__file__).resolve().parents[1] / "results" / "noise-free-chains
                                             ({"max_steps": 10}, "at least 100"),
                                             ({"tempering": 1}, "at least 2 temperatures"),
                                             ({"tempering": 4, "hottest_beta": 0.0}, "hottest beta"),
-                                            ({"only": (3, 27)}, "0 to 26")])
+                                            ({"only": (3, 27)}, "0 to 26"),
+                                            ({"tau_floor": 0.0}, "tau_floor"), ({"tau_floor": 1e6}, "tau_floor")])
 def test_the_configuration_names_what_it_refuses(changes, cause):
     with pytest.raises(ValueError, match=cause):
         Config(**changes)
@@ -69,4 +70,33 @@ def test_a_tempered_record_is_fitted_with_the_ladder_asked_and_says_so(tmp_path,
     assert row["tempering"] == 2 and row["hottest_beta"] == 0.01 and row["swap_rates"] == [0.4]
     assert (tmp_path / "records" / "0000.json").exists()
     with pytest.raises(ValueError, match="holds records of ladder"):  # the folder now keeps this ladder
+        run(Config(summarise=True), tmp_path, Serial())
+
+
+def test_a_raised_tau_floor_reaches_the_fit_and_the_folder_keeps_it(tmp_path, monkeypatch):
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from bayes_inerter.inference.posterior.priors import MOTION_DISCREPANCY_PRIORS, LogUniform
+    from bayes_inerter.study import noise_free
+
+    calls = []
+
+    def fake_fit(record, out, **options):  # the plumbing is tested, not a fit
+        calls.append(options)
+        rng = np.random.default_rng(0)
+        return SimpleNamespace(idata=SimpleNamespace(posterior={"b": rng.normal(paper_parameters("A0").b, 1.0, (2, 100)),
+                                                                "tau": np.full((2, 100), 0.25)}),
+                               converged=True, iterations=500, tau=np.array([3.0]),
+                               b_interval=SimpleNamespace(identified=True))
+
+    monkeypatch.setattr(noise_free, "fit_record", fake_fit)
+    assert Config().priors() == {}
+    config = Config(tau_floor=0.1, only=(0,))
+    (tmp_path / "records").mkdir()
+    row = noise_free.fit_one((0, tmp_path, config, "abc"))
+    assert calls[0]["priors"] == {"tau": LogUniform(0.1, MOTION_DISCREPANCY_PRIORS["tau"].high)}
+    assert row["tau_floor"] == 0.1 and row["tau_median"] == 0.25
+    with pytest.raises(ValueError, match="holds records of tau_floor"):
         run(Config(summarise=True), tmp_path, Serial())

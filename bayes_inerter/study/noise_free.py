@@ -7,7 +7,9 @@ made by the project's own generator from Table I and Table 2 with every noise of
 ``bayes-inerter fit`` runs it (the default likelihood, each chain to the convergence
 rule, at most ``Config.max_steps``). ``Config.zeta_B`` gives the generator's plate mode
 that damping ratio in place of Table I's c_B (a ratio of 8e-6, outside the fit's damping
-prior of 0.5 to 10 %: ``priors.MODAL_PRIORS``).
+prior of 0.5 to 10 %: ``priors.MODAL_PRIORS``). ``Config.tau_floor`` raises the floor of
+the discrepancy tau's log-uniform prior (a probe of the likelihood, not the package's
+default).
 
 The study of results/noise-free-chains* (``studies/noise_free_chains.py``, through
 ``cli.study_script``): one JSON per record in ``out``/records (a run that stops goes on
@@ -33,6 +35,7 @@ from ..device import grid_case, paper_parameters
 from ..inference.fit import fit_record
 from ..inference.sampling.convergence import Convergence
 from ..inference.sampling.tempering import Tempering
+from ..inference.posterior.priors import MOTION_DISCREPANCY_PRIORS, LogUniform
 from ..inference.summaries.results import hdi
 from ..records import GeneratorSettings, generate_record
 from .manifest import source_commit
@@ -64,6 +67,8 @@ class Config:
     tempering: int | None = field(default=None, metadata={"help": "parallel tempering's temperatures (default: none)"})
     hottest_beta: float = field(default=Tempering.beta_min, metadata={"help": "the tempering ladder's hottest beta"})
     only: tuple[int, ...] | None = field(default=None, metadata={"help": "fit these records alone"})
+    tau_floor: float | None = field(default=None, metadata={
+        "help": "the discrepancy tau's prior floor, N (default: the package's, priors.MOTION_DISCREPANCY_PRIORS)"})
     summarise: bool = field(default=False, metadata={"help": "only write chains.csv from the records there"})
 
     def __post_init__(self) -> None:
@@ -77,6 +82,15 @@ class Config:
             self.ladder()  # its own check of the ladder
         if self.only is not None and not all(0 <= k < 27 for k in self.only):
             raise ValueError(f"only names records of the paper's grid, 0 to 26, got {list(self.only)}")
+        if self.tau_floor is not None and not 0.0 < self.tau_floor < MOTION_DISCREPANCY_PRIORS["tau"].high:
+            raise ValueError(f"tau_floor must lie between 0 and the prior's top "
+                             f"({MOTION_DISCREPANCY_PRIORS['tau'].high:g} N), got {self.tau_floor}")
+
+    def priors(self) -> dict:
+        """The fit's priors beyond the package's: tau's floor raised where asked."""
+        if self.tau_floor is None:
+            return {}
+        return {"tau": LogUniform(self.tau_floor, MOTION_DISCREPANCY_PRIORS["tau"].high)}
 
     def ladder(self) -> Tempering | None:
         """The fit's tempering (None: the default sampler)."""
@@ -105,7 +119,7 @@ def fit_one(job) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(rec, Path(tmp) / "fit", seed=k, plots=False,
                          convergence=replace(Convergence(), max_steps=config.max_steps),
-                         tempering=config.ladder())
+                         tempering=config.ladder(), priors=config.priors())
     b = np.asarray(res.idata.posterior["b"]).ravel()
     lo, hi = hdi(b)
     tau = np.asarray(res.tau, dtype=float)
@@ -119,6 +133,9 @@ def fit_one(job) -> dict:
     if config.tempering is not None:  # absent for the default sampler: the rows before it have no such keys
         row.update(tempering=config.tempering, hottest_beta=config.hottest_beta,
                    swap_rates=res.tempering["swap_rates"])
+    if config.tau_floor is not None:  # likewise absent for the package's prior
+        tau = np.asarray(res.idata.posterior["tau"]).ravel()
+        row.update(tau_floor=config.tau_floor, tau_median=float(np.median(tau)))
     write_json(path, row, indent=1)
     return row
 
@@ -139,12 +156,14 @@ def _line(r: dict) -> str:
 
 def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     """The records not yet in ``out``/records fitted on ``executor`` (one each), then
-    chains.csv from every record there. A folder keeps one ``zeta_B`` and one ladder: a
-    run asking another is refused (ValueError). ``lines``: one per record fitted or read."""
+    chains.csv from every record there. A folder keeps one ``zeta_B``, one ladder and one
+    tau floor: a run asking another is refused (ValueError). ``lines``: one per record
+    fitted or read."""
     out = Path(out)
     (out / "records").mkdir(parents=True, exist_ok=True)
     kept = [json.loads(p.read_text()) for p in (out / "records").glob("*.json")]
-    for key, want, of in (("zeta_B", config.zeta_B, lambda r: r["zeta_B"]), ("ladder", _ladder(config), _row_ladder)):
+    for key, want, of in (("zeta_B", config.zeta_B, lambda r: r["zeta_B"]), ("ladder", _ladder(config), _row_ladder),
+                          ("tau_floor", config.tau_floor, lambda r: r.get("tau_floor"))):
         have = {of(r) for r in kept}
         if have - {want}:
             raise ValueError(f"{out} holds records of {key} {sorted(have, key=str)}, not {want}; "
