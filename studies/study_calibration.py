@@ -8,7 +8,7 @@ already there. About a minute per replicate and process on a 2-core machine.
 
     python studies/study_calibration.py [--replicates 200] [--steps 600] [--processes 2]
         [--seed 0] [--out FOLDER] [--single] [--residual motion] [--converge] [--freqs 0.5 1.5]
-        [--input-noise 0]
+        [--input-noise 0] [--tempering TEMPS] [--tau-floor N]
 
 ``--raise-cap`` raises a folder's cap to ``--max-steps`` before running: the replicates
 whose chains stopped unconverged at its old cap move to ``capped-<old>/`` and are fitted
@@ -20,12 +20,13 @@ rank_correlations.csv: the parameters whose truths' ranks move together; a singl
 calibration's coverage_by_frequency.csv: the same counts at each drive frequency.
 ``--single`` fits each replicate's one record alone (its frequency ``freqs[k % n]``),
 ``--residual`` chooses the likelihood, ``--input-noise N`` takes N draws of the
-drivetrain's input noise (``LikelihoodSettings.input_noise``; 0 turns it off), ``--converge``
-runs every chain to the convergence rule (at most ``--max-steps``) instead of
-``--steps``. A folder keeps one
-configuration (settings.json): its replicates are reused, so a run stopped by a
-session's end continues where it stopped (each replicate's fit in progress is kept
-in ``--work``, by default OUT/.running).
+drivetrain's input noise (``LikelihoodSettings.input_noise``; 0 turns it off),
+``--tau-floor N`` raises the floor of the discrepancy tau's prior to N newtons in the
+fits (``--residual motion``; a probe of the likelihood, results/noise-free-tau-floor),
+``--converge`` runs every chain to the convergence rule (at most ``--max-steps``)
+instead of ``--steps``. A folder keeps one configuration (settings.json): its
+replicates are reused, so a run stopped by a session's end continues where it stopped
+(each replicate's fit in progress is kept in ``--work``, by default OUT/.running).
     python studies/study_calibration.py --inspect K [--steps N]
 
 ``--inspect K`` runs replicate K again (joint, or ``--single``) with its fit kept

@@ -233,3 +233,39 @@ def test_summarising_an_empty_folder_says_what_to_do(tmp_path):
     (tmp_path / "replicates").mkdir()
     with pytest.raises(ValueError, match="run the study into it first"):
         run(Config(summarise=True), tmp_path, Serial())
+
+
+def test_a_raised_tau_floor_is_checked_and_reaches_the_fit(tmp_path, monkeypatch):
+    """``tau_floor`` (a probe of the discrepancy's floor): refused outside the motion-in
+    likelihood and outside the prior; the fit gets the study's priors with tau's floor
+    raised, the devices drawn stay the same, and the script's option makes it."""
+    from bayes_inerter.inference.posterior.priors import MOTION_DISCREPANCY_PRIORS, LogUniform
+    from bayes_inerter.study import study_calibration
+    from bayes_inerter.study.study_calibration import Config
+
+    motion = LikelihoodSettings(residual="motion")
+    with pytest.raises(ValueError, match="motion-in likelihood"):
+        StudyCalibration(tau_floor=0.1)
+    with pytest.raises(ValueError, match="tau_floor must lie"):
+        StudyCalibration(tau_floor=0.0, likelihood=motion)
+    assert StudyCalibration(likelihood=motion).priors() is STUDY_SBC_PRIORS
+    cs = StudyCalibration(tau_floor=0.1, likelihood=motion, single=True, frequencies=(1.0,), steps=30)
+    assert cs.priors() == {**STUDY_SBC_PRIORS, "tau": LogUniform(0.1, MOTION_DISCREPANCY_PRIORS["tau"].high)}
+    assert "tau's prior floor 0.1 N" in cs.describe()
+    assert Config(residual="motion", tau_floor=0.1, single=True).settings().tau_floor == 0.1
+
+    class Stop(Exception):
+        pass
+
+    seen = {}
+
+    def fake_fit(record, out, **options):  # the plumbing is tested, not a fit
+        seen.update(options)
+        raise Stop
+
+    monkeypatch.setattr(study_calibration, "fit_record", fake_fit)
+    with pytest.raises(Stop):
+        study_replicate(cs, 0, tmp_path / "work")
+    assert seen["priors"] == cs.priors()
+    plain = StudyCalibration(likelihood=motion, single=True, frequencies=(1.0,), steps=30)
+    assert replicate_device(cs, 0).truth == replicate_device(plain, 0).truth  # tau is fitted, never drawn

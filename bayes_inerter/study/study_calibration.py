@@ -66,7 +66,7 @@ from ..inference.sampling.tempering import Tempering
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
 from ..inference.posterior.likelihood import LikelihoodSettings
 from ..inference.posterior.model import PosteriorModel
-from ..inference.posterior.priors import LogUniform, Uniform
+from ..inference.posterior.priors import MOTION_DISCREPANCY_PRIORS, LogUniform, Uniform
 from ..inference.summaries.results import hdi
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
@@ -119,6 +119,9 @@ class StudyCalibration:
         folder saved before this option existed is continued under its own likelihood).
     max_steps : the cap of a chain run to the convergence rule.
     tempering : the fits' parallel tempering (``sampler.Tempering``; None: none).
+    tau_floor : the floor of the discrepancy tau's log-uniform prior, N, in the fits
+        (None: the package's, ``priors.MOTION_DISCREPANCY_PRIORS``); a probe of the
+        likelihood (results/noise-free-tau-floor), not the package's prior.
     """
 
     setting: str = "A3"
@@ -131,6 +134,7 @@ class StudyCalibration:
     likelihood: LikelihoodSettings = field(default_factory=lambda: LikelihoodSettings(residual="ar1"))
     max_steps: int = 6000
     tempering: Tempering | None = None
+    tau_floor: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
@@ -140,6 +144,18 @@ class StudyCalibration:
             raise ValueError(f"steps must be None or a whole number of at least 20, got {self.steps!r}")
         if not (isinstance(self.draws, int) and self.draws >= 9):
             raise ValueError(f"draws must be a whole number of at least 9, got {self.draws!r}")
+        if self.tau_floor is not None:
+            top = MOTION_DISCREPANCY_PRIORS["tau"].high
+            if self.likelihood.residual != "motion":
+                raise ValueError("tau_floor is the motion-in likelihood's discrepancy floor: use it with residual 'motion'")
+            if not 0.0 < self.tau_floor < top:
+                raise ValueError(f"tau_floor must lie between 0 and the prior's top ({top:g} N), got {self.tau_floor}")
+
+    def priors(self) -> dict:
+        """The fits' priors: :data:`STUDY_SBC_PRIORS`, with tau's floor raised where asked."""
+        if self.tau_floor is None:
+            return STUDY_SBC_PRIORS
+        return {**STUDY_SBC_PRIORS, "tau": LogUniform(self.tau_floor, MOTION_DISCREPANCY_PRIORS["tau"].high)}
 
     #: Its replicates' fits continue from a checkpoint kept in a work folder
     #: (``calibration.run_replicates``'s ``work`` gives each one): a chain of tens of
@@ -156,7 +172,8 @@ class StudyCalibration:
                 f"joint fits of {len(self.frequencies)} records,")
         return (f"{what} {', '.join(f'{f:g}' for f in self.frequencies)} Hz ({self.generator.duration:g} s, masses "
                 f"of {self.setting}, the {self.likelihood.residual} likelihood), {steps}, ranks among {self.draws} "
-                f"draws, seed {self.seed}" + ("" if self.tempering is None else f", {self.tempering.describe()}"))
+                f"draws, seed {self.seed}" + ("" if self.tempering is None else f", {self.tempering.describe()}")
+                + ("" if self.tau_floor is None else f", tau's prior floor {self.tau_floor:g} N"))
 
 
 @dataclass(frozen=True)
@@ -209,14 +226,14 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     truth, records, redraws = device.truth, device.records, device.redraws
     convergence = dataclasses.replace(Convergence(), max_steps=cs.max_steps)
     if cs.single:
-        res = fit_record(records[0], out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=STUDY_SBC_PRIORS,
+        res = fit_record(records[0], out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=cs.priors(),
                          plots=False, likelihood=cs.likelihood, convergence=convergence, interval="posterior",
                          tempering=cs.tempering)
         post = res.idata.posterior
         kept = {n: np.asarray(post[n]).ravel() for n in post.data_vars}
         kept[f"b_{cs.setting}"] = kept.pop("b")
     else:
-        res = fit_joint(records, out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=STUDY_SBC_PRIORS,
+        res = fit_joint(records, out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=cs.priors(),
                         plots=False, all_draws=True, likelihood=cs.likelihood, convergence=convergence,
                         tempering=cs.tempering)
         with np.load(out / ALL_DRAWS_FILE) as f:
@@ -453,7 +470,7 @@ def write_study_calibration(out, cs: StudyCalibration, results: list[dict], vers
         plt.close(fig)
     report, section = study_calibration_report(out, cs, rows, results, versions,
                                                long_enough=chains_long_enough(results), levels=LEVELS,
-                                               priors=STUDY_SBC_PRIORS)
+                                               priors=cs.priors())
     return {"coverage": rows, "replicates": len(results), "failed": [r for r in results if "error" in r],
             "report": report, "section": section}
 
@@ -484,11 +501,11 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
 
     _, truth, records, _, res, kept = _fit_replicate(cs, k, Path(out))
     if cs.single:
-        jm = PosteriorModel(records[0], priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+        jm = PosteriorModel(records[0], priors=cs.priors(), likelihood=cs.likelihood)
         kept = {("b" if n == f"b_{cs.setting}" else n): x for n, x in kept.items()}
         known = {n: truth[n] for n in jm.names if n in truth}  # drawn with the device, gain included
     else:
-        jm = JointModel(tuple(records), priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+        jm = JointModel(tuple(records), priors=cs.priors(), likelihood=cs.likelihood)
         known = {f"b_{cs.setting}": truth["b"], **{n: truth[n] for n in jm.shared},
                  **{n: truth[n] for n in jm.names if n == "gain"}}  # drawn with the device
     reference = (stored_identity(Path(out) / "chain.h5") or {}).get("reference")
@@ -527,6 +544,7 @@ class Config:
     converge : each chain to the convergence rule, at most ``max_steps``.
     max_steps : the cap of a chain run to the rule.
     tempering : parallel tempering with this many temperatures, to beta 0.1 (None: none).
+    tau_floor : the floor of tau's prior, N (``StudyCalibration.tau_floor``; None: the package's).
     freqs : the drive frequencies, Hz (None: the study's).
     work : where each replicate's fit runs until done, continued by the next run
         (None: the output folder's ``.running``).
@@ -549,6 +567,8 @@ class Config:
     max_steps: int = field(default=StudyCalibration.max_steps, metadata={"help": "the cap of a chain run to the rule"})
     tempering: int | None = field(default=None, metadata={
         "help": "fit with parallel tempering of this many temperatures (default: none)"})
+    tau_floor: float | None = field(default=None, metadata={
+        "help": "the discrepancy tau's prior floor, N, with --residual motion (default: the package's)"})
     freqs: tuple[float, ...] | None = field(default=None, metadata={"help": "drive frequencies, Hz"})
     work: str | None = field(default=None, metadata={
         "help": "where each replicate's fit runs until done (default: OUT/.running)"})
@@ -574,6 +594,8 @@ class Config:
             extra["frequencies"] = tuple(self.freqs)
         if self.tempering is not None:
             extra["tempering"] = Tempering(self.tempering)
+        if self.tau_floor is not None:
+            extra["tau_floor"] = self.tau_floor
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 
