@@ -290,3 +290,13 @@ def test_a_truncation_needs_its_arguments_sampled_and_the_joint_model_refuses_on
         JointModel((record, record), priors=NUT_DAMPING_FLOOR, likelihood=AR1)
     with pytest.raises(ValueError, match="unknown parameters: zeta_x"):
         PosteriorModel(record, likelihood=AR1, priors={"zeta_x": LogUniform(1.0, 2.0)})
+
+
+def test_the_tau_floor_prior_raises_the_floor_and_keeps_the_top():
+    from bayes_inerter.inference.posterior.priors import MOTION_DISCREPANCY_PRIORS, tau_floor_prior
+
+    top = MOTION_DISCREPANCY_PRIORS["tau"].high
+    assert tau_floor_prior(0.1).low == 0.1 and tau_floor_prior(0.1).high == top
+    for bad in (0.0, -1.0, top):
+        with pytest.raises(ValueError, match="tau_floor must lie"):
+            tau_floor_prior(bad)

@@ -35,7 +35,7 @@ from ..device import grid_case, paper_parameters
 from ..inference.fit import fit_record
 from ..inference.sampling.convergence import Convergence
 from ..inference.sampling.tempering import Tempering
-from ..inference.posterior.priors import MOTION_DISCREPANCY_PRIORS, LogUniform
+from ..inference.posterior.priors import tau_floor_prior
 from ..inference.summaries.results import hdi
 from ..records import GeneratorSettings, generate_record
 from .manifest import source_commit
@@ -82,15 +82,14 @@ class Config:
             self.ladder()  # its own check of the ladder
         if self.only is not None and not all(0 <= k < 27 for k in self.only):
             raise ValueError(f"only names records of the paper's grid, 0 to 26, got {list(self.only)}")
-        if self.tau_floor is not None and not 0.0 < self.tau_floor < MOTION_DISCREPANCY_PRIORS["tau"].high:
-            raise ValueError(f"tau_floor must lie between 0 and the prior's top "
-                             f"({MOTION_DISCREPANCY_PRIORS['tau'].high:g} N), got {self.tau_floor}")
+        if self.tau_floor is not None:
+            tau_floor_prior(self.tau_floor)  # its own check
 
     def priors(self) -> dict:
         """The fit's priors beyond the package's: tau's floor raised where asked."""
         if self.tau_floor is None:
             return {}
-        return {"tau": LogUniform(self.tau_floor, MOTION_DISCREPANCY_PRIORS["tau"].high)}
+        return {"tau": tau_floor_prior(self.tau_floor)}
 
     def ladder(self) -> Tempering | None:
         """The fit's tempering (None: the default sampler)."""

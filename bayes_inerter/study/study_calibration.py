@@ -66,7 +66,7 @@ from ..inference.sampling.tempering import Tempering
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
 from ..inference.posterior.likelihood import LikelihoodSettings
 from ..inference.posterior.model import PosteriorModel
-from ..inference.posterior.priors import MOTION_DISCREPANCY_PRIORS, LogUniform, Uniform
+from ..inference.posterior.priors import LogUniform, Uniform, tau_floor_prior
 from ..inference.summaries.results import hdi
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
@@ -145,17 +145,15 @@ class StudyCalibration:
         if not (isinstance(self.draws, int) and self.draws >= 9):
             raise ValueError(f"draws must be a whole number of at least 9, got {self.draws!r}")
         if self.tau_floor is not None:
-            top = MOTION_DISCREPANCY_PRIORS["tau"].high
             if self.likelihood.residual != "motion":
                 raise ValueError("tau_floor is the motion-in likelihood's discrepancy floor: use it with residual 'motion'")
-            if not 0.0 < self.tau_floor < top:
-                raise ValueError(f"tau_floor must lie between 0 and the prior's top ({top:g} N), got {self.tau_floor}")
+            tau_floor_prior(self.tau_floor)  # its own check
 
     def priors(self) -> dict:
         """The fits' priors: :data:`STUDY_SBC_PRIORS`, with tau's floor raised where asked."""
         if self.tau_floor is None:
             return STUDY_SBC_PRIORS
-        return {**STUDY_SBC_PRIORS, "tau": LogUniform(self.tau_floor, MOTION_DISCREPANCY_PRIORS["tau"].high)}
+        return {**STUDY_SBC_PRIORS, "tau": tau_floor_prior(self.tau_floor)}
 
     #: Its replicates' fits continue from a checkpoint kept in a work folder
     #: (``calibration.run_replicates``'s ``work`` gives each one): a chain of tens of

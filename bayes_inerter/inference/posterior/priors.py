@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["LogUniform", "LogNormal", "Uniform", "Normal", "delay_prior", "DEFAULT_PRIORS", "SPLIT_PRIORS",
-           "NOISE_PRIORS", "DISCREPANCY_PRIORS", "MOTION_DISCREPANCY_PRIORS", "MODAL_PRIORS", "gain_prior",
-           "TRUNCATIONS", "nut_damping_ratio", "NUT_DAMPING_FLOOR"]
+           "NOISE_PRIORS", "DISCREPANCY_PRIORS", "MOTION_DISCREPANCY_PRIORS", "tau_floor_prior", "MODAL_PRIORS",
+           "gain_prior", "TRUNCATIONS", "nut_damping_ratio", "NUT_DAMPING_FLOOR"]
 
 
 @dataclass(frozen=True)
@@ -222,6 +222,16 @@ MOTION_DISCREPANCY_PRIORS = {
     "alpha": Uniform(0.0, 2.0),
     "law": LogUniform(1e-3, 1.0),
 }
+
+
+def tau_floor_prior(floor: float) -> LogUniform:
+    """The motion-in discrepancy tau's prior with its floor raised to ``floor`` (N), its
+    top the package's: a probe of the likelihood (results/noise-free-tau-floor), passed as
+    ``priors={"tau": ...}``; ValueError outside (0, top)."""
+    top = MOTION_DISCREPANCY_PRIORS["tau"].high
+    if not 0.0 < floor < top:
+        raise ValueError(f"tau_floor must lie between 0 and the prior's top ({top:g} N), got {floor}")
+    return LogUniform(floor, top)
 
 
 def delay_prior(sd: float) -> Normal:
