@@ -133,8 +133,7 @@ def fit_one(job) -> dict:
         row.update(tempering=config.tempering, hottest_beta=config.hottest_beta,
                    swap_rates=res.tempering["swap_rates"])
     if config.tau_floor is not None:  # likewise absent for the package's prior
-        tau = np.asarray(res.idata.posterior["tau"]).ravel()
-        row.update(tau_floor=config.tau_floor, tau_median=float(np.median(tau)))
+        row.update(tau_floor=config.tau_floor, tau_median=float(np.median(res.idata.posterior["tau"])))
     write_json(path, row, indent=1)
     return row
 
