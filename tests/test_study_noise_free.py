@@ -46,7 +46,10 @@ def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):
         run(Config(summarise=True), tmp_path, Serial())
 
 
-def test_a_tempered_record_is_fitted_with_the_ladder_asked_and_says_so(tmp_path, monkeypatch):
+def _stand_in_fit(monkeypatch, posterior=None, **result):
+    """``noise_free.fit_record`` replaced by a stand-in (the plumbing is tested, not a
+    fit): it returns b's draws about A0's b, the ``posterior``'s other draws and
+    ``result``'s fields; the list returned collects the options each call was given."""
     from types import SimpleNamespace
 
     import numpy as np
@@ -55,14 +58,21 @@ def test_a_tempered_record_is_fitted_with_the_ladder_asked_and_says_so(tmp_path,
 
     calls = []
 
-    def fake_fit(record, out, **options):  # the plumbing is tested, not a fit
+    def fake_fit(record, out, **options):
         calls.append(options)
         b = np.random.default_rng(0).normal(paper_parameters("A0").b, 1.0, size=(2, 100))
-        return SimpleNamespace(idata=SimpleNamespace(posterior={"b": b}), converged=True, iterations=500,
-                               tau=np.array([3.0]), b_interval=SimpleNamespace(identified=True),
-                               tempering={"swap_rates": [0.4]})
+        return SimpleNamespace(idata=SimpleNamespace(posterior={"b": b, **(posterior or {})}), converged=True,
+                               iterations=500, tau=np.array([3.0]), b_interval=SimpleNamespace(identified=True),
+                               **result)
 
     monkeypatch.setattr(noise_free, "fit_record", fake_fit)
+    return calls
+
+
+def test_a_tempered_record_is_fitted_with_the_ladder_asked_and_says_so(tmp_path, monkeypatch):
+    from bayes_inerter.study import noise_free
+
+    calls = _stand_in_fit(monkeypatch, tempering={"swap_rates": [0.4]})
     config = Config(tempering=2, hottest_beta=0.01, only=(0,))
     (tmp_path / "records").mkdir()  # as run() makes it
     row = noise_free.fit_one((0, tmp_path, config, "abc"))
@@ -74,24 +84,12 @@ def test_a_tempered_record_is_fitted_with_the_ladder_asked_and_says_so(tmp_path,
 
 
 def test_a_raised_tau_floor_reaches_the_fit_and_the_folder_keeps_it(tmp_path, monkeypatch):
-    from types import SimpleNamespace
-
     import numpy as np
 
     from bayes_inerter.inference.posterior.priors import MOTION_DISCREPANCY_PRIORS, LogUniform
     from bayes_inerter.study import noise_free
 
-    calls = []
-
-    def fake_fit(record, out, **options):  # the plumbing is tested, not a fit
-        calls.append(options)
-        rng = np.random.default_rng(0)
-        return SimpleNamespace(idata=SimpleNamespace(posterior={"b": rng.normal(paper_parameters("A0").b, 1.0, (2, 100)),
-                                                                "tau": np.full((2, 100), 0.25)}),
-                               converged=True, iterations=500, tau=np.array([3.0]),
-                               b_interval=SimpleNamespace(identified=True))
-
-    monkeypatch.setattr(noise_free, "fit_record", fake_fit)
+    calls = _stand_in_fit(monkeypatch, posterior={"tau": np.full((2, 100), 0.25)})
     assert Config().priors() == {}
     config = Config(tau_floor=0.1, only=(0,))
     (tmp_path / "records").mkdir()
