@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.sampling.convergence import Convergence, Monitor, check_chain, is_converged, transient
+from bayes_inerter.inference.sampling.convergence import Convergence, Monitor, check_chain, is_converged, transient, TAU_RTOL
 
 
 def test_transient_is_none_for_a_chain_in_equilibrium_and_the_climb_for_one_that_is_not():
@@ -42,7 +42,7 @@ def test_the_warm_up_share_leaves_a_slow_start_out_of_tau():
 
 
 def test_a_falling_tau_counts_as_settled_but_a_growing_one_does_not():
-    conv = Convergence()  # 50 tau, 5 %
+    conv = Convergence(tau_rtol=0.05)  # 50 tau, 5 % (the rule these chains were judged by)
     good = dict(rhat=np.array([1.01]), ess=np.array([2000.0]))
     # the adaptive A3 1 Hz chain of benchmarks/bench_adaptation.py at its checks of
     # 4,500 and 5,000 steps: tau fell 3.7 %, the chain is longer than 50 times either
@@ -62,7 +62,7 @@ def test_a_falling_tau_counts_as_settled_but_a_growing_one_does_not():
 
 def test_growth_judged_against_the_largest_tau_ignores_a_small_taus_wander():
     good = dict(rhat=np.array([1.01, 1.01]), ess=np.array([2000.0, 2000.0]))
-    each, largest = Convergence(), Convergence(growth="largest")
+    each, largest = Convergence(tau_rtol=0.05), Convergence(growth="largest", tau_rtol=0.05)
     # the largest tau steady, a parameter with a fifth of it grown 10 % of itself (2 % of the largest)
     tau, previous = np.array([60.0, 13.2]), np.array([60.0, 12.0])
     assert not is_converged(5000, tau, previous, conv=each, **good)
@@ -74,6 +74,19 @@ def test_growth_judged_against_the_largest_tau_ignores_a_small_taus_wander():
     tau = np.array([66.0, 12.0])
     assert not is_converged(5000, tau, previous, conv=each, **good)
     assert not is_converged(5000, tau, previous, conv=largest, **good)
+
+
+def test_the_default_tolerance_lets_tau_wander_by_a_fifth_between_checks():
+    """``TAU_RTOL``: a tau estimated from a few hundred steps is noisy; growth up to a
+    fifth of itself since the last check is taken for that noise, more is not."""
+    good = dict(rhat=np.array([1.01, 1.01]), ess=np.array([2000.0, 2000.0]))
+    assert Convergence().tau_rtol == TAU_RTOL == 0.2
+    previous = np.array([10.0, 6.0])
+    assert is_converged(1000, np.array([11.9, 6.0]), previous, conv=Convergence(), **good)
+    assert not is_converged(1000, np.array([12.1, 6.0]), previous, conv=Convergence(), **good)
+    assert not is_converged(1000, np.array([11.9, 6.0]), previous, conv=Convergence(tau_rtol=0.05), **good)
+    # the length part is unchanged: 50 times the larger of the two checks' tau
+    assert not is_converged(590, np.array([11.9, 6.0]), previous, conv=Convergence(), **good)
 
 
 def test_an_unknown_growth_judgement_is_refused():

@@ -98,3 +98,16 @@ def test_a_raised_tau_floor_reaches_the_fit_and_the_folder_keeps_it(tmp_path, mo
     assert row["tau_floor"] == 0.1 and row["tau_median"] == 0.25
     with pytest.raises(ValueError, match="holds records of tau_floor"):
         run(Config(summarise=True), tmp_path, Serial())
+
+
+def test_the_stopping_rule_reaches_the_fit_and_the_folder_keeps_it(tmp_path, monkeypatch):
+    from bayes_inerter.inference import Convergence
+    from bayes_inerter.study import noise_free
+
+    calls = _stand_in_fit(monkeypatch)
+    (tmp_path / "records").mkdir()
+    row = noise_free.fit_one((0, tmp_path, Config(only=(0,), max_steps=800), "abc"))
+    assert calls[0]["convergence"].tau_rtol == row["tau_rtol"] == Convergence().tau_rtol
+    assert calls[0]["convergence"].max_steps == 800
+    with pytest.raises(ValueError, match="continue it with --tau-rtol"):
+        run(Config(only=(0,), tau_rtol=0.05), tmp_path, Serial())

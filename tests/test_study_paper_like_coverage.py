@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from bayes_inerter.inference import Convergence
 from bayes_inerter.executor import Serial
 from bayes_inerter.study.paper_like_coverage import Config, likelihood_settings, run
 
@@ -51,6 +52,22 @@ def test_a_folder_keeps_one_family_one_likelihood_and_one_sampler(tmp_path):
         run(Config(tempering=4, hottest_beta=0.01), tmp_path, Serial())  # the same temperatures, a hotter end
 
 
+def test_a_folder_keeps_one_stopping_rule(tmp_path):
+    """Replicates that do not name their tolerance were stopped with the old 0.05: a run
+    with the package's is refused, one asking 0.05 continues them (here: summarises,
+    every replicate asked being there)."""
+    (tmp_path / "replicates").mkdir()
+    one = json.loads(next((COMMITTED / "replicates").glob("*.json")).read_text())
+    today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood)}
+    assert "tau_rtol" not in today
+    (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
+    with pytest.raises(ValueError, match=f"tau_rtol 0.05, not {Convergence().tau_rtol:g}: continue it with "
+                                         "--tau-rtol 0.05"):
+        run(Config(replicates=1), tmp_path, Serial())
+    got = run(Config(replicates=1, tau_rtol=0.05), tmp_path, Serial())
+    assert (tmp_path / "coverage.csv").exists() and not got.failed
+
+
 def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):
     with pytest.raises(ValueError, match="run without summarise first"):
         run(Config(summarise=True), tmp_path, Serial())
@@ -63,7 +80,8 @@ def test_progress_counts_only_the_replicates_of_the_frequency_asked(tmp_path):
         (tmp_path / "replicates" / p.name).write_text(json.dumps({**json.loads(p.read_text()),
                                                                   "likelihood_settings": today}))
     seen = []
-    run(Config(freq=0.5, replicates=100), tmp_path, Serial(), progress=lambda done, total: seen.append((done, total)))
+    run(Config(freq=0.5, replicates=100, tau_rtol=0.05), tmp_path, Serial(),  # the rule they were stopped by
+        progress=lambda done, total: seen.append((done, total)))
     at_half = sum(json.loads(p.read_text())["freq_hz"] == 0.5 for p in (COMMITTED / "replicates").glob("*.json"))
     assert at_half < 100 and seen == [(at_half, at_half)]
 
@@ -111,5 +129,8 @@ def test_a_tempered_replicate_is_fitted_tempered_and_says_so(tmp_path, monkeypat
     got = plc.replicate(0, 6000, 500, tempering=Config(tempering=3, hottest_beta=0.2).ladder())
     assert calls[0]["tempering"].temps == 3 and calls[0]["tempering"].beta_min == 0.2
     assert got["tempering"] == [3, 0.2] and got["swap_rates"] == [0.3, 0.2]
-    untempered = plc.replicate(0, 6000, 500)
+    assert calls[0]["convergence"].tau_rtol == got["tau_rtol"] == Convergence().tau_rtol
+    assert calls[0]["convergence"].max_steps == 500
+    untempered = plc.replicate(0, 6000, 500, tau_rtol=0.05)
+    assert calls[1]["convergence"].tau_rtol == untempered["tau_rtol"] == 0.05
     assert calls[1]["tempering"] is None and "tempering" not in untempered and "swap_rates" not in untempered

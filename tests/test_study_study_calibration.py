@@ -269,3 +269,29 @@ def test_a_raised_tau_floor_is_checked_and_reaches_the_fit(tmp_path, monkeypatch
     assert seen["priors"] == cs.priors()
     plain = StudyCalibration(likelihood=motion, single=True, frequencies=(1.0,), steps=30)
     assert replicate_device(cs, 0).truth == replicate_device(plain, 0).truth  # tau is fitted, never drawn
+
+
+def test_the_calibration_keeps_its_folders_stopping_rule_unless_asked(tmp_path, monkeypatch):
+    """``tau_rtol``: 0.05 by default (the rule the committed folders were stopped with),
+    the script's option changes it, and the fit gets it."""
+    from bayes_inerter.study import study_calibration
+    from bayes_inerter.study.study_calibration import Config
+
+    assert StudyCalibration().tau_rtol == 0.05 and Config().settings().tau_rtol == 0.05
+    assert Config(tau_rtol=0.2).settings().tau_rtol == 0.2
+
+    class Stop(Exception):
+        pass
+
+    seen = {}
+
+    def fake_fit(record, out, **options):
+        seen.update(options)
+        raise Stop
+
+    monkeypatch.setattr(study_calibration, "fit_record", fake_fit)
+    cs = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), single=True, frequencies=(1.0,),
+                          steps=None, max_steps=900, tau_rtol=0.2)
+    with pytest.raises(Stop):
+        study_replicate(cs, 0, tmp_path / "work")
+    assert seen["convergence"].tau_rtol == 0.2 and seen["convergence"].max_steps == 900

@@ -26,18 +26,18 @@ import json
 import math
 import tempfile
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..device import grid_case, paper_parameters
 from ..inference.fit import fit_record
-from ..inference.sampling.convergence import Convergence
 from ..inference.sampling.tempering import Tempering
 from ..inference.posterior.priors import tau_floor_prior
 from ..inference.summaries.results import hdi
 from ..records import GeneratorSettings, generate_record
+from . import stop_rule
 from .manifest import source_commit
 from .output import StudyOutput, write_json
 
@@ -58,6 +58,8 @@ class Config:
         default sampler). A folder keeps one ladder.
     hottest_beta : the tempering ladder's hottest beta.
     only : fit these records alone (None: records 0 to ``records`` - 1).
+    tau_rtol : the convergence rule's tolerance of tau's growth (None: the package's,
+        ``Convergence.tau_rtol``); a folder keeps one (``stop_rule``).
     summarise : only write chains.csv from the records already there.
     """
 
@@ -69,6 +71,9 @@ class Config:
     only: tuple[int, ...] | None = field(default=None, metadata={"help": "fit these records alone"})
     tau_floor: float | None = field(default=None, metadata={
         "help": "the discrepancy tau's prior floor, N (default: the package's, priors.MOTION_DISCREPANCY_PRIORS)"})
+    tau_rtol: float | None = field(default=None, metadata={
+        "help": "the convergence rule's tolerance of tau's growth between checks (default: the package's, "
+                "Convergence.tau_rtol); a folder keeps one"})
     summarise: bool = field(default=False, metadata={"help": "only write chains.csv from the records there"})
 
     def __post_init__(self) -> None:
@@ -117,7 +122,7 @@ def fit_one(job) -> dict:
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(rec, Path(tmp) / "fit", seed=k, plots=False,
-                         convergence=replace(Convergence(), max_steps=config.max_steps),
+                         convergence=stop_rule.convergence(config.max_steps, config.tau_rtol),
                          tempering=config.ladder(), priors=config.priors())
     b = np.asarray(res.idata.posterior["b"]).ravel()
     lo, hi = hdi(b)
@@ -128,7 +133,8 @@ def fit_one(job) -> dict:
            "width94_pct": 100.0 * (hi - lo) / p.b, "identified": bool(res.b_interval.identified),
            "converged": bool(res.converged), "steps": int(res.iterations),
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
-           "seconds": round(time.perf_counter() - t0, 1), "commit": commit}
+           "seconds": round(time.perf_counter() - t0, 1), "commit": commit,
+           "tau_rtol": stop_rule.resolved(config.tau_rtol)}
     if config.tempering is not None:  # absent for the default sampler: the rows before it have no such keys
         row.update(tempering=config.tempering, hottest_beta=config.hottest_beta,
                    swap_rates=res.tempering["swap_rates"])
@@ -166,6 +172,8 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
         if have - {want}:
             raise ValueError(f"{out} holds records of {key} {sorted(have, key=str)}, not {want}; "
                              "choose another folder")
+    if not config.summarise:
+        stop_rule.check_folder(kept, config.tau_rtol, out)
     failed = []
     if not config.summarise:
         commit = source_commit() or ""  # the code this run loaded: HEAD may move while it runs
@@ -182,7 +190,7 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     if not rows:
         raise ValueError(f"{out} holds no finished record; run without summarise first")
     with open(out / "chains.csv", "w", newline="") as f:  # every digit: the rows are the study's result
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer = csv.DictWriter(f, fieldnames=list(dict.fromkeys(k for r in rows for k in r)))
         writer.writeheader()
         writer.writerows(rows)
     return StudyOutput(written=(out / "chains.csv",), failed=tuple(failed), lines=tuple(map(_line, rows)),

@@ -29,7 +29,9 @@ fits with those of ``LikelihoodSettings`` changed (``input_noise=16``,
 folder keeps one likelihood, its every setting recorded in each replicate (a change of
 the library's default starts a new folder). ``tempering`` T fits with parallel tempering
 (``sampler.Tempering``, T temperatures down to ``hottest_beta``) where the default sampler
-does not; a folder keeps one sampler. ``freq`` F runs only the replicates driven at F Hz.
+does not; a folder keeps one sampler. ``tau_rtol`` stops the chains with that tolerance
+of the convergence rule (``Convergence.tau_rtol``; a folder keeps one, each replicate
+names it, ``stop_rule``). ``freq`` F runs only the replicates driven at F Hz.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ import json
 import math
 import tempfile
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -48,10 +50,10 @@ import numpy as np
 from ..device import FREQUENCIES_HZ, grid_case, paper_parameters
 from ..inference.fit import fit_record
 from ..inference.posterior.likelihood import LikelihoodSettings, settings_changes
-from ..inference.sampling.convergence import Convergence
 from ..inference.sampling.tempering import Tempering
 from ..inference.summaries.results import hdi
 from ..records.paper_like import PaperLike, laboratory, paper_like_record
+from . import stop_rule
 from .manifest import source_commit
 from .output import StudyOutput, write_json
 
@@ -78,7 +80,8 @@ def likelihood_settings(text: str) -> dict:
 
 
 def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
-              likelihood: str = "default", tempering: Tempering | None = None) -> dict:
+              likelihood: str = "default", tempering: Tempering | None = None,
+              tau_rtol: float | None = None) -> dict:
     setting, freq = grid_case(k)
     seed = seed0 + k
     rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family])
@@ -87,7 +90,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
     with tempfile.TemporaryDirectory() as tmp:
         res = fit_record(rec, Path(tmp) / "fit", seed=seed, plots=False,
                          likelihood=LikelihoodSettings(**settings_changes(likelihood)),
-                         convergence=replace(Convergence(), max_steps=max_steps), tempering=tempering)
+                         convergence=stop_rule.convergence(max_steps, tau_rtol), tempering=tempering)
     b = np.asarray(res.idata.posterior["b"]).ravel()
     tau = np.asarray(list(res.tau.values()) if isinstance(res.tau, dict) else res.tau, dtype=float)
     out = {"replicate": k, "setting": setting, "freq_hz": freq, "seed": seed, "b_true": b_true,
@@ -95,7 +98,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
            "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
-           "likelihood_settings": likelihood_settings(likelihood)}
+           "likelihood_settings": likelihood_settings(likelihood), "tau_rtol": stop_rule.resolved(tau_rtol)}
     if tempering is not None:  # absent for the default sampler, as in the replicates written before the option
         out.update(tempering=_ladder_entry(tempering), swap_rates=res.tempering["swap_rates"])
     for level in LEVELS:
@@ -118,7 +121,8 @@ def _file(out: Path, k: int) -> Path:
 
 def _run(job) -> dict:
     k, out, config, commit = job
-    got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder())
+    got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder(),
+                    config.tau_rtol)
     path = _file(out, k)
     write_json(path, got, indent=1)
     return got
@@ -245,6 +249,9 @@ class Config:
     freq: float | None = field(default=None, metadata={"help": "only the replicates driven at this frequency, Hz"})
     tempering: int | None = field(default=None, metadata={"help": "parallel tempering's temperatures (default: none)"})
     hottest_beta: float = field(default=Tempering.beta_min, metadata={"help": "the tempering ladder's hottest beta"})
+    tau_rtol: float | None = field(default=None, metadata={
+        "help": "the convergence rule's tolerance of tau's growth between checks (default: the package's, "
+                "Convergence.tau_rtol); a folder keeps one"})
     summarise: bool = field(default=False, metadata={"help": "only write the tables from the replicates there"})
     against: str | None = field(default=None, metadata={
         "help": "with summarise: a folder of the same replicates fitted otherwise; also writes pairs.csv and "
@@ -302,6 +309,8 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     if not config.summarise and any(r.get("tempering") != _ladder_entry(ladder) for r in found):
         asked = "the default sampler" if ladder is None else ladder.describe()
         raise ValueError(f"{out} holds replicates fitted with another sampler than {asked}; choose another folder")
+    if not config.summarise:
+        stop_rule.check_folder(found, config.tau_rtol, out)
     lines, failed = [], []
     if not config.summarise:
         commit = source_commit() or ""  # the code this run loaded, read once: HEAD may move while it runs

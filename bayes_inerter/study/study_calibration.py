@@ -70,6 +70,7 @@ from ..inference.posterior.priors import LogUniform, Uniform, tau_floor_prior
 from ..inference.summaries.results import hdi
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
+from . import stop_rule
 
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
@@ -122,6 +123,10 @@ class StudyCalibration:
     tau_floor : the floor of the discrepancy tau's log-uniform prior, N, in the fits
         (None: the package's, ``priors.MOTION_DISCREPANCY_PRIORS``); a probe of the
         likelihood (results/noise-free-tau-floor), not the package's prior.
+    tau_rtol : the convergence rule's tolerance of tau's growth between checks
+        (``Convergence.tau_rtol``; default: the 0.05 its committed folders were stopped
+        with, ``stop_rule.TAU_RTOL_BEFORE``, so that a folder saved before this option
+        existed is continued under its own rule).
     """
 
     setting: str = "A3"
@@ -135,6 +140,7 @@ class StudyCalibration:
     max_steps: int = 6000
     tempering: Tempering | None = None
     tau_floor: float | None = None
+    tau_rtol: float = stop_rule.TAU_RTOL_BEFORE
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
@@ -222,7 +228,7 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     rng = np.random.default_rng([cs.seed, k])
     device = _draw_device(cs, rng, k)
     truth, records, redraws = device.truth, device.records, device.redraws
-    convergence = dataclasses.replace(Convergence(), max_steps=cs.max_steps)
+    convergence = stop_rule.convergence(cs.max_steps, cs.tau_rtol)
     if cs.single:
         res = fit_record(records[0], out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=cs.priors(),
                          plots=False, likelihood=cs.likelihood, convergence=convergence, interval="posterior",
@@ -543,6 +549,8 @@ class Config:
     max_steps : the cap of a chain run to the rule.
     tempering : parallel tempering with this many temperatures, to beta 0.1 (None: none).
     tau_floor : the floor of tau's prior, N (``StudyCalibration.tau_floor``; None: the package's).
+    tau_rtol : the convergence rule's tolerance of tau's growth (``StudyCalibration.tau_rtol``;
+        None: its default).
     freqs : the drive frequencies, Hz (None: the study's).
     work : where each replicate's fit runs until done, continued by the next run
         (None: the output folder's ``.running``).
@@ -567,6 +575,9 @@ class Config:
         "help": "fit with parallel tempering of this many temperatures (default: none)"})
     tau_floor: float | None = field(default=None, metadata={
         "help": "the discrepancy tau's prior floor, N, with --residual motion (default: the package's)"})
+    tau_rtol: float | None = field(default=None, metadata={
+        "help": "the convergence rule's tolerance of tau's growth between checks (default: 0.05, the one "
+                "the committed folders were stopped with; the package's is Convergence.tau_rtol)"})
     freqs: tuple[float, ...] | None = field(default=None, metadata={"help": "drive frequencies, Hz"})
     work: str | None = field(default=None, metadata={
         "help": "where each replicate's fit runs until done (default: OUT/.running)"})
@@ -594,6 +605,8 @@ class Config:
             extra["tempering"] = Tempering(self.tempering)
         if self.tau_floor is not None:
             extra["tau_floor"] = self.tau_floor
+        if self.tau_rtol is not None:
+            extra["tau_rtol"] = self.tau_rtol
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 
