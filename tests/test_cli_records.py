@@ -307,10 +307,28 @@ def test_a_tempered_fit_prints_its_ladder_and_swap_rates(tmp_path, capsys):
     assert f"{info['ladder']}; swaps accepted between neighbours: {rates}" in text.splitlines()
 
 
-def test_a_hottest_beta_without_tempering_is_refused_before_the_folder_is_touched(tmp_path, capsys):
+@pytest.mark.parametrize("ladder", [["--tempering", "3"], ["--hottest-beta", "0.2"]])
+def test_no_tempering_with_a_ladder_is_refused_before_the_folder_is_touched(tmp_path, capsys, ladder):
     p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
     out = tmp_path / "fit"
-    assert main(["fit", str(p), *MAP, "--out", str(out), "--steps", "4", "--hottest-beta", "0.2"]) != 0
+    assert main(["fit", str(p), *MAP, "--out", str(out), "--steps", "4", "--no-tempering", *ladder]) != 0
     err = capsys.readouterr().err.strip()
-    assert err.startswith("error: ") and "\n" not in err and "--tempering TEMPS" in err
+    assert err.startswith("error: ") and "\n" not in err and "give one or the other" in err
     assert not out.exists()
+
+
+def test_fit_is_tempered_unless_told_not_to(monkeypatch, tmp_path):
+    """The command line's sampler: the default ladder, the one asked, or none."""
+    from bayes_inerter.inference.sampling.tempering import Tempering
+
+    seen = []
+
+    def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
+        seen.append(options["tempering"])
+        raise ValueError("stand-in fit")
+
+    monkeypatch.setattr("bayes_inerter.inference.fit_record", fake_fit)
+    p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
+    for extra in ([], ["--tempering", "3"], ["--hottest-beta", "0.2"], ["--no-tempering"]):
+        assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--steps", "4", "--no-plots", *extra]) == 1
+    assert seen == [Tempering(), Tempering(3), Tempering(4, 0.2), None]

@@ -30,8 +30,9 @@ def cmd_fit(args) -> int:
     if args.steps is not None and args.max_steps is not None:
         raise CliError("give --steps (exactly that many) or --max-steps (until converged, at most that many), "
                        "not both")
-    if args.hottest_beta is not None and args.tempering is None:
-        raise CliError("--hottest-beta sets the tempering ladder's hottest copy: give --tempering TEMPS with it")
+    if args.no_tempering and (args.tempering is not None or args.hottest_beta is not None):
+        raise CliError("--no-tempering fits without the tempering ladder that --tempering and --hottest-beta set: "
+                       "give one or the other")
     convergence = Convergence() if args.max_steps is None else Convergence(max_steps=args.max_steps)
     # refused here, before the output folder is touched
     rec, device, masses, drive = load_record(args, need_masses=True)
@@ -44,7 +45,8 @@ def cmd_fit(args) -> int:
                    coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
                    checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
                    name=Path(args.record).name, convergence=convergence,
-                   tempering=Tempering.of(args.tempering, args.hottest_beta))
+                   tempering=None if args.no_tempering else Tempering.of(args.tempering or Tempering.temps,
+                                                                         args.hottest_beta))
     if args.model == "compare":
         return _compare(rec, args, options)
     bar = StepProgress("sampling", total=args.steps, check_interrupt=check_interrupt, cap=convergence.max_steps)

@@ -156,11 +156,14 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--no-adaptation", action="store_true",
                    help="emcee's ensemble moves alone, without the independence move fitted to the chain")
     p.add_argument("--tempering", type=_at_least_two, metavar="TEMPS",
-                   help="parallel tempering with this many temperatures (default: none); each step then costs "
-                        "TEMPS times the evaluations, and hot copies of the posterior carry the walkers between "
-                        "its humps (docs/inference.md)")
+                   help="parallel tempering with this many temperatures (default 4); each step costs TEMPS times "
+                        "the evaluations, and hot copies of the posterior carry the walkers between its humps "
+                        "(docs/inference.md)")
     p.add_argument("--hottest-beta", type=_open_unit, metavar="BETA",
-                   help="with --tempering: the hottest copy's power of the likelihood, in (0, 1) (default 0.1)")
+                   help="the tempering ladder's hottest copy's power of the likelihood, in (0, 1) (default 0.1)")
+    p.add_argument("--no-tempering", action="store_true",
+                   help="the posterior's ensemble alone, without tempering (the default before; faster per step, "
+                        "slower to converge on records the model does not fit)")
     p.add_argument("--no-plots", action="store_true", help="write no figures (they take several seconds)")
     p.add_argument("--checkpoint-seconds", type=_non_negative_float, default=CHECKPOINT_SECONDS,
                    help="write the chain's steps at most this many seconds apart (%(default)s; 0: every step): "

@@ -142,7 +142,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                checkpoint_seconds: float = WRITE_SECONDS,
                interval: str | IntervalSettings | None = None, freq: float | None = None,
                name: str | None = None, modal: bool | None = None, masses: Masses | None = None,
-               tempering: Tempering | None = None) -> FitResult:
+               tempering: Tempering | None = Tempering()) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
     ``modal``: the bearing's damper sampled as the plate mode's damping ratio under its
@@ -160,8 +160,10 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     in the model's parameters whichever is used). ``adaptation``: the fitted independence
     move (``sampler.Adaptation``; None: the ensemble moves alone). ``checkpoint_seconds``:
     the steps reach chain.h5 at most this far apart (0: every step; ``run_sampler``).
-    ``tempering``: parallel tempering's ladder (``sampler.Tempering``; None, the default:
-    none); fit.json gives it and its swap rates. ``progress``, ``report``:
+    ``tempering``: parallel tempering's ladder (``sampler.Tempering``; the default, 4
+    temperatures down to beta 0.1; None: the ensemble alone, the default before, see
+    docs/inference.md for the measurements that chose it); fit.json gives it and its swap
+    rates. ``progress``, ``report``:
     ``run_sampler``'s callbacks. The folder is locked for the run (``lock.folder_lock``):
     a second run into it is refused at once.
 

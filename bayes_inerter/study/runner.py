@@ -72,8 +72,10 @@ def run_job(job: FitJob, plots: bool = True) -> dict:
 
     t0 = time.perf_counter()
     rec = read_record(job.record)
+    # the study's fits keep the ensemble sampler alone, as its committed results were made
+    # (``fit``'s default is tempered; the study's chains tempered are not yet measured)
     res = fit_record(rec, job.out, model=job.model, steps=job.steps, walkers=job.walkers, seed=job.seed,
-                     processes=1, plots=plots)
+                     processes=1, plots=plots, tempering=None)
     outcome = {
         "key": job.key, "status": "done", "converged": bool(res.converged), "reason": res.reason,
         "iterations": int(res.iterations), "seconds": time.perf_counter() - t0,
