@@ -127,6 +127,46 @@ def test_the_two_port_fits_come_first_with_each_records_seed(tmp_path):
         ("A0_1Hz/rigid", 0), ("A0_1Hz/linear", 0), ("A2_1Hz/rigid", 1), ("A2_1Hz/linear", 1)]
 
 
+def test_the_plans_tempering_reaches_every_single_record_job(tmp_path):
+    records = {name: (tmp_path / f"{name}.csv", name[:2], 1.0) for name in ("A0_1Hz", "A2_1Hz")}
+    assert {j.tempering for j in tiny_plan(comparison=(("A0",), (1.0,))).jobs(records, tmp_path)} == {None}
+    jobs = tiny_plan(comparison=(("A0",), (1.0,)), tempering=3).jobs(records, tmp_path)
+    assert len(jobs) == 4 and {j.tempering for j in jobs} == {3}
+    with pytest.raises(ValueError, match="at least 2 temperatures"):
+        tiny_plan(tempering=1)
+
+
+def test_a_job_recorded_before_tempering_was_an_option_is_the_untempered_job(tmp_path):
+    from dataclasses import asdict
+
+    from bayes_inerter.study.runner import _same_job
+
+    job = FitJob(str(tmp_path / "A0_1Hz.csv"), str(tmp_path / "fit"), steps=4)
+    old = {k: v for k, v in asdict(job).items() if k != "tempering"}
+    assert _same_job(old, job)
+    assert not _same_job(old, FitJob(job.record, job.out, steps=4, tempering=4))
+    assert _same_job(asdict(FitJob(job.record, job.out, steps=4, tempering=4)),
+                     FitJob(job.record, job.out, steps=4, tempering=4))
+
+
+def test_a_jobs_tempering_reaches_its_fit(tmp_path, monkeypatch):
+    import bayes_inerter.inference as inference
+    from bayes_inerter.inference.sampling.tempering import Tempering
+
+    seen = []
+
+    def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
+        seen.append(options["tempering"])
+        raise ValueError("stand-in fit")
+
+    monkeypatch.setattr(inference, "fit_record", fake_fit)
+    monkeypatch.setattr("bayes_inerter.records.read_record", lambda path: None)
+    for temps in (None, 3):
+        with pytest.raises(ValueError, match="stand-in fit"):
+            runner_module.run_job(FitJob("r.csv", str(tmp_path / "f"), steps=4, tempering=temps), plots=False)
+    assert seen == [None, Tempering(3)]
+
+
 def _copy_of(study, tmp_path):
     """A copy of the module's study folder, for a test that runs into it again (the
     shared folder's REPORT.md and study.json must stay the first run's, whatever order
@@ -307,6 +347,9 @@ def test_cli_study_takes_the_sensor_uncertainty_in_percent(tmp_path, monkeypatch
     assert main(["study", "--quick", "--identify", "--out", str(tmp_path / "o")]) == 130
     assert main(["study", "--no-identify", "--out", str(tmp_path / "o")]) == 130
     assert seen[1].identify and not seen[2].identify
+    assert seen[0].tempering is None  # the study's fits: the ensemble alone unless asked
+    assert main(["study", "--quick", "--tempering", "3", "--out", str(tmp_path / "o")]) == 130
+    assert seen[3].tempering == 3
 
 
 def test_cli_study_refuses_a_missing_records_folder(tmp_path, capsys):

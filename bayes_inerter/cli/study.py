@@ -26,6 +26,8 @@ def _plan(args):
         changes["joint_steps"] = args.joint_steps
     if args.no_joint:
         changes["joint"] = False
+    if args.tempering is not None:
+        changes["tempering"] = args.tempering
     if args.sensor_uncertainty is not None:
         from ..records.sensitivity import SensorCalibration
 

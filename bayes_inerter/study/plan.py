@@ -46,6 +46,9 @@ class FitJob:
     steps: int | None = None
     walkers: int | None = None
     seed: int = 0
+    #: parallel tempering's temperatures (``sampler.Tempering``, down to its default
+    #: hottest beta); None: the ensemble alone
+    tempering: int | None = None
 
     @property
     def key(self) -> str:
@@ -86,6 +89,9 @@ class StudyPlan:
     identify : also fit every record by the paper's least squares (eq. 4, about 20 s a 10 s
         record; ``study.least_squares``) and set it beside the posterior in
         ``least_squares.csv``.
+    tempering : the single-record fits' parallel tempering, temperatures (None, the
+        default: the ensemble alone, as the committed studies were run; ``fit``'s own
+        default is 4). The joint model is not tempered.
     """
 
     name: str
@@ -104,6 +110,7 @@ class StudyPlan:
     skip_checks: tuple = ()
     figures: bool = False
     identify: bool = False
+    tempering: int | None = None
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.settings if s not in SETTINGS]
@@ -116,6 +123,8 @@ class StudyPlan:
             value = getattr(self, name)
             if value is not None and not (isinstance(value, int) and value >= 1):
                 raise ValueError(f"{name} must be a positive whole number or None, got {value!r}")
+        if self.tempering is not None and not (isinstance(self.tempering, int) and self.tempering >= 2):
+            raise ValueError(f"tempering needs at least 2 temperatures, got {self.tempering!r}")
 
     def jobs(self, records: dict, out: Path) -> list[FitJob]:
         """Fit jobs for ``records`` (name -> (CSV path, setting, frequency)): the two-port
@@ -130,7 +139,7 @@ class StudyPlan:
                 models += list(self.compare_models)
             for model in models:
                 jobs.append(FitJob(str(path), str(out / "fits" / model / name), model, self.steps,
-                                   self.walkers, self.seed + i))
+                                   self.walkers, self.seed + i, self.tempering))
         return sorted(jobs, key=lambda job: job.model != "two-port")  # stable: records' order within each
 
 

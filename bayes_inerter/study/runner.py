@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ..executor import Dask, Executor, LocalProcesses, WorkerDied
 from ..inference.summaries.results import LOO_FILE
+from ..inference.sampling.tempering import Tempering
 from .plan import FitJob
 
 __all__ = ["run_job", "run_jobs", "finished", "DONE_FILE"]
@@ -57,6 +58,7 @@ def _same_job(recorded, job: FitJob) -> bool:
     in another place, are the same study."""
     if not isinstance(recorded, dict):
         return False
+    recorded = {"tempering": None, **recorded}  # a job recorded before the option was untempered
     want = dataclasses.asdict(job)
     names = ("record", "out")
     if {k: v for k, v in recorded.items() if k not in names} != {k: v for k, v in want.items() if k not in names}:
@@ -72,10 +74,8 @@ def run_job(job: FitJob, plots: bool = True) -> dict:
 
     t0 = time.perf_counter()
     rec = read_record(job.record)
-    # the study's fits keep the ensemble sampler alone, as its committed results were made
-    # (``fit``'s default is tempered; the study's chains tempered are not yet measured)
     res = fit_record(rec, job.out, model=job.model, steps=job.steps, walkers=job.walkers, seed=job.seed,
-                     processes=1, plots=plots, tempering=None)
+                     processes=1, plots=plots, tempering=Tempering.of(job.tempering))
     outcome = {
         "key": job.key, "status": "done", "converged": bool(res.converged), "reason": res.reason,
         "iterations": int(res.iterations), "seconds": time.perf_counter() - t0,
