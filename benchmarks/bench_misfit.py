@@ -9,8 +9,9 @@ For each frequency, two 10 s records of the setting: the model's own (today's de
 ``records.generator.paper_record``, grid seed ``--seed``) and a paper-like one
 (``records.paper_like.paper_like_record``: full network, Stribeck friction, nut
 backlash, calibration errors and coloured noise; laboratory seed ``--seed``). Each is
-fitted by ``fit_record`` with the package's defaults, one process, until the
-convergence rule holds (``steps=None``), without plots, into a temporary folder.
+fitted by ``fit_record`` with the package's defaults (parallel tempering, 4
+temperatures, since it became ``fit``'s default), one process, until the convergence
+rule holds (``steps=None``), without plots, into a temporary folder.
 
 A run still going after ``--cap-seconds`` of wall time is stopped by its ``progress``
 callback (the check comes after each step, so the start-up optimisation is not cut)
@@ -26,10 +27,14 @@ included; for a capped run the wall time until the cap), end-to-end wall seconds
 posterior.nc keeps) and 94 % HDI against the true b, and whether it met the issue's
 target: converged in under 120 s end to end. The 1-minute load average before and
 after each fit is printed and kept; the machine is shared, so seconds are only
-comparable within one run. One row per fit goes to results/performance/misfit.csv.
+comparable within one run. One row per fit goes to
+results/performance/misfit_default.csv, with its sampler (results/performance/misfit.csv
+holds the rows of the ensemble sampler alone, the default before).
 
 With ``--tempering TEMPS`` each record is fitted twice, side by side in the same run:
-with the default sampler and with parallel tempering (``sampler.Tempering``, TEMPS
+with the ensemble alone (``tempering=None``; its rows' ``sampler`` is "ensemble", and
+"default" in the rows written while it was the package's default) and with parallel
+tempering (``sampler.Tempering``, TEMPS
 temperatures down to ``--hottest-beta``, its convergence rule judging tau's growth as
 ``--growth`` says, ``Convergence.growth``); the evaluations of the log posterior after the
 start search (steps x walkers x temperatures), the swap rates and the ratio of the
@@ -38,7 +43,8 @@ results/performance/misfit_tempering.csv instead.
 
 With ``--models M [M ...]`` each record is fitted under each of these models
 (``fit_record(model=...)``; for example ``two-port two-port-rich``), side by side in the
-same run with the default sampler; the ratio of each fit's wall time to the first
+same run with the ensemble sampler alone (as its rows were made before ``fit`` tempered
+by default); the ratio of each fit's wall time to the first
 model's is printed, and the rows, with their model, go to
 results/performance/misfit_models.csv instead.
 """
@@ -133,15 +139,16 @@ def main():
     ap.add_argument("--growth", choices=GROWTH, default=None,
                     help="the tempered fits' judgement of tau's growth (Convergence.growth; default: the package's)")
     ap.add_argument("--models", nargs="+", default=None, metavar="MODEL",
-                    help="fit each record under each of these models, side by side (default sampler only)")
+                    help="fit each record under each of these models, side by side (the ensemble sampler alone)")
     ap.add_argument("--no-row", action="store_true", help="print only; write no CSV row (trial runs)")
     args = ap.parse_args()
     if args.models and args.tempering:
         ap.error("--models and --tempering each compare fits side by side; give one of them")
     models = args.models or ["two-port"]
     conv = Convergence(max_steps=args.max_steps) if args.max_steps else None
-    samplers = [("default", None, conv)]
-    if args.tempering:
+    samplers = [("default", Tempering(), conv)]
+    if args.tempering or args.models:
+        samplers = [("ensemble", None, conv)]
         ladder = Tempering(args.tempering, args.hottest_beta)
         hot_conv = conv
         if args.growth is not None:
@@ -189,7 +196,7 @@ def main():
                         "b_97%": round(got["b_97"], 1), "b_truth": round(b_true, 1),
                         "covers": got["b_3"] <= b_true <= got["b_97"], "under_120s": got["met"],
                         "load_before": round(load0, 2), "load_after": round(load1, 2)}
-                    if args.tempering:
+                    if not args.models:
                         row.update(sampler=sampler, evaluations=got["evaluations"],
                                    swap_rates=" ".join(f"{r:.3f}" for r in got["swap_rates"]))
                     if args.models:
@@ -202,7 +209,7 @@ def main():
     print(head)
     print("-" * len(head))
     for r in results:
-        name = (f"{r['truth']} {r['freq']:g} Hz" + ("" if r["sampler"] == "default" else " PT")
+        name = (f"{r['truth']} {r['freq']:g} Hz" + (" PT" if args.tempering and r["sampler"] != "ensemble" else "")
                 + (f" {r['model']}" if args.models else ""))
         print(f"{name:>16} {'yes' if r['converged'] else 'no':>5} {r['steps']:>6} {r['slow'][0][1]:>8.0f} "
               f"{r['slow'][0][0]:>8} {r['sampling_s']:>10.0f} {r['wall_s']:>7.0f} {r['b_median']:>9.1f} "
@@ -211,7 +218,7 @@ def main():
     print(f"\ntarget: converged in under {TARGET_S:.0f} s end to end on one process; conv 'no' = stopped by the cap "
           f"or max steps, not by the convergence rule")
     if args.tempering:
-        print("\ntempered against default, same record and seed: wall-time ratio, evaluations ratio")
+        print("\ntempered against the ensemble alone, same record and seed: wall-time ratio, evaluations ratio")
         for plain, hot in zip(results[::2], results[1::2]):
             print(f"  {plain['truth']} {plain['freq']:g} Hz: {hot['wall_s'] / plain['wall_s']:.2f}, "
                   f"{hot['evaluations'] / plain['evaluations']:.2f}; swap rates "
@@ -227,7 +234,7 @@ def main():
 
 
 def _csv_name(args) -> str:
-    return "misfit_tempering" if args.tempering else "misfit_models" if args.models else "misfit"
+    return "misfit_tempering" if args.tempering else "misfit_models" if args.models else "misfit_default"
 
 
 if __name__ == "__main__":
