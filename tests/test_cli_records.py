@@ -318,13 +318,15 @@ def test_no_tempering_with_a_ladder_is_refused_before_the_folder_is_touched(tmp_
 
 
 def test_fit_is_tempered_unless_told_not_to(monkeypatch, tmp_path):
-    """The command line's sampler: the default ladder, the one asked, or none."""
+    """The command line's sampler: the default ladder, the one asked, or none, and each
+    one's cap."""
     from bayes_inerter.inference.sampling.tempering import Tempering
 
-    seen = []
+    seen, caps = [], []
 
     def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
         seen.append(options["tempering"])
+        caps.append(options["convergence"].max_steps)
         raise ValueError("stand-in fit")
 
     monkeypatch.setattr("bayes_inerter.inference.fit_record", fake_fit)
@@ -332,3 +334,6 @@ def test_fit_is_tempered_unless_told_not_to(monkeypatch, tmp_path):
     for extra in ([], ["--tempering", "3"], ["--hottest-beta", "0.2"], ["--no-tempering"]):
         assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--steps", "4", "--no-plots", *extra]) == 1
     assert seen == [Tempering(), Tempering(3), Tempering(4, 0.2), None]
+    assert caps == [10_000, 10_000, 10_000, 20_000]  # each sampler's own cap unless --max-steps
+    assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--max-steps", "500", "--no-plots"]) == 1
+    assert caps[-1] == 500

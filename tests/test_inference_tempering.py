@@ -124,3 +124,15 @@ def test_the_ladder_is_geometric_from_the_posterior_down():
     betas = Tempering(temps=4, beta_min=0.1).betas
     assert betas[0] == 1.0 and np.isclose(betas[-1], 0.1)
     assert np.allclose(betas[1:] / betas[:-1], betas[1] / betas[0])
+
+
+def test_a_tempered_fit_given_no_rule_is_capped_at_its_own_steps():
+    from bayes_inerter.inference.sampling.convergence import Convergence
+    from bayes_inerter.inference.sampling.tempering import MAX_STEPS, Tempering, default_convergence
+
+    assert default_convergence(None) == Convergence()
+    tempered = default_convergence(Tempering())
+    assert tempered.max_steps == MAX_STEPS == 10_000
+    assert tempered == Convergence(max_steps=MAX_STEPS)  # the rule is otherwise the package's
+    # in evaluations, twice the untempered cap with the default ladder
+    assert MAX_STEPS * Tempering().temps == 2 * Convergence().max_steps

@@ -138,7 +138,8 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--walkers", type=_positive_int, help="walkers (default 2 x parameters + 2)")
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
     p.add_argument("--max-steps", type=_positive_int,
-                   help="until converged, but at most this many steps in all (default 20000; a checkpoint is continued)")
+                   help="until converged, but at most this many steps in all (default 10000 tempered, 20000 with "
+                        "--no-tempering; a checkpoint is continued)")
     p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")
     p.add_argument("--residual", choices=FIT_RESIDUALS, default=DEFAULT_RESIDUAL,
                    help="likelihood (%(default)s): ar1 or iid, the low-passed acceleration sample by sample; "

@@ -33,6 +33,7 @@ from .posterior.model import LikelihoodSettings, PosteriorModel
 from .sampling.optimize import laplace_covariance
 from .summaries.results import contraction, posterior_sample, summary_rows, to_inference_data, write_loo, write_summary
 from .sampling.sampler import Adaptation, Convergence, Tempering, check_run_options, run_sampler
+from .sampling.tempering import default_convergence
 
 __all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions", "DRAWS_FILE",
            "ALL_DRAWS_FILE"]
@@ -163,7 +164,8 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     ``tempering``: parallel tempering's ladder (``sampler.Tempering``; the default, 4
     temperatures down to beta 0.1; None: the ensemble alone, the default before, see
     docs/inference.md for the measurements that chose it); fit.json gives it and its swap
-    rates. ``progress``, ``report``:
+    rates. ``convergence`` None: the package's rule, capped at ``tempering.MAX_STEPS``
+    (10,000) steps where tempered (``tempering.default_convergence``). ``progress``, ``report``:
     ``run_sampler``'s callbacks. The folder is locked for the run (``lock.folder_lock``):
     a second run into it is refused at once.
 
@@ -187,6 +189,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     """
     out = Path(out)
     likelihood = likelihood or LikelihoodSettings()
+    convergence = convergence or default_convergence(tempering)
     if interval is None:
         interval = "posterior" if likelihood.residual in ("harmonic", "motion") else DEFAULT_INTERVAL
     interval_settings = _interval_settings(interval)
@@ -274,6 +277,7 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
     from .sampling.optimize import NM_RESTARTS, find_start, local_optimum
 
     out = Path(out)
+    convergence = convergence or default_convergence(tempering)
     jm = JointModel(tuple(records), priors=priors or {}, likelihood=likelihood or LikelihoodSettings(), model=model)
     check_run_options(jm.ndim, walkers, steps)
     coords = default_coordinates(jm, coordinates)

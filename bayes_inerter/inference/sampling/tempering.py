@@ -39,7 +39,22 @@ from ...executor import Executor, interrupts_held
 from .checkpoint import CheckpointError
 from .target import Target
 
-__all__ = ["Tempering", "TemperedTarget", "sample_tempered", "swap_rates"]
+__all__ = ["Tempering", "TemperedTarget", "sample_tempered", "swap_rates", "MAX_STEPS", "default_convergence"]
+
+#: A tempered fit's default cap, in the posterior's ensemble's steps: 10,000, each
+#: costing ``temps`` times the evaluations (40,000 steps' worth with 4 temperatures,
+#: twice the untempered cap, ``Convergence.max_steps``). The cap of the runs that
+#: measured the tempered fit's calibration (results/coverage-sbc-v8 and -v9,
+#: results/coverage-paper-like-tempered).
+MAX_STEPS = 10_000
+
+
+def default_convergence(tempering: "Tempering | None"):
+    """The convergence rule a fit takes when none is given: the package's
+    (``Convergence()``), capped at :data:`MAX_STEPS` where it is tempered."""
+    from .convergence import Convergence
+
+    return Convergence() if tempering is None else Convergence(max_steps=MAX_STEPS)
 
 
 @dataclass(frozen=True)
