@@ -34,6 +34,8 @@ def cmd_fit(args) -> int:
     if args.no_tempering and (args.tempering is not None or args.hottest_beta is not None):
         raise CliError("--no-tempering fits without the tempering ladder that --tempering and --hottest-beta set: "
                        "give one or the other")
+    tempering = None if args.no_tempering else Tempering.of(args.tempering or Tempering.temps, args.hottest_beta)
+    convergence = default_convergence(tempering) if args.max_steps is None else Convergence(max_steps=args.max_steps)
     # refused here, before the output folder is touched
     rec, device, masses, drive = load_record(args, need_masses=True)
     print(f"masses: {masses.describe()}", flush=True)
@@ -44,11 +46,7 @@ def cmd_fit(args) -> int:
                    likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample, delay_sd=args.delay_sd),
                    coordinates=args.coordinates, adaptation=None if args.no_adaptation else Adaptation(),
                    checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
-                   name=Path(args.record).name)
-    options["tempering"] = tempering = None if args.no_tempering else Tempering.of(args.tempering or Tempering.temps,
-                                                                                    args.hottest_beta)
-    options["convergence"] = convergence = (default_convergence(tempering) if args.max_steps is None
-                                            else Convergence(max_steps=args.max_steps))
+                   name=Path(args.record).name, convergence=convergence, tempering=tempering)
     if args.model == "compare":
         return _compare(rec, args, options)
     bar = StepProgress("sampling", total=args.steps, check_interrupt=check_interrupt, cap=convergence.max_steps)

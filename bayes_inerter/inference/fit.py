@@ -373,7 +373,7 @@ def _finish(out: Path, model, got: _Sampled, steps, convergence, b_identified: b
                                 "--coordinates unconstrained"))
     late = convergence_warning(converged=run.converged, reason=run.reason, iteration=run.iteration,
                                tau=dict(zip(model.names, map(float, run.tau))), rows=got.rows,
-                               conv=convergence or Convergence(), steps=steps, b_identified=b_identified)
+                               conv=convergence, steps=steps, b_identified=b_identified)
     if late is not None:
         ended.append(late)
     _flag(got.rows, ended)
