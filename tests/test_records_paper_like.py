@@ -57,3 +57,15 @@ def test_a_paper_like_record_keeps_the_papers_b_and_says_what_it_is():
     for key in ("stribeck_ratio", "stribeck_velocity", "backlash", "force_gain", "accel_gain"):
         assert other[key] == rec.metadata["generator"][key] == getattr(lab, key)
     assert laboratory(3, device=dev).force_gain != lab.force_gain
+
+
+def test_a_longer_record_is_the_same_laboratory_for_longer():
+    dev = PaperLike(base=GeneratorSettings(duration=1.0, ramp=0.5, oversample=12))
+    short = paper_like_record("A1", 1.5, seed=2, device=dev)
+    longer = paper_like_record("A1", 1.5, seed=2, device=dev, duration=1.5)
+    assert longer.time[-1] == pytest.approx(1.5) and short.time[-1] == pytest.approx(1.0)
+    for key in ("stribeck_ratio", "backlash", "force_gain", "accel_gain"):
+        assert longer.metadata["generator"][key] == short.metadata["generator"][key]
+    assert longer.metadata["generator"]["duration"] == 1.5
+    with pytest.raises(ValueError, match="ramp"):
+        paper_like_record("A1", 1.5, seed=2, device=dev, duration=0.25)

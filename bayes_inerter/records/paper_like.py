@@ -104,16 +104,20 @@ def laboratory(seed: int, *, device: PaperLike | None = None, frequencies=FREQUE
 
 
 def paper_like_record(name: str, freq: float, *, seed: int = 0, device: PaperLike | None = None,
-                      frequencies=FREQUENCIES_HZ, names=tuple(SETTINGS)) -> Record:
+                      frequencies=FREQUENCIES_HZ, names=tuple(SETTINGS), duration: float | None = None) -> Record:
     """The paper-like record of setting ``name`` at ``freq``: the device drawn from the
     first stream spawned from ``seed`` (the same for every record of that seed), the
     noise from the record's own stream, spawned after it in the grid's order (as
-    :func:`.generator.paper_record`), so each record can be made alone."""
+    :func:`.generator.paper_record`), so each record can be made alone. ``duration``:
+    the record's length, s, ramp included (None: the generator's, the paper's 10 s); the
+    same laboratory and sensors, a longer record (its noise is drawn anew)."""
     names, frequencies = list(names), list(frequencies)
     if name not in names or freq not in frequencies:
         raise ValueError(f"no setting {name!r} at {freq:g} Hz in the grid")
     seeds = _streams(seed, frequencies, names)
     settings = laboratory(seed, device=device, frequencies=frequencies, names=names)
+    if duration is not None:
+        settings = dataclasses.replace(settings, duration=float(duration))
     rng = np.random.default_rng(seeds[1 + names.index(name) * len(frequencies) + frequencies.index(freq)])
     rec = generate_record(paper_parameters(name), freq, settings=settings, rng=rng, setting_name=name)
     rec.metadata["truth"] = "paper-like"
