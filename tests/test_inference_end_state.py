@@ -6,7 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.summaries.end_state import PHI_WARNING, end_state_warnings
+from bayes_inerter.inference.summaries.end_state import (FEW_PERIODS, HONEST_PERIODS, PHI_WARNING, end_state_warnings,
+                                                       few_periods_warning)
 from bayes_inerter.inference.sampling.optimize import laplace_ensemble
 from bayes_inerter.inference.posterior.priors import LogUniform, Uniform
 from bayes_inerter.inference.summaries.results import PosteriorSample
@@ -61,3 +62,11 @@ def test_no_walkers_drawn_around_a_start_of_zero_density():
     # walkers that started outside stayed there: draws outside the prior's support
     with pytest.raises(ValueError, match="zero posterior density"):
         laplace_ensemble(_Flat(), np.array([math.log(3000.0), 0.5]), 6, np.random.default_rng(0))
+
+
+def test_a_record_of_three_periods_is_warned_and_b_flagged_and_four_are_not():
+    w = few_periods_warning(3)
+    assert w is not None and w.flag == FEW_PERIODS and w.names == ("b",)
+    assert "3 steady drive periods" in w.message and "results/record-length" in w.message
+    assert few_periods_warning(HONEST_PERIODS) is None
+    assert few_periods_warning(None) is None  # a time-domain likelihood takes no periods' means

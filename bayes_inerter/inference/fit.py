@@ -27,7 +27,7 @@ from ..lock import folder_lock
 from ..masses import Masses, resolve_masses
 from .sampling.coordinates import default_coordinates
 from .sampling.coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
-from .summaries.end_state import EndWarning, convergence_warning, end_state_warnings
+from .summaries.end_state import EndWarning, convergence_warning, end_state_warnings, few_periods_warning
 from .summaries.interval import DEFAULT_INTERVAL, INTERVALS, IntervalSettings, inertance_interval
 from .posterior.model import LikelihoodSettings, PosteriorModel
 from .sampling.optimize import laplace_covariance
@@ -376,6 +376,9 @@ def _finish(out: Path, model, got: _Sampled, steps, convergence, b_identified: b
                                conv=convergence, steps=steps, b_identified=b_identified)
     if late is not None:
         ended.append(late)
+    few = few_periods_warning(model.harmonic.periods if getattr(model, "harmonic", None) is not None else None)
+    if few is not None:
+        ended.append(few)
     _flag(got.rows, ended)
     write_summary(out / "summary.csv", got.rows)
     return dataclasses.replace(got, ended=ended, edge=edge)
