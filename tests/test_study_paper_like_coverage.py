@@ -46,7 +46,7 @@ def test_a_folder_keeps_one_family_one_likelihood_and_one_sampler(tmp_path):
     with pytest.raises(ValueError, match="another sampler than parallel tempering, 4 temperatures"):
         run(Config(tempering=4), tmp_path, Serial())
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps({**today, "tempering": [4, 0.1]}))
-    with pytest.raises(ValueError, match="another sampler than the default sampler"):
+    with pytest.raises(ValueError, match="another sampler than the ensemble alone"):
         run(Config(), tmp_path, Serial())
     with pytest.raises(ValueError, match="tempering, 4 temperatures, beta 1, 0.215, 0.0464, 0.01; choose"):
         run(Config(tempering=4, hottest_beta=0.01), tmp_path, Serial())  # the same temperatures, a hotter end

@@ -55,7 +55,7 @@ class Config:
     zeta_B : the generator's plate-mode damping ratio (None: Table I's c_B).
     max_steps : each chain's cap (cold steps where tempered).
     tempering : parallel tempering's temperatures (``sampler.Tempering``; None: the
-        default sampler). A folder keeps one ladder.
+        ensemble alone). A folder keeps one ladder.
     hottest_beta : the tempering ladder's hottest beta.
     only : fit these records alone (None: records 0 to ``records`` - 1).
     tau_rtol : the convergence rule's tolerance of tau's growth (None: the package's,
@@ -97,7 +97,7 @@ class Config:
         return {"tau": tau_floor_prior(self.tau_floor)}
 
     def ladder(self) -> Tempering | None:
-        """The fit's tempering (None: the default sampler)."""
+        """The fit's tempering (None: the ensemble alone)."""
         return Tempering.of(self.tempering, self.hottest_beta)
 
 
@@ -135,7 +135,7 @@ def fit_one(job) -> dict:
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
            "seconds": round(time.perf_counter() - t0, 1), "commit": commit,
            "tau_rtol": stop_rule.resolved(config.tau_rtol)}
-    if config.tempering is not None:  # absent for the default sampler: the rows before it have no such keys
+    if config.tempering is not None:  # absent for the ensemble alone: the rows before it have no such keys
         row.update(tempering=config.tempering, hottest_beta=config.hottest_beta,
                    swap_rates=res.tempering["swap_rates"])
     if config.tau_floor is not None:  # likewise absent for the package's prior

@@ -28,10 +28,11 @@ fits with those of ``LikelihoodSettings`` changed (``input_noise=16``,
 ``law_beyond_viscous=false``), a candidate beside the default on the same seeds; a
 folder keeps one likelihood, its every setting recorded in each replicate (a change of
 the library's default starts a new folder). ``tempering`` T fits with parallel tempering
-(``sampler.Tempering``, T temperatures down to ``hottest_beta``) where the default sampler
-does not; a folder keeps one sampler. ``tau_rtol`` stops the chains with that tolerance
-of the convergence rule (``Convergence.tau_rtol``; a folder keeps one, each replicate
-names it, ``stop_rule``). ``freq`` F runs only the replicates driven at F Hz.
+(``sampler.Tempering``, T temperatures down to ``hottest_beta``), None with the ensemble
+alone (the folders' default, ``fit``'s before it tempered); a folder keeps one sampler.
+``tau_rtol`` stops the chains with that tolerance of the convergence rule
+(``Convergence.tau_rtol``; a folder keeps one, each replicate names it, ``stop_rule``).
+``freq`` F runs only the replicates driven at F Hz.
 """
 
 from __future__ import annotations
@@ -99,7 +100,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
            "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
            "likelihood_settings": likelihood_settings(likelihood), "tau_rtol": stop_rule.resolved(tau_rtol)}
-    if tempering is not None:  # absent for the default sampler, as in the replicates written before the option
+    if tempering is not None:  # absent for the ensemble alone, as in the replicates written before the option
         out.update(tempering=_ladder_entry(tempering), swap_rates=res.tempering["swap_rates"])
     for level in LEVELS:
         lo, hi = hdi(b, level)
@@ -273,7 +274,7 @@ class Config:
             raise ValueError(f"likelihood {self.likelihood!r}: {exc}") from None
 
     def ladder(self) -> Tempering | None:
-        """The fit's tempering (None: the default sampler)."""
+        """The fit's tempering (None: the ensemble alone)."""
         return Tempering.of(self.tempering, self.hottest_beta)
 
 
@@ -307,7 +308,7 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
                          "gives today (or made before replicates recorded them); choose another folder")
     ladder = config.ladder()
     if not config.summarise and any(r.get("tempering") != _ladder_entry(ladder) for r in found):
-        asked = "the default sampler" if ladder is None else ladder.describe()
+        asked = "the ensemble alone" if ladder is None else ladder.describe()
         raise ValueError(f"{out} holds replicates fitted with another sampler than {asked}; choose another folder")
     if not config.summarise:
         stop_rule.check_folder(found, config.tau_rtol, out)

@@ -78,7 +78,7 @@ class Tempering:
     @classmethod
     def of(cls, temps: int | None, beta_min: float | None = None) -> Tempering | None:
         """The ladder of ``temps`` temperatures down to ``beta_min`` (None: the default
-        hottest beta), or None where ``temps`` is None (the default sampler): what a
+        hottest beta), or None where ``temps`` is None (the ensemble alone): what a
         command line's ``--tempering`` and ``--hottest-beta`` ask for."""
         if temps is None:
             return None
