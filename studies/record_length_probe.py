@@ -61,7 +61,8 @@ def fit_one(way: str, i: int, work: Path) -> dict:
     b = np.asarray(post["b"]).ravel()
     info = json.loads((out / "fit.json").read_text())
     lab = laboratory(seed)
-    b_true = paper_parameters(setting).b
+    b_params = paper_parameters(setting)
+    b_true = b_params.b
     lo, hi = hdi(b, 0.94)
     lo50, hi50 = hdi(b, 0.5)
     return {"way": way, "setting": setting, "seed": seed, "b_true": b_true, "b_median": float(np.median(b)),
@@ -69,7 +70,13 @@ def fit_one(way: str, i: int, work: Path) -> dict:
             "gain_ratio_pct": 100 * (lab.force_gain / lab.accel_gain - 1),
             "z": (float(np.median(b)) - b_true) / ((hi - lo) / 3.76), "covered94": bool(lo <= b_true <= hi),
             "covered50": bool(lo50 <= b_true <= hi50), "width94_pct": 100 * (hi - lo) / b_true,
-            "tau_median_N": float(np.median(np.asarray(post["tau"]))), "converged": bool(info.get("converged")),
+            "tau_median_N": float(np.median(np.asarray(post["tau"]))),
+            # the friction's split between plate and rotation, f1_0 / (f1_0 + f2_0), against the truth's
+            "f_share_median": float(np.median(np.asarray(post["f_share"]))),
+            "f_share_hdi94": [float(v) for v in hdi(np.asarray(post["f_share"]).ravel(), 0.94)],
+            "f_share_true": b_params.f1_0 / (b_params.f1_0 + b_params.f2_0),
+            "corr_b_f_share": float(np.corrcoef(b, np.asarray(post["f_share"]).ravel())[0, 1]),
+            "converged": bool(info.get("converged")),
             "steps": info.get("iterations")}
 
 
@@ -97,7 +104,7 @@ def main(argv=None) -> int:
     with open(a.out / "summary.csv", "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["way", "fits", "rms_z", "mean_z", "covered94", "covered50", "median_width94_pct",
-                    "rms_error_beyond_gain_pct", "median_tau_N"])
+                    "rms_error_beyond_gain_pct", "median_tau_N", "f_share_held94"])
         for way in a.ways:
             r = [x for x in rows if x["way"] == way]
             if not r:
@@ -107,7 +114,8 @@ def main(argv=None) -> int:
             w.writerow([way, len(r), f"{np.sqrt(np.mean(z ** 2)):.2f}", f"{np.mean(z):+.2f}",
                         sum(x["covered94"] for x in r), sum(x["covered50"] for x in r),
                         f"{np.median([x['width94_pct'] for x in r]):.2f}", f"{np.sqrt(np.mean(beyond ** 2)):.2f}",
-                        f"{np.median([x['tau_median_N'] for x in r]):.3f}"])
+                        f"{np.median([x['tau_median_N'] for x in r]):.3f}",
+                        sum(x["f_share_hdi94"][0] <= x["f_share_true"] <= x["f_share_hdi94"][1] for x in r)])
     print(f"wrote {a.out / 'fits.csv'} and summary.csv")
     return 0
 
