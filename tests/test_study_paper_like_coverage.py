@@ -68,6 +68,24 @@ def test_a_folder_keeps_one_stopping_rule(tmp_path):
     assert (tmp_path / "coverage.csv").exists() and not got.failed
 
 
+def test_a_folder_keeps_one_record_length(tmp_path):
+    """Replicates that do not name a length are the paper's 10 s records: a run asking
+    20 s is refused, one asking the paper's continues them (here: summarises)."""
+    (tmp_path / "replicates").mkdir()
+    one = json.loads(next((COMMITTED / "replicates").glob("*.json")).read_text())
+    today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood), "tau_rtol": 0.05}
+    (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
+    with pytest.raises(ValueError, match="another length than 20 s; choose another folder"):
+        run(Config(replicates=1, tau_rtol=0.05, duration=20.0), tmp_path, Serial())
+    (tmp_path / "replicates" / "0000.json").write_text(json.dumps({**today, "duration_s": 20.0}))
+    with pytest.raises(ValueError, match="another length than the paper's 10 s"):
+        run(Config(replicates=1, tau_rtol=0.05), tmp_path, Serial())
+    got = run(Config(replicates=1, tau_rtol=0.05, duration=20.0), tmp_path, Serial())
+    assert not got.failed
+    with pytest.raises(ValueError, match="duration must be a positive number"):
+        Config(duration=0.0)
+
+
 def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):
     with pytest.raises(ValueError, match="run without summarise first"):
         run(Config(summarise=True), tmp_path, Serial())

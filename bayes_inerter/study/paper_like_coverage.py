@@ -32,7 +32,9 @@ the library's default starts a new folder). ``tempering`` T fits with parallel t
 alone (the folders' default, ``fit``'s before it tempered); a folder keeps one sampler.
 ``tau_rtol`` stops the chains with that tolerance of the convergence rule
 (``Convergence.tau_rtol``; a folder keeps one, each replicate names it, ``stop_rule``).
-``freq`` F runs only the replicates driven at F Hz.
+``freq`` F runs only the replicates driven at F Hz. ``duration`` D makes every record D s
+long, ramp included (the paper's are 10 s: 3 steady periods at 0.5 Hz, results/record-length);
+a folder keeps one length.
 """
 
 from __future__ import annotations
@@ -82,10 +84,10 @@ def likelihood_settings(text: str) -> dict:
 
 def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
               likelihood: str = "default", tempering: Tempering | None = None,
-              tau_rtol: float | None = None) -> dict:
+              tau_rtol: float | None = None, duration: float | None = None) -> dict:
     setting, freq = grid_case(k)
     seed = seed0 + k
-    rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family])
+    rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family], duration=duration)
     b_true = paper_parameters(setting).b
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
@@ -102,6 +104,8 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "likelihood_settings": likelihood_settings(likelihood), "tau_rtol": stop_rule.resolved(tau_rtol)}
     if tempering is not None:  # absent for the ensemble alone, as in the replicates written before the option
         out.update(tempering=_ladder_entry(tempering), swap_rates=res.tempering["swap_rates"])
+    if duration is not None:  # absent for the paper's 10 s, as in the replicates written before the option
+        out["duration_s"] = float(duration)
     for level in LEVELS:
         lo, hi = hdi(b, level)
         key = round(100 * level)
@@ -123,7 +127,7 @@ def _file(out: Path, k: int) -> Path:
 def _run(job) -> dict:
     k, out, config, commit = job
     got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder(),
-                    config.tau_rtol)
+                    config.tau_rtol, config.duration)
     path = _file(out, k)
     write_json(path, got, indent=1)
     return got
@@ -253,6 +257,8 @@ class Config:
     tau_rtol: float | None = field(default=None, metadata={
         "help": "the convergence rule's tolerance of tau's growth between checks (default: the package's, "
                 "Convergence.tau_rtol); a folder keeps one"})
+    duration: float | None = field(default=None, metadata={
+        "help": "each record's length, s, ramp included (default: the paper's 10 s); a folder keeps one"})
     summarise: bool = field(default=False, metadata={"help": "only write the tables from the replicates there"})
     against: str | None = field(default=None, metadata={
         "help": "with summarise: a folder of the same replicates fitted otherwise; also writes pairs.csv and "
@@ -265,6 +271,8 @@ class Config:
             raise ValueError(f"unknown family {self.family!r}; choose from {', '.join(FAMILIES)}")
         if self.freq is not None and self.freq not in FREQUENCIES_HZ:
             raise ValueError(f"freq must be one of {', '.join(f'{f:g}' for f in FREQUENCIES_HZ)} Hz, got {self.freq:g}")
+        if self.duration is not None and not self.duration > 0:
+            raise ValueError(f"duration must be a positive number of seconds, got {self.duration!r}")
         if self.against is not None and not self.summarise:
             raise ValueError("against compares finished replicates: give it with summarise")
         self.ladder()  # its own check of the ladder
@@ -310,6 +318,9 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     if not config.summarise and any(r.get("tempering") != _ladder_entry(ladder) for r in found):
         asked = "the ensemble alone" if ladder is None else ladder.describe()
         raise ValueError(f"{out} holds replicates fitted with another sampler than {asked}; choose another folder")
+    if not config.summarise and any(r.get("duration_s") != config.duration for r in found):
+        length = "the paper's 10 s" if config.duration is None else f"{config.duration:g} s"
+        raise ValueError(f"{out} holds replicates of records of another length than {length}; choose another folder")
     if not config.summarise:
         stop_rule.check_folder(found, config.tau_rtol, out)
     lines, failed = [], []
