@@ -35,6 +35,8 @@ ROOT = Path(__file__).resolve().parents[1]
 SETTINGS_ORDER = ("A3", "B1", "A6", "A0", "B2", "A1", "A4", "A2", "A5")
 FREQ = 0.5
 SEED0 = 9150
+#: A normal's 94 % interval in its sds (2 x 1.88): z is b's error over the 94 % width / this.
+WIDTH94_SDS = 3.76
 #: way: (record length s, likelihood settings, seconds kept of the record: None all)
 WAYS = {"10s": (None, {}, None), "20s": (20.0, {}, None), "20s-last3": (20.0, {"settle": 6}, None),
         "20s-first10s": (20.0, {}, 10.0), "10s-20harmonics": (None, {"cutoff": 20 * FREQ}, None)}
@@ -51,10 +53,10 @@ def fit_one(way: str, i: int, work: Path) -> dict:
     setting, seed = SETTINGS_ORDER[i % len(SETTINGS_ORDER)], SEED0 + i
     duration, changes, kept = WAYS[way]
     out = work / way / f"{setting}-{FREQ}-{seed}"
-    rec = paper_like_record(setting, FREQ, seed=seed, duration=duration)
-    if kept is not None:
-        rec = _first(rec, kept)
-    if not (out / "fit.json").exists():
+    if not (out / "fit.json").exists():  # a finished fit is read, its record not made again
+        rec = paper_like_record(setting, FREQ, seed=seed, duration=duration)
+        if kept is not None:
+            rec = _first(rec, kept)
         fit_record(rec, out, seed=seed, plots=False, likelihood=LikelihoodSettings(**changes))
     import arviz as az  # after the fit: its import is slow
     post = az.from_netcdf(str(out / "posterior.nc")).posterior
@@ -68,7 +70,7 @@ def fit_one(way: str, i: int, work: Path) -> dict:
     return {"way": way, "setting": setting, "seed": seed, "b_true": b_true, "b_median": float(np.median(b)),
             "error_pct": 100 * (float(np.median(b)) / b_true - 1),
             "gain_ratio_pct": 100 * (lab.force_gain / lab.accel_gain - 1),
-            "z": (float(np.median(b)) - b_true) / ((hi - lo) / 3.76), "covered94": bool(lo <= b_true <= hi),
+            "z": (float(np.median(b)) - b_true) / ((hi - lo) / WIDTH94_SDS), "covered94": bool(lo <= b_true <= hi),
             "covered50": bool(lo50 <= b_true <= hi50), "width94_pct": 100 * (hi - lo) / b_true,
             "tau_median_N": float(np.median(np.asarray(post["tau"]))),
             # the friction's split between plate and rotation, f1_0 / (f1_0 + f2_0), against the truth's

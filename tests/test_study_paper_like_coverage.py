@@ -70,7 +70,8 @@ def test_a_folder_keeps_one_stopping_rule(tmp_path):
 
 def test_a_folder_keeps_one_record_length(tmp_path):
     """Replicates that do not name a length are the paper's 10 s records: a run asking
-    20 s is refused, one asking the paper's continues them (here: summarises)."""
+    20 s is refused; a folder of 20 s records refuses the paper's and continues a run
+    asking 20 s (here: every replicate asked being there, it only summarises)."""
     (tmp_path / "replicates").mkdir()
     one = json.loads(next((COMMITTED / "replicates").glob("*.json")).read_text())
     today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood), "tau_rtol": 0.05}
