@@ -8,7 +8,7 @@ import pytest
 
 from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings
-from bayes_inerter.study.study_calibration import (LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
+from bayes_inerter.study.study_calibration import (IDENTIFIED, LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
                                                   coverage_by_frequency, coverage_rows, coverage_so_far, finished_replicates,
                                                   inspect_replicate, raise_cap, rank_correlations, replicate_device,
                                                   study_replicate, write_coverage_so_far, write_study_calibration)
@@ -68,6 +68,22 @@ def test_coverage_so_far_counts_every_chain_and_the_converged_apart(tmp_path):
     assert write_coverage_so_far(tmp_path) == coverage_so_far(results)
     assert (tmp_path / "coverage_so_far.csv").read_text().count("\n") == 1 + len(rows)
     assert not (tmp_path / "coverage_by_frequency.csv").exists()  # not a single-record calibration's folder
+
+
+def test_the_identified_combination_is_counted_over_the_replicates_that_rank_it():
+    """b / gain is what a record identifies where the gain is sampled; replicates written
+    before it was ranked carry none, and the pooled row leaves it out."""
+    results = [_fake(k, True) for k in range(4)]
+    for k, r in enumerate(results[1:], start=1):
+        r["converged"] = True
+        r["identified"] = {IDENTIFIED: {"truth": 1.0, "rank": 4, "hdi": {"94": True, "50": k == 1},
+                                        "central": {"94": True, "50": k == 1}}}
+    rows = {(r["chains"], r["parameter"]): r for r in coverage_so_far(results)}
+    got = rows["all", f"{IDENTIFIED} (identified)"]
+    assert (got["replicates"], got["held_94"], got["held_50"]) == (3, 3, 1)
+    assert got["expected_50"] == 1.5
+    assert rows["all", "all parameters"]["intervals"] == 4 * len(NAMES)
+    assert rows["converged", f"{IDENTIFIED} (identified)"]["replicates"] == 3
 
 
 def test_coverage_by_frequency_splits_the_replicates_as_they_were_fitted(tmp_path):
@@ -295,3 +311,35 @@ def test_the_calibration_keeps_its_folders_stopping_rule_unless_asked(tmp_path, 
     with pytest.raises(Stop):
         study_replicate(cs, 0, tmp_path / "work")
     assert seen["convergence"].tau_rtol == 0.2 and seen["convergence"].max_steps == 900
+
+
+def test_a_replicate_that_samples_the_gain_ranks_b_over_gain_too(tmp_path, monkeypatch):
+    """Where the gain is sampled the replicate ranks b / gain (what the record identifies)
+    beside b: here every draw puts b / gain 1 % high while b's spread holds the truth."""
+    import types
+
+    import xarray as xr
+
+    from bayes_inerter.study import study_calibration
+
+    cs = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), single=True, frequencies=(1.0,),
+                          steps=None, max_steps=900, draws=19)
+    truth = replicate_device(cs, 0).truth
+    assert "gain" in truth
+    rng = np.random.default_rng(0)
+    gain = truth["gain"] * np.exp(0.02 * rng.standard_normal(400))
+    draws = {n: np.full(400, v) for n, v in truth.items()}
+    draws["gain"], draws["b"] = gain, 1.01 * truth["b"] / truth["gain"] * gain * np.exp(1e-4 * rng.standard_normal(400))
+    post = xr.Dataset({n: (("chain", "draw"), v.reshape(1, -1)) for n, v in draws.items()})
+
+    def fake_fit(record, out, **options):
+        return types.SimpleNamespace(idata=types.SimpleNamespace(posterior=post), tau=[10.0], iterations=900,
+                                     converged=True, coordinates="unconstrained", tau_by_parameter={})
+
+    monkeypatch.setattr(study_calibration, "fit_record", fake_fit)
+    rep = study_replicate(cs, 0, tmp_path / "work")
+    got = rep["identified"][IDENTIFIED]
+    assert got["truth"] == pytest.approx(truth["b"] / truth["gain"])
+    assert got["rank"] == 0 and not got["hdi"]["94"] and not got["central"]["94"]
+    assert rep["hdi"]["94"]["b"]  # b's own interval, widened by the gain's, holds it
+    assert json.loads(json.dumps(rep)) == rep

@@ -75,7 +75,7 @@ from . import stop_rule
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
-           "RANK_CORRELATION", "Config", "run"]
+           "RANK_CORRELATION", "IDENTIFIED", "Config", "run"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -269,15 +269,35 @@ def study_replicate(cs: StudyCalibration, k: int, folder=None) -> dict:
            # which chains are slow and why, readable later without running them again
            "coordinates": res.coordinates, "tau_by_parameter": res.tau_by_parameter}
     for name, t in truth.items():
-        x = kept[name]
-        out["ranks"][name] = int(np.sum(x[pick] < t))
-        for level in LEVELS:
-            key = f"{round(100 * level)}"
-            lo, hi = hdi(x, level)
-            out["hdi"].setdefault(key, {})[name] = bool(lo <= t <= hi)
-            lo, hi = np.quantile(x, [0.5 - level / 2, 0.5 + level / 2])
-            out["central"].setdefault(key, {})[name] = bool(lo <= t <= hi)
+        got = _held(kept[name], t, pick)
+        out["ranks"][name] = got["rank"]
+        for form in ("hdi", "central"):
+            for key, inside in got[form].items():
+                out[form].setdefault(key, {})[name] = inside
+    if "gain" in truth:
+        out["identified"] = {IDENTIFIED: _held(kept["b"] / kept["gain"], truth["b"] / truth["gain"], pick)}
     return out
+
+
+#: The combination a record identifies where the sensors' gain is sampled: the predicted
+#: force scales the measured acceleration by b / gain, so b's interval is b / gain's
+#: (the data's) widened by the gain's prior (which the data leave as it is). Its rank and
+#: intervals are kept beside the parameters' (``identified`` in a replicate's JSON), so
+#: that a shortfall of b's coverage can be told apart from the gain draws' own spread.
+IDENTIFIED = "b/gain"
+
+
+def _held(x: np.ndarray, t: float, pick: np.ndarray) -> dict:
+    """The truth ``t``'s rank among the draws ``x[pick]`` and whether each of the
+    :data:`LEVELS` intervals of ``x`` (highest-density, equal-tailed) holds it."""
+    got = {"truth": float(t), "rank": int(np.sum(x[pick] < t)), "hdi": {}, "central": {}}
+    for level in LEVELS:
+        key = f"{round(100 * level)}"
+        lo, hi = hdi(x, level)
+        got["hdi"][key] = bool(lo <= t <= hi)
+        lo, hi = np.quantile(x, [0.5 - level / 2, 0.5 + level / 2])
+        got["central"][key] = bool(lo <= t <= hi)
+    return got
 
 
 def coverage_rows(results: list[dict]) -> list[dict]:
@@ -358,7 +378,9 @@ def coverage_so_far(results: list[dict]) -> list[dict]:
     parameter how many replicates' 94 % and 50 % highest-density intervals held the truth,
     and a row ``all parameters`` pooling them, each beside the count nominal coverage
     expects and its binomial standard error (parameters of one replicate are not
-    independent, so the pooled se is a lower bound). A failed replicate is a miss."""
+    independent, so the pooled se is a lower bound). A failed replicate is a miss.
+    Replicates that rank an :data:`IDENTIFIED` combination add a row ``<name>
+    (identified)`` counted over them alone (the pooled row leaves it out)."""
     rows = []
     for chains, group in (("all", results), ("converged", [r for r in results if r.get("converged")])):
         ok = [r for r in group if "ranks" in r]
@@ -374,6 +396,17 @@ def coverage_so_far(results: list[dict]) -> list[dict]:
                 row[f"held_{q}"] = sum(bool(r["hdi"][q][k]) for r in ok for k in keys)
                 row[f"expected_{q}"] = round(level * n, 1)
                 row[f"se_{q}"] = round(math.sqrt(level * (1 - level) * n), 1)
+            rows.append(row)
+        carrying = [r for r in ok if "identified" in r]
+        for name in dict.fromkeys(n for r in carrying for n in r["identified"]):
+            held = [r["identified"][name] for r in carrying if name in r["identified"]]
+            row = {"chains": chains, "parameter": f"{name} (identified)", "replicates": len(held),
+                   "intervals": len(held)}
+            for level in LEVELS:
+                q = f"{round(100 * level)}"
+                row[f"held_{q}"] = sum(bool(h["hdi"][q]) for h in held)
+                row[f"expected_{q}"] = round(level * len(held), 1)
+                row[f"se_{q}"] = round(math.sqrt(level * (1 - level) * len(held)), 1)
             rows.append(row)
     return rows
 
