@@ -297,6 +297,29 @@ def _line(r: dict) -> str:
             f"converged {r['converged']}, {r['seconds']} s")
 
 
+def _refuse_mixing(found: list[dict], config: Config, out: Path) -> None:
+    """ValueError naming the first setting in which a replicate in ``out`` differs from
+    what ``config`` asks (family, likelihood, sampler, record length, stopping rule):
+    their coverage counts would not belong to one configuration."""
+    ladder = config.ladder()
+    families = sorted({r.get("family", "default") for r in found})
+    asked = "the ensemble alone" if ladder is None else ladder.describe()
+    length = "the paper's 10 s" if config.duration is None else f"{config.duration:g} s"
+    checks = (
+        (lambda r: r.get("family", "default") == config.family,
+         f"of family {', '.join(families)}, not {config.family}"),
+        (lambda r: r.get("likelihood_settings") == likelihood_settings(config.likelihood),
+         f"fitted with other likelihood settings than {config.likelihood!r} gives today (or made before "
+         "replicates recorded them)"),
+        (lambda r: r.get("tempering") == _ladder_entry(ladder), f"fitted with another sampler than {asked}"),
+        (lambda r: r.get("duration_s") == config.duration, f"of records of another length than {length}"),
+    )
+    for same, what in checks:
+        if not all(same(r) for r in found):
+            raise ValueError(f"{out} holds replicates {what}; choose another folder")
+    stop_rule.check_folder(found, config.tau_rtol, out)
+
+
 def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     """The replicates not yet in ``out``/replicates fitted on ``executor`` (one each),
     then replicates.csv and coverage.csv from every replicate there. A folder keeps one
@@ -306,23 +329,8 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     out = Path(out)
     (out / "replicates").mkdir(parents=True, exist_ok=True)
     found = [json.loads(p.read_text()) for p in (out / "replicates").glob("*.json")]
-    kept = {r.get("family", "default") for r in found}
-    if not config.summarise and kept - {config.family}:
-        raise ValueError(f"{out} holds replicates of family {', '.join(sorted(kept))}, not {config.family}; "
-                         "choose another folder")
-    want = likelihood_settings(config.likelihood)
-    if not config.summarise and any(r.get("likelihood_settings") != want for r in found):
-        raise ValueError(f"{out} holds replicates fitted with other likelihood settings than {config.likelihood!r} "
-                         "gives today (or made before replicates recorded them); choose another folder")
-    ladder = config.ladder()
-    if not config.summarise and any(r.get("tempering") != _ladder_entry(ladder) for r in found):
-        asked = "the ensemble alone" if ladder is None else ladder.describe()
-        raise ValueError(f"{out} holds replicates fitted with another sampler than {asked}; choose another folder")
-    if not config.summarise and any(r.get("duration_s") != config.duration for r in found):
-        length = "the paper's 10 s" if config.duration is None else f"{config.duration:g} s"
-        raise ValueError(f"{out} holds replicates of records of another length than {length}; choose another folder")
     if not config.summarise:
-        stop_rule.check_folder(found, config.tau_rtol, out)
+        _refuse_mixing(found, config, out)
     lines, failed = [], []
     if not config.summarise:
         commit = source_commit() or ""  # the code this run loaded, read once: HEAD may move while it runs
