@@ -405,3 +405,27 @@ def test_report_command_draws_the_figures_again(study, capsys):
         assert "no checkpoint here" in capsys.readouterr().out
     finally:
         (fit / "kept.h5").rename(fit / "chain.h5")
+
+
+def test_a_joint_fit_of_another_likelihood_is_not_reused(tmp_path):
+    """finished_joint matches an earlier joint fit by its records, seed and likelihood
+    settings: one sampled under another likelihood (the AR(1) residual before the
+    motion-in default, say) is sampled again, not read back."""
+    import dataclasses
+
+    from bayes_inerter.inference.fit import DRAWS_FILE, joint_records
+    from bayes_inerter.inference.posterior.joint import JointModel
+    from bayes_inerter.records.generator import paper_record
+    from bayes_inerter.study.run import finished_joint
+
+    recs = [paper_record(s, 1.0, seed=1) for s in ("A0", "A2")]
+    jm = JointModel(tuple(recs))
+    plan = tiny_plan()
+    info = {"records": joint_records(jm), "seed": plan.seed, "converged": True, "iterations": plan.joint_steps,
+            "likelihood": dataclasses.asdict(jm.likelihood)}
+    (tmp_path / "summary.csv").write_text("name,kind,median\nb_A0,physical,700.0\n")
+    np.savez(tmp_path / DRAWS_FILE, b_A0=np.ones(4))
+    (tmp_path / "fit.json").write_text(json.dumps(info))
+    assert finished_joint(tmp_path, recs, plan) is not None
+    (tmp_path / "fit.json").write_text(json.dumps({**info, "likelihood": {"residual": "ar1"}}))
+    assert finished_joint(tmp_path, recs, plan) is None

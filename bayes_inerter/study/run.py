@@ -110,7 +110,7 @@ def run_joint(plan: StudyPlan, out: Path, fits: list, records: dict, *, processe
 def finished_joint(folder: Path, records, plan: StudyPlan):
     """The joint model's outputs from an earlier run into ``folder``, as a FitResult,
     if it finished converged (or with ``plan.joint_steps`` steps) on the same records with
-    the same seed and left what the tables need (summary.csv, fit.json, b_draws.npz);
+    the same seed and today's likelihood settings and left what the tables need (summary.csv, fit.json, b_draws.npz);
     else None. A fresh clone of committed results thus rebuilds its tables and report
     without sampling the joint chain again (its checkpoint is not committed)."""
     import csv
@@ -128,7 +128,8 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
     except (OSError, ValueError, KeyError):
         return None
     jm = JointModel(tuple(records))
-    same = info.get("records") == joint_records(jm) and info.get("seed") == plan.seed
+    same = (info.get("records") == joint_records(jm) and info.get("seed") == plan.seed
+            and info.get("likelihood") == dataclasses.asdict(jm.likelihood))
     ended = info.get("converged") if plan.joint_steps is None else info.get("iterations") == plan.joint_steps
     if not (same and ended):
         return None
