@@ -18,6 +18,30 @@ RESULTS = Path(__file__).resolve().parents[1] / "results"
 def test_the_configuration_refuses_too_few_steps():
     with pytest.raises(ValueError, match="at least 20"):
         Config(paper_like_steps=5)
+    with pytest.raises(ValueError, match="at least 2 temperatures"):
+        Config(tempering=1)
+
+
+def test_tempering_reaches_every_single_record_fit_of_both_studies(tmp_path, monkeypatch):
+    import types
+
+    from bayes_inerter.study import full
+
+    plans = []
+
+    def fake_run_study(plan, folder, **_):
+        plans.append(plan)
+        return types.SimpleNamespace(outcomes=[], seconds={"total": 0.0})
+
+    monkeypatch.setattr(full, "run_study", fake_run_study)
+    monkeypatch.setattr(full, "paper_like_records", lambda folder, seed: folder)
+    monkeypatch.setattr(full, "_report", lambda out, seed: out / "REPORT.md")
+    run(Config(tempering=4), tmp_path, Serial())
+    control, headline = plans
+    assert control.tempering == headline.tempering == 4
+    assert control.joint and not headline.joint  # the joint model itself is not tempered
+    run(Config(), tmp_path, Serial())
+    assert plans[2].tempering is None  # the committed results' sampler unless asked
 
 
 def test_the_paper_like_records_are_those_generate_writes(tmp_path):
