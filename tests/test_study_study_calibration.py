@@ -343,3 +343,22 @@ def test_a_replicate_that_samples_the_gain_ranks_b_over_gain_too(tmp_path, monke
     assert got["rank"] == 0 and not got["hdi"]["94"] and not got["central"]["94"]
     assert rep["hdi"]["94"]["b"]  # b's own interval, widened by the gain's, holds it
     assert json.loads(json.dumps(rep)) == rep
+
+
+def test_gain_draws_counts_the_true_gains_inside_their_prior(tmp_path):
+    """A gain the records leave at its prior holds the truth as often as the draws fall
+    inside the prior's interval: the count says whether a shortfall is the draws'."""
+    from bayes_inerter.study.study_calibration import gain_draws
+
+    sd = 0.01
+    z = [0.1, -0.5, 0.9, -1.5, 2.5]  # in units of the prior's sd: 2 inside 50 %, 4 inside 94 %
+    results = [{**_fake(k, True), "truth": {"gain": float(np.exp(v * sd))}} for k, v in enumerate(z)]
+    (row,) = gain_draws(results + [{"replicate": 5, "error": "RuntimeError: no"}], sd)
+    assert (row["replicates"], row["inside_50"], row["inside_94"]) == (5, 2, 4)
+    assert row["expected_50"] == 2.5 and gain_draws([_fake(0, True)], sd) == []
+    (tmp_path / "replicates").mkdir()
+    for r in results:
+        (tmp_path / "replicates" / f"{r['replicate']:04d}.json").write_text(json.dumps(r))
+    (tmp_path / "settings.json").write_text(json.dumps({"likelihood": {"gain_sd": sd}}))
+    write_coverage_so_far(tmp_path)
+    assert (tmp_path / "gain_draws.csv").read_text().splitlines()[1].startswith("gain,5,")

@@ -75,7 +75,7 @@ from . import stop_rule
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
-           "RANK_CORRELATION", "IDENTIFIED", "Config", "run"]
+           "RANK_CORRELATION", "IDENTIFIED", "gain_draws", "Config", "run"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -454,12 +454,33 @@ def coverage_by_frequency(results: list[dict], frequencies) -> list[dict]:
     return rows
 
 
+def gain_draws(results: list[dict], gain_sd: float) -> list[dict]:
+    """Where the replicates' true gains fell in their prior (log-normal about 1, log-sd
+    ``gain_sd``): how many lay inside its central 94 % and 50 % intervals, beside the
+    counts expected and their binomial se. The records leave the gain's posterior at its
+    prior, so its coverage, and through b / gain b's, moves with these draws' own spread
+    (the draws, not the likelihood). [] where no replicate drew a gain."""
+    from scipy import stats
+
+    z = [abs(math.log(r["truth"]["gain"])) / gain_sd for r in results if "gain" in r.get("truth", {})]
+    if not z:
+        return []
+    row = {"parameter": "gain", "replicates": len(z)}
+    for level in LEVELS:
+        q = f"{round(100 * level)}"
+        row[f"inside_{q}"] = sum(v <= stats.norm.ppf(0.5 + level / 2) for v in z)
+        row[f"expected_{q}"] = round(level * len(z), 1)
+        row[f"se_{q}"] = round(math.sqrt(level * (1 - level) * len(z)), 1)
+    return [row]
+
+
 def write_coverage_so_far(out) -> list[dict]:
     """``out``/coverage_so_far.csv from :func:`coverage_so_far` of the replicates
     finished in ``out``, and ``out``/rank_correlations.csv from
     :func:`rank_correlations`; for a single-record calibration (its settings.json says
-    ``single``) also ``out``/coverage_by_frequency.csv (:func:`coverage_by_frequency`).
-    Returns the coverage rows."""
+    ``single``) also ``out``/coverage_by_frequency.csv (:func:`coverage_by_frequency`);
+    where the fits sampled a gain (settings.json's ``gain_sd``), ``out``/gain_draws.csv
+    (:func:`gain_draws`). Returns the coverage rows."""
     from .analysis import write_csv
 
     finished = finished_replicates(out)
@@ -470,6 +491,10 @@ def write_coverage_so_far(out) -> list[dict]:
     saved = json.loads(settings_file.read_text()) if settings_file.exists() else {}
     if saved.get("single") and saved.get("frequencies"):
         write_csv(Path(out) / "coverage_by_frequency.csv", coverage_by_frequency(finished, saved["frequencies"]))
+    gain_sd = (saved.get("likelihood") or {}).get("gain_sd")
+    drawn = gain_draws(finished, gain_sd) if gain_sd else []
+    if drawn:
+        write_csv(Path(out) / "gain_draws.csv", drawn)
     return rows
 
 
