@@ -60,9 +60,11 @@ def test_chains_sentence_counts_the_converged_two_port_chains(tmp_path):
     for k, (converged, steps) in enumerate([(True, 4000), (False, 20000)]):
         folder = tmp_path / "fits" / "two-port" / f"r{k}"
         folder.mkdir(parents=True)
-        (folder / "fit.json").write_text(json.dumps({"converged": converged, "iterations": steps}))
+        (folder / "fit.json").write_text(json.dumps({"converged": converged, "iterations": steps,
+                                                     "timings_s": {"total": 30.0 + 60 * k}}))
     text = chains_sentence(tmp_path)
     assert text.startswith("1 of the 2 two-port chains met") and "4,000 to 20,000 steps" in text
+    assert "a median 60 s and at most 90 s" in text and "(2 minutes in all" in text
     assert "indicative" in text and chains_sentence(tmp_path / "none") == ""
 
 

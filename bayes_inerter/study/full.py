@@ -24,6 +24,7 @@ through ``cli.study_script``.
 from __future__ import annotations
 
 import json
+import statistics
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -86,6 +87,10 @@ def chains_sentence(headline: Path) -> str:
     steps = [int(f["iterations"]) for f in fits]
     length = f"{steps[0]:,} steps each" if min(steps) == max(steps) else f"{min(steps):,} to {max(steps):,} steps"
     text = f"{done} of the {len(fits)} two-port chains met the package's convergence rule ({length})."
+    seconds = sorted(float(f["timings_s"]["total"]) for f in fits if "total" in f.get("timings_s", {}))
+    if seconds:
+        text += (f" A fit took a median {statistics.median(seconds):.0f} s and at most {seconds[-1]:.0f} s "
+                 f"on one process ({sum(seconds) / 60:.0f} minutes in all).")
     if done < len(fits):
         text += " Read the intervals of the others as indicative (limitations below)."
     return text
