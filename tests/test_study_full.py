@@ -18,8 +18,8 @@ RESULTS = Path(__file__).resolve().parents[1] / "results"
 def test_the_configuration_refuses_too_few_steps():
     with pytest.raises(ValueError, match="at least 20"):
         Config(paper_like_steps=5)
-    with pytest.raises(ValueError, match="at least 2 temperatures"):
-        Config(tempering=1)
+    with pytest.raises(ValueError, match="whole number of temperatures"):
+        Config(tempering=0)
 
 
 def test_tempering_reaches_every_single_record_fit_of_both_studies(tmp_path, monkeypatch):
@@ -40,8 +40,9 @@ def test_tempering_reaches_every_single_record_fit_of_both_studies(tmp_path, mon
     control, headline = plans
     assert control.tempering == headline.tempering == 4
     assert control.joint and not headline.joint  # the joint model itself is not tempered
-    run(Config(), tmp_path, Serial())
-    assert plans[2].tempering is None  # the committed results' sampler unless asked
+    run(Config(tempering=1), tmp_path, Serial())
+    assert plans[2].tempering is None  # one temperature: the ensemble alone
+    assert Config().tempering == 4  # as fit, and as the committed results were sampled
 
 
 def test_the_paper_like_records_are_those_generate_writes(tmp_path):

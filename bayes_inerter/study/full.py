@@ -57,8 +57,8 @@ class Config:
     paper_like_steps : steps of each paper-like chain (None: until converged).
     report_only : only write REPORT.md again from the results there.
     tempering : parallel tempering's temperatures for every single-record fit of both
-        studies (``StudyPlan.tempering``; None: the ensemble alone, as the committed
-        results were sampled). The joint model is not tempered.
+        studies (``StudyPlan.tempering``; default 4, as ``fit`` and the committed
+        results; 1 or None: the ensemble alone). The joint model is not tempered.
     """
 
     seed: int = field(default=0, metadata={"help": "the paper-like laboratory's seed"})
@@ -66,15 +66,15 @@ class Config:
         "help": "steps of each paper-like chain (default: until converged)"})
     report_only: bool = field(default=False, metadata={
         "help": "only write REPORT.md again from the results there (the other studies' SECTION.md included)"})
-    tempering: int | None = field(default=None, metadata={
-        "help": "parallel tempering's temperatures for every single-record fit (default: none, the ensemble alone)"})
+    tempering: int | None = field(default=4, metadata={
+        "help": "parallel tempering's temperatures for every single-record fit (default 4, as fit; 1: the ensemble alone)"})
 
     def __post_init__(self) -> None:
         if self.paper_like_steps is not None and not (isinstance(self.paper_like_steps, int)
                                                       and self.paper_like_steps >= 20):
             raise ValueError(f"paper_like_steps must be a whole number of at least 20, got {self.paper_like_steps!r}")
-        if self.tempering is not None and not (isinstance(self.tempering, int) and self.tempering >= 2):
-            raise ValueError(f"tempering needs at least 2 temperatures, got {self.tempering!r}")
+        if self.tempering is not None and not (isinstance(self.tempering, int) and self.tempering >= 1):
+            raise ValueError(f"tempering must be a whole number of temperatures (1: none), got {self.tempering!r}")
 
 
 def chains_sentence(headline: Path) -> str:
@@ -129,7 +129,7 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     out = Path(out)
     failed, lines = [], []
     if not config.report_only:
-        plan = full_plan(tempering=config.tempering)
+        plan = full_plan(tempering=None if config.tempering in (None, 1) else config.tempering)
         headline = replace(plan, records_dir=str(paper_like_records(out / "paper-like" / "records", config.seed)),
                            joint=False, **({} if config.paper_like_steps is None else {"steps": config.paper_like_steps}))
         for name, p, folder in (("control", plan, out), ("paper-like", headline, out / "paper-like")):
