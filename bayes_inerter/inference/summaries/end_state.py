@@ -25,8 +25,10 @@ trusting an interval.
   harmonic's mean and noise from the record's steady drive periods; with fewer than
   :data:`HONEST_PERIODS` b's interval was measured too narrow (results/record-length:
   on paper-like records at 0.5 Hz, 3 periods gave b's error 1.07 to 1.16 times the
-  posterior's sd in rms; 8 periods 0.56 on the same design laboratories, but not on
-  fresh ones, results/coverage-paper-like-20s: more periods are not yet shown enough).
+  posterior's sd in rms; 8 periods 0.56 on the same design laboratories, 1.13 on
+  fresh ones, results/coverage-paper-like-20s, with b's 94 % and 50 % intervals just
+  inside the issue's ranges there and b still biased low: more periods help, and are
+  not shown to be enough).
 
 The thresholds are assumptions of this package, module constants. Each warning is one
 line: ``fit`` prints it as it is and fit.json keeps it, with the rows it flags.
