@@ -394,8 +394,7 @@ def coverage_so_far(results: list[dict]) -> list[dict]:
             for level in LEVELS:
                 q = f"{round(100 * level)}"
                 row[f"held_{q}"] = sum(bool(r["hdi"][q][k]) for r in ok for k in keys)
-                row[f"expected_{q}"] = round(level * n, 1)
-                row[f"se_{q}"] = round(math.sqrt(level * (1 - level) * n), 1)
+                row.update(_nominal(level, n))
             rows.append(row)
         carrying = [r for r in ok if "identified" in r]
         for name in dict.fromkeys(n for r in carrying for n in r["identified"]):
@@ -405,8 +404,7 @@ def coverage_so_far(results: list[dict]) -> list[dict]:
             for level in LEVELS:
                 q = f"{round(100 * level)}"
                 row[f"held_{q}"] = sum(bool(h["hdi"][q]) for h in held)
-                row[f"expected_{q}"] = round(level * len(held), 1)
-                row[f"se_{q}"] = round(math.sqrt(level * (1 - level) * len(held)), 1)
+                row.update(_nominal(level, len(held)))
             rows.append(row)
     return rows
 
@@ -454,6 +452,13 @@ def coverage_by_frequency(results: list[dict], frequencies) -> list[dict]:
     return rows
 
 
+def _nominal(level: float, n: int) -> dict:
+    """The count a level's intervals hold in ``n`` tries at nominal coverage and its
+    binomial se, keyed as the coverage rows keep them."""
+    q = f"{round(100 * level)}"
+    return {f"expected_{q}": round(level * n, 1), f"se_{q}": round(math.sqrt(level * (1 - level) * n), 1)}
+
+
 def gain_draws(results: list[dict], gain_sd: float) -> list[dict]:
     """Where the replicates' true gains fell in their prior (log-normal about 1, log-sd
     ``gain_sd``): how many lay inside its central 94 % and 50 % intervals, beside the
@@ -469,8 +474,7 @@ def gain_draws(results: list[dict], gain_sd: float) -> list[dict]:
     for level in LEVELS:
         q = f"{round(100 * level)}"
         row[f"inside_{q}"] = sum(v <= stats.norm.ppf(0.5 + level / 2) for v in z)
-        row[f"expected_{q}"] = round(level * len(z), 1)
-        row[f"se_{q}"] = round(math.sqrt(level * (1 - level) * len(z)), 1)
+        row.update(_nominal(level, len(z)))
     return [row]
 
 
