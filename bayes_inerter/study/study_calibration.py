@@ -473,7 +473,8 @@ def gain_draws(results: list[dict], gain_sd: float) -> list[dict]:
     row = {"parameter": "gain", "replicates": len(z)}
     for level in LEVELS:
         q = f"{round(100 * level)}"
-        row[f"inside_{q}"] = sum(v <= stats.norm.ppf(0.5 + level / 2) for v in z)
+        edge = stats.norm.ppf(0.5 + level / 2)  # the interval's half-width in prior sds
+        row[f"inside_{q}"] = sum(v <= edge for v in z)
         row.update(_nominal(level, len(z)))
     return [row]
 
