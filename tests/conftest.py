@@ -24,11 +24,12 @@ settings.load_profile("bayes-inerter")
 #: the search's stages restore the defaults they test): twenty generations of the
 #: evolution where the default (``optimize.DE_MAXITER``) is forty, one Nelder-Mead pass of
 #: 200 iterations where the default is up to seven of 800 (``NM_RESTARTS``,
-#: ``NM_MAXITER``), and no polish with the discrepancy's sd held (``TAU_CONTINUATION``).
+#: ``NM_MAXITER``), and no polish with the discrepancy's sd held (``TAU_CONTINUATION``)
+#: nor with the viscous sum held (``HELD_MODES``).
 #: Each is read at call time. With the default search a fit's start took about 22 of its
 #: 28 s, and the quick subset ran over four minutes on two cores. (Ten generations left a
 #: calibration replicate of tests/test_study_calibration.py without a finite start.)
-TEST_SEARCH = {"DE_MAXITER": 20, "NM_MAXITER": 200, "NM_RESTARTS": 0, "TAU_CONTINUATION": ()}
+TEST_SEARCH = {"DE_MAXITER": 20, "NM_MAXITER": 200, "NM_RESTARTS": 0, "TAU_CONTINUATION": (), "HELD_MODES": {}}
 
 #: The same settings as Python source, for a command run in a process of its own (a fresh
 #: interpreter does not read conftest).

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.sampling.optimize import (RESTART_GAIN, laplace_covariance, laplace_ensemble, local_optimum,
-                                              mirrored_modes, whitened_optimum)
+from bayes_inerter.inference.sampling.optimize import (RESTART_GAIN, held_modes, laplace_covariance, laplace_ensemble,
+                                              local_optimum, mirrored_modes, whitened_optimum)
 
 #: These tests measure the search itself: the package's settings, not the lighter ones the
 #: rest of the suite runs (conftest's TEST_SEARCH).
@@ -261,6 +261,53 @@ def test_a_model_without_the_split_has_no_mirror():
     model = GaussianModel()
     model.names = ["b", "f_0", "c_n"]
     assert mirrored_modes(model, np.array([0.5, 0.2, 3.0]), 0.0) == []
+
+
+class LogScale:
+    """A prior's one attribute that held_modes reads: the parameter is sampled in log."""
+    log_scale = True
+
+
+class BrokenRidge:
+    """A stand-in for a friction-dominated record's posterior: log f_0 and log c_f (both
+    sampled in log) with two narrow optima along their ridge, at c_f e^7 and e^5 (the
+    second ``drop`` nats lower, f_0 a little higher there), and a valley between."""
+
+    names = ["f_0", "c_f"]
+    all_priors = {"f_0": LogScale(), "c_f": LogScale()}
+
+    def __init__(self, drop=2.0):
+        self.drop = drop
+
+    def bounds(self):
+        return np.array([[5.0, 11.0], [2.0, 10.0]])
+
+    def log_prob(self, theta):
+        lo, hi = self.bounds().T
+        if np.any(theta < lo) or np.any(theta > hi):
+            return -np.inf, np.nan
+        f, c = theta
+        upper = -0.5 * (((f - 8.40) / 0.01) ** 2 + ((c - 7.0) / 0.1) ** 2)
+        lower = -0.5 * (((f - 8.42) / 0.01) ** 2 + ((c - 5.0) / 0.1) ** 2) - self.drop
+        return float(np.logaddexp(upper, lower)), 0.0
+
+
+def test_a_held_viscous_sum_finds_the_ridges_other_optimum():
+    """Held at a tenth of the start's c_f and freed, the polish ends in the ridge's other
+    optimum (kept: more than a factor of 2 away in c_f, within MIRROR_NATS); held at ten
+    times it, it climbs back to the start (dropped: not apart from it)."""
+    model = BrokenRidge(drop=2.0)
+    start = np.array([8.40, 7.0])
+    lp = model.log_prob(start)[0]
+    (theta, got_lp), = held_modes(model, start, lp)
+    assert abs(theta[1] - 5.0) < 1e-3 and abs(theta[0] - 8.42) < 1e-3
+    assert abs(got_lp - (lp - 2.0)) < 1e-3
+    # too far below, nothing asked, or a parameter the model lacks: nothing
+    assert held_modes(model, start, lp, nats=1.0) == []
+    assert held_modes(model, start, lp, holds={}) == []
+    assert held_modes(model, start, lp, holds={"k_n": (0.1,)}) == []
+    with pytest.raises(ValueError, match="positive"):
+        held_modes(model, start, lp, holds={"c_f": (0.0,)})
 
 
 class NoisyLine:

@@ -144,6 +144,47 @@ def test_a_chain_keeps_its_likelihoods_reference_point_when_continued(tmp_path):
     assert again.iteration == 8 and again.model.reference == first.model.reference
 
 
+def test_a_searched_start_shares_the_walkers_with_a_held_viscous_sums_mode(tmp_path, monkeypatch):
+    """Where c_f's posterior has two separated optima and the start search ends at one,
+    the polish with c_f held at a tenth of the start's (``optimize.held_modes``) finds the
+    other and half the walkers begin there; with no parameter held, none do."""
+    from scipy import stats
+
+    import bayes_inerter.inference.sampling.optimize as optimize
+    import bayes_inerter.inference.sampling.sampler as sampler
+
+    pm = normal_posterior(duration=1.5, ramp=0.5)
+    centre = pm.test_start[0].copy()
+    i = pm.names.index("c_f")
+    lo, hi = pm.bounds().T
+    high, low = min(centre[i], hi[i] - 0.5), min(centre[i], hi[i] - 0.5) - 2.0  # log c_f: a factor e^2 apart
+    assert low > lo[i] + 0.5
+    sd = np.minimum(hi - centre, centre - lo) / 6
+    rest = np.arange(len(centre)) != i
+
+    def two_optima(theta):
+        theta = np.asarray(theta, dtype=float)
+        if np.any(theta < lo) or np.any(theta > hi):
+            return -np.inf, np.nan
+        ends = np.logaddexp(stats.norm.logpdf(theta[i], high, 0.05), stats.norm.logpdf(theta[i], low, 0.05) - 1.0)
+        return float(np.sum(stats.norm.logpdf(theta[rest], centre[rest], sd[rest])) + ends), 0.0
+
+    pm.log_prob = two_optima
+    start = centre.copy()
+    start[i] = high
+    monkeypatch.setattr(sampler, "find_start", lambda model, rng, many=None: (start, two_optima(start)[0]))
+    monkeypatch.setattr(optimize, "MIRROR_SHARES", ())
+
+    def first_viscous(path):
+        return run_sampler(pm, path, nwalkers=24, seed=3, steps=1, adaptation=None).chain()[0][:, i]
+
+    monkeypatch.setattr(optimize, "HELD_MODES", {"c_f": (0.1,)})
+    held = first_viscous(tmp_path / "held.h5")
+    assert 8 <= np.sum(np.abs(held - low) < 0.3) <= 16 and np.sum(np.abs(held - high) < 0.3) >= 8
+    monkeypatch.setattr(optimize, "HELD_MODES", {})
+    assert np.all(np.abs(first_viscous(tmp_path / "none.h5") - high) < 0.3)
+
+
 def test_a_searched_start_puts_half_the_walkers_in_the_splits_mirrored_mode(tmp_path, monkeypatch):
     """Where the friction split's posterior has a mode at either end and the start
     search ends at one, half the walkers begin at the other (``optimize.mirrored_modes``);

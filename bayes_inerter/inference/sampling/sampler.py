@@ -43,7 +43,7 @@ from .coordinates import Coordinates, continue_at, default_coordinates, referenc
 from .identity import run_identity
 from ..posterior.model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
-from .optimize import find_start, laplace_ensemble, mirrored_modes
+from .optimize import find_start, held_modes, laplace_ensemble, mirrored_modes
 from .target import Target, objective_at
 from .tempering import Tempering, sample_tempered, swap_rates
 
@@ -398,7 +398,8 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
     """The first state of a new chain and the point its walkers were drawn around: the
     optimiser's start (its search on ``executor``), or ``start``. Where the start is the
     search's (``searched``, or ``start`` None) and its mirror ends in a mode of its own
-    (``optimize.mirrored_modes``), half the walkers are drawn around that mode: a chain
+    (``optimize.mirrored_modes``), or a held parameter's polish ends in one
+    (``optimize.held_modes``), the walkers are shared equally among the modes: a chain
     whose walkers all begin in one mode of the friction's split may never visit the
     other, and neither tau nor R-hat can see a mode no walker visits."""
     model, coords = target.model, target.coords
@@ -425,6 +426,7 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
     if searched:
         lp = float(start[1]) if len(start) > 1 and start[1] is not None else model.log_prob(start_theta)[0]
         centres += [theta for theta, _ in mirrored_modes(model, start_theta, lp) if inside(theta)]
+        centres += [theta for theta, _ in held_modes(model, start_theta, lp) if inside(theta)]
     counts = [nwalkers // len(centres) + (k < nwalkers % len(centres)) for k in range(len(centres))]
     walkers = np.vstack([laplace_ensemble(model, centre, n, rng, accept=inside)[0]
                          for centre, n in zip(centres, counts)])
