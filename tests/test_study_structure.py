@@ -159,3 +159,15 @@ def test_the_study_says_which_result_it_needs(tmp_path):
 
     with pytest.raises(ValueError, match="b_draws.npz is missing; run the full study"):
         run(Config(steps=200), tmp_path / "structure")
+
+
+def test_the_paper_like_a0_sentence_says_whether_its_interval_holds_the_b_it_was_made_at():
+    """The section's sentence on the paper-like A0 follows its honest interval: held,
+    missed, or no row and no sentence."""
+    from bayes_inerter.study.structure_report import _paper_like_a0
+
+    row = {"setting": "A0", "b_paper": "753.34", "b_honest_3%": "743.9", "b_honest_97%": "756.1"}
+    assert "holds the b its records were made at (753.3 kg)" in _paper_like_a0([row])
+    low = {**row, "b_honest_97%": "750.0"}
+    assert "misses the b its records were made at" in _paper_like_a0([{"setting": "A1"}, low])
+    assert _paper_like_a0([{"setting": "A1", "b_paper": "1669"}]) == ""

@@ -498,8 +498,10 @@ def run(config: Config, out, executor=None, *, progress=None):
     rest = identified_from_draws({k: v for k, v in draws.items() if k != "b_A0"}, "control without A0")
     without_a0 = explanations(with_identification_error(rest, config.per_setting, config.common), priors)[3]
     coverage = read_csv(coverage_file) if coverage_file.is_file() else []
-    (out / "SECTION.md").write_text(structure_section(expl, fits, freq, priors, config.per_setting, config.common,
-                                                      without_a0, least_squares, coverage))
+    (out / "SECTION.md").write_text(structure_section(
+        expl, fits, freq, priors, config.per_setting, config.common, without_a0, least_squares, coverage,
+        paper_like=read_csv(full / "paper-like" / "inertance.csv"),
+        coverage_source=f"results/{coverage_file.parent.name}"))
     lines = [f"{label}: acceptance {f.acceptance:.2f}, tau {f.tau:.0f} steps, ppc {f.ppc:.2f}"
              for label, f in fits.items()] + _lines(expl, freq)
     return StudyOutput(written=tuple(out / n for n in ("explanations.csv", "terms.csv", "frequency.csv",

@@ -21,9 +21,10 @@ def _p(chi2_value: float, dof: int) -> float:
     return float(chi2.sf(chi2_value, dof)) if dof > 0 else float("nan")
 
 
-def _posterior_errors(coverage) -> str:
+def _posterior_errors(coverage, source: str = "results/coverage-paper-like-v5") -> str:
     """A0's b errors under the package's own fit, by frequency, from the paper-like
-    coverage study's rows, as a sentence; "" without rows."""
+    coverage study's rows (read from the folder ``source``), as a sentence; "" without
+    rows."""
     err = {}
     for r in coverage:
         if r.get("error_pct") not in (None, ""):
@@ -36,18 +37,34 @@ def _posterior_errors(coverage) -> str:
     capped = sum(1 for r in coverage if r.get("converged") is False)
     return (f" This package's default fit (motion in, force out, each chain to the convergence rule or its cap; "
             f"{capped} of {len(coverage)} stopped at the cap) showed no such bias on the same device family in "
-            f"other laboratories (results/coverage-paper-like-v5): A0's b {', '.join(a0)}, every setting's within "
+            f"other laboratories ({source}): A0's b {', '.join(a0)}, every setting's within "
             f"{max(abs(x) for x in every):.1f} % on {len(every)} records. A bias of least squares' size is a "
             "force-driven fit's, such as the paper's, not one every fit of these records has.")
 
 
+def _paper_like_a0(inertance) -> str:
+    """Whether the full study's paper-like A0 interval (its honest one) holds the b its
+    records were made at (Table 2's), as a sentence; "" without an A0 row."""
+    row = next((r for r in inertance if r.get("setting") == "A0"), None)
+    if row is None or row.get("b_honest_3%") in (None, ""):
+        return ""
+    lo, hi, truth = float(row["b_honest_3%"]), float(row["b_honest_97%"]), float(row["b_paper"])
+    if lo <= truth <= hi:
+        return (f" Its A0 interval ({lo:.1f} to {hi:.1f} kg) holds the b its records were made at ({truth:.1f} kg): "
+                "on this device the structure's A0 is the device's, not the fit's.")
+    return (f" Its A0 interval ({lo:.1f} to {hi:.1f} kg) misses the b its records were made at ({truth:.1f} kg), "
+            "and the structure, pulled by the other settings, moves A0 towards it.")
+
+
 def structure_section(expl, fits, freq, priors, per_setting: float, common: float, without_a0, least_squares,
-                      coverage=()) -> str:
+                      coverage=(), paper_like=(), coverage_source: str = "results/coverage-paper-like-v5") -> str:
     """REPORT.md's section on the structure study (``structure.run``), written from its
     numbers: the nested explanations ``expl``, the structural ``fits`` of the control and
     the paper-like b's, the per-frequency shares ``freq``, the identification error
     assumed (``per_setting``, ``common``), the fit without A0, the paper-like least
-    squares' rows and the paper-like coverage study's rows (``coverage``)."""
+    squares' rows, the paper-like coverage study's rows (``coverage``, from the folder
+    ``coverage_source``) and the full study's paper-like per-setting rows (``paper_like``,
+    its inertance.csv)."""
 
     c, pl = fits["control"], fits["paper-like"]
     by = {(r["identified"], r["explanation"]): r for r in expl}
@@ -125,7 +142,7 @@ def structure_section(expl, fits, freq, priors, per_setting: float, common: floa
             + f", the other settings within {100 * max(others_1hz):.1f} % at 1 Hz. A bias of the 1 Hz size "
             f"on A0 is {100 * a0.get(1.0, float('nan')) * b_a0 / max(b_a0 - theory_a0['b_base'], 1e-9):.0f} % of "
             f"A0's departure from the geometry ({b_a0:.1f} against {theory_a0['b_base']:.1f} kg)."
-            + _posterior_errors(coverage) + " "
+            + _posterior_errors(coverage, coverage_source) + " "
             "A bias that adds about the same kilograms to every setting (the same friction in each) is "
             "exactly what dJ_0 does, and no set of b's can tell the two apart. The paper tuned its parameters "
             "by hand against records at all three frequencies and does not say which dominated, so which part "
@@ -137,10 +154,9 @@ def structure_section(expl, fits, freq, priors, per_setting: float, common: floa
         "g m^2 it is unmodelled rotating parts. A trifilar pendulum on one big flywheel measures its inertia: "
         "at a solid disc's, kappa_big below 1 is slip on the hub; at about "
         f"{np.median(c.terms['kappa_big']):.2f} of it, the flywheel's shape.",
-        f"- **Paper-like device:** its honest intervals are wide; with kappa_big the structure fits them (chi2 "
+        f"- **Paper-like device:** with kappa_big the structure fits its honest intervals (chi2 "
         f"{by[('paper-like', big)]['chi2']:.1f}, p {pl.ppc:.2f} as built); kappa_big = {_ci(pl, 'kappa_big')}, "
-        f"dJ_0 = {_ci(pl, 'dJ_0', 1e3)} g m^2. Its A0 interval (from the full study's earlier likelihood) "
-        "misses the generating b, and the structure, pulled by the other settings, moves A0 towards it.",
+        f"dJ_0 = {_ci(pl, 'dJ_0', 1e3)} g m^2." + _paper_like_a0(paper_like),
     ]
     if "control (posterior HDI)" in agree:
         a = agree["control (posterior HDI)"]
