@@ -20,11 +20,13 @@ are unidentified), so a local optimiser from a guess is not enough. Two stages:
 4. that point with the Coulomb force's split mirrored (f_share to 1 - f_share),
    polished the same way (:func:`mirrored_modes`), and the higher of the two. Where the
    mirror ends in a mode of its own not far below, the sampler draws half its walkers
-   there (``sampler``; :data:`MIRROR_NATS`);
-5. that point with the viscous sum held at each factor of :data:`HELD_MODES` times its
-   own value, polished with it held and then freed (:func:`held_modes`), and the higher
-   of them all. Where one ends in a mode of its own not far below, the sampler draws a
-   share of its walkers there too.
+   there (``sampler``; :data:`MIRROR_NATS`).
+
+Where the sampler draws its walkers around the search's optimum, it also looks along
+the friction's ridge: that point with the viscous sum held at each factor of
+:data:`HELD_MODES` times its own value, polished with it held and then freed
+(:func:`held_modes`); each polish that ends in a mode of its own not far below (or
+above) gets an equal share of the walkers.
 
 Why two objectives: where the model is right the residual is nearly white and the two
 agree; on a record of a richer device the residual is dominated by the model's error,
@@ -132,17 +134,20 @@ MIRROR_NATS = 10.0
 MIRROR_SEPARATION = 0.2
 
 #: The parameters whose ridge :func:`held_modes` searches, each held at these factors of
-#: its own value before it is freed (**assumption**; {} leaves the search and the
-#: walkers as before). Where the Coulomb force is large against the inertial one, the
-#: Coulomb and viscous sums trade along a ridge broken into separate optima (the
-#: friction's split, the nut's stiffness and the viscous split move with them). On the
-#: model's own physics (simulation-based calibration, results/coverage-sbc-v9, seed 16)
-#: f_0's truth lay above every draw and c_f's below every draw on 15 of 150 replicates,
-#: all with f_0 above 1,000 N. On replicate 36 (0.5 Hz, f_0 4,531 N, c_f 189 N s/m) the
-#: chain, converged, sampled an optimum with c_f near 1,000 N s/m; held at a tenth of the
+#: its own value before it is freed (**assumption**; {} leaves the walkers as before).
+#: Where the Coulomb force is large against the inertial one, the Coulomb and viscous
+#: sums trade along a ridge broken into separate optima (the friction's split, the nut's
+#: stiffness and the viscous split move with them). On the model's own physics
+#: (simulation-based calibration, results/coverage-sbc-v9, seed 16) f_0's truth lay
+#: above every draw and c_f's below every draw on 15 of 150 replicates, all with f_0
+#: above 1,000 N. On replicate 36 (0.5 Hz, f_0 4,531 N, c_f 189 N s/m) the chain,
+#: converged, sampled an optimum with c_f near 1,000 N s/m; held at a tenth of the
 #: start's c_f and freed, the polish ended at f_0 4,531 N, c_f 178 N s/m, 5 nats above
-#: the start, with a straight path between the two optima 500 nats down.
-HELD_MODES: dict = {"c_f": (0.1, 10.0)}
+#: the start, with a straight path between the two optima 500 nats down. On replicate
+#: 102 (f_0 5,488 N, c_f 208 N s/m, the start at c_f 8,166) a tenth found an optimum at
+#: c_f 1,071 and the truth's (c_f 263, 0.7 nats lower) took 0.03: the ladder walks to
+#: a thirtieth and to thirty times.
+HELD_MODES: dict = {"c_f": (0.3, 0.1, 0.03, 3.0, 10.0, 30.0)}
 #: A held optimum counts as a mode of its own where its held parameter differs from the
 #: start's by more than this in log (a factor of 2), and it lies within
 #: :data:`MIRROR_NATS` of the start.
@@ -277,7 +282,7 @@ def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
 
 
 def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_POPSIZE, maxiter=None,
-               objectives=None, many=None, continuation=None, mirrors=None, holds=None):
+               objectives=None, many=None, continuation=None, mirrors=None):
     """Return (theta, log posterior) of a quick optimum (see module docstring).
 
     ``objectives``: names of :data:`OBJECTIVES` evolved in stage 1, each in turn with the
@@ -289,8 +294,7 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     factors of :func:`tau_continued` (None: :data:`TAU_CONTINUATION` as it is when
     called; (): none). ``mirrors``: the shares whose mirrors the search polishes and
     keeps where higher (:func:`mirrored_modes`; None: :data:`MIRROR_SHARES` as it is
-    when called). ``holds``: the parameters and factors :func:`held_modes` tries, its
-    optima kept where higher (None: :data:`HELD_MODES` as it is when called).
+    when called).
     """
     maxiter = DE_MAXITER if maxiter is None else maxiter
     objectives = default_objectives(model) if objectives is None else tuple(objectives)
@@ -311,9 +315,6 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     if continued is not None and continued[1] > best[1]:
         best = continued
     for theta, lp in mirrored_modes(model, best[0], best[1], nats=math.inf, shares=mirrors):
-        if lp > best[1]:
-            best = (theta, lp)
-    for theta, lp in held_modes(model, best[0], best[1], nats=math.inf, holds=holds):
         if lp > best[1]:
             best = (theta, lp)
     return best
@@ -381,7 +382,8 @@ def held_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats: flo
                holds: dict | None = None) -> list:
     """The optima reached from ``theta`` with a parameter held away from its value and
     then freed (``holds``, default :data:`HELD_MODES`: for each parameter, the factors it
-    is held at; :func:`held_optimum`, then :func:`local_optimum` with restarts), as
+    is held at, walked outwards from 1 in each direction, each held polish started from
+    the one before; :func:`held_optimum`, then :func:`local_optimum` with restarts), as
     (theta, log posterior): those whose held parameter ended more than
     :data:`HELD_SEPARATION` in log from ``theta``'s, within ``nats`` (default
     :data:`MIRROR_NATS`) of ``lp``, and apart from one another. A parameter the model
@@ -396,15 +398,21 @@ def held_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats: flo
             continue
         i = names.index(name)
         lo, hi = model.bounds()[i]
-        for factor in factors:
-            if not factor > 0:
-                raise ValueError(f"held factors must be positive, got {factor} for {name}")
-            level = float(np.clip(theta[i] + math.log(factor), lo, hi))
-            got, got_lp = local_optimum(model, held_optimum(model, theta, i, level), restarts=NM_RESTARTS)
-            apart = all(abs(float(got[i] - other[i])) > HELD_SEPARATION for other, _ in out)
-            if (math.isfinite(got_lp) and got_lp > lp - nats and abs(float(got[i] - theta[i])) > HELD_SEPARATION
-                    and apart):
-                out.append((got, float(got_lp)))
+        if not all(f > 0 for f in factors):
+            raise ValueError(f"held factors must be positive, got {tuple(factors)} for {name}")
+        # each direction walked outwards, each held polish started from the last one's
+        for ladder in (sorted((f for f in factors if f < 1), reverse=True), sorted(f for f in factors if f > 1)):
+            held = theta
+            for factor in ladder:
+                level = float(np.clip(theta[i] + math.log(factor), lo, hi))
+                if abs(level - held[i]) < 1e-12 and held is not theta:
+                    break  # clipped at the prior's bound: the rest of the ladder is the same point
+                held = held_optimum(model, held, i, level)
+                got, got_lp = local_optimum(model, held, restarts=NM_RESTARTS)
+                apart = all(abs(float(got[i] - other[i])) > HELD_SEPARATION for other, _ in out)
+                if (math.isfinite(got_lp) and got_lp > lp - nats and abs(float(got[i] - theta[i])) > HELD_SEPARATION
+                        and apart):
+                    out.append((got, float(got_lp)))
     return out
 
 
