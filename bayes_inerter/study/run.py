@@ -111,8 +111,9 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
     """The joint model's outputs from an earlier run into ``folder``, as a FitResult,
     if it finished converged (or with ``plan.joint_steps`` steps) on the same records with
     the same seed and today's likelihood settings and left what the tables need
-    (summary.csv, fit.json, b_draws.npz); else None. A fresh clone of committed results thus rebuilds its tables and report
-    without sampling the joint chain again (its checkpoint is not committed)."""
+    (summary.csv, fit.json, b_draws.npz); else None. A fresh clone of committed results
+    thus rebuilds its tables and report without sampling the joint chain again (its
+    checkpoint is not committed)."""
     import csv
 
     from ..inference.fit import DRAWS_FILE, FitResult, joint_records

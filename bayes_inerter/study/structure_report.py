@@ -21,7 +21,7 @@ def _p(chi2_value: float, dof: int) -> float:
     return float(chi2.sf(chi2_value, dof)) if dof > 0 else float("nan")
 
 
-def _posterior_errors(coverage, source: str = "results/coverage-paper-like-v5") -> str:
+def _posterior_errors(coverage, source: str) -> str:
     """A0's b errors under the package's own fit, by frequency, from the paper-like
     coverage study's rows (read from the folder ``source``), as a sentence; "" without
     rows."""
