@@ -139,8 +139,8 @@ MIRROR_SEPARATION = 0.2
 #: sums trade along a ridge broken into separate optima (the friction's split, the nut's
 #: stiffness and the viscous split move with them). On the model's own physics
 #: (simulation-based calibration, results/coverage-sbc-v9, seed 16) f_0's truth lay
-#: above every draw and c_f's below every draw on 15 of 150 replicates, all with f_0
-#: above 1,000 N. On replicate 36 (0.5 Hz, f_0 4,531 N, c_f 189 N s/m) the chain,
+#: above every draw and c_f's below every draw on 13 of 150 replicates, all with f_0
+#: above 2,000 N. On replicate 36 (0.5 Hz, f_0 4,531 N, c_f 189 N s/m) the chain,
 #: converged, sampled an optimum with c_f near 1,000 N s/m; held at a tenth of the
 #: start's c_f and freed, the polish ended at f_0 4,531 N, c_f 178 N s/m, 5 nats above
 #: the start, with a straight path between the two optima 500 nats down. On replicate
