@@ -3,7 +3,6 @@ folder's one family and likelihood, and its tables remade from committed replica
 
 import csv
 import json
-import shutil
 from pathlib import Path
 
 import pytest
@@ -11,8 +10,17 @@ import pytest
 from bayes_inerter.inference import Convergence
 from bayes_inerter.executor import Serial
 from bayes_inerter.study.paper_like_coverage import Config, likelihood_settings, run
+from bayes_inerter.study.replicate_store import finished, replicate_path
 
 COMMITTED = Path(__file__).resolve().parents[1] / "results" / "coverage-paper-like-v5"
+
+
+def _copy_committed(folder):
+    """The committed replicates (loose or packed: ``study.replicate_store``) written
+    loose into ``folder``."""
+    (folder / "replicates").mkdir(parents=True)
+    for r in finished(COMMITTED):
+        replicate_path(folder, r["replicate"]).write_text(json.dumps(r))
 
 
 @pytest.mark.parametrize("changes, cause", [
@@ -26,7 +34,7 @@ def test_the_configuration_names_what_it_refuses(changes, cause):
 
 
 def test_summarise_remakes_the_committed_tables(tmp_path):
-    shutil.copytree(COMMITTED / "replicates", tmp_path / "replicates")
+    _copy_committed(tmp_path)
     got = run(Config(summarise=True), tmp_path, Serial())
     for name in ("replicates.csv", "coverage.csv"):
         assert (tmp_path / name).read_bytes() == (COMMITTED / name).read_bytes()
@@ -35,7 +43,7 @@ def test_summarise_remakes_the_committed_tables(tmp_path):
 
 def test_a_folder_keeps_one_family_one_likelihood_and_one_sampler(tmp_path):
     (tmp_path / "replicates").mkdir()
-    one = json.loads(next((COMMITTED / "replicates").glob("*.json")).read_text())
+    one = finished(COMMITTED)[0]
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps(one))
     with pytest.raises(ValueError, match="family default, not backlash"):
         run(Config(family="backlash"), tmp_path, Serial())
@@ -57,7 +65,7 @@ def test_a_folder_keeps_one_stopping_rule(tmp_path):
     with the package's is refused, one asking 0.05 continues them (here: summarises,
     every replicate asked being there)."""
     (tmp_path / "replicates").mkdir()
-    one = json.loads(next((COMMITTED / "replicates").glob("*.json")).read_text())
+    one = finished(COMMITTED)[0]
     today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood)}
     assert "tau_rtol" not in today
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
@@ -73,7 +81,7 @@ def test_a_folder_keeps_one_record_length(tmp_path):
     20 s is refused; a folder of 20 s records refuses the paper's and continues a run
     asking 20 s (here: every replicate asked being there, it only summarises)."""
     (tmp_path / "replicates").mkdir()
-    one = json.loads(next((COMMITTED / "replicates").glob("*.json")).read_text())
+    one = finished(COMMITTED)[0]
     today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood), "tau_rtol": 0.05}
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
     with pytest.raises(ValueError, match="another length than 20 s; choose another folder"):
@@ -95,19 +103,18 @@ def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):
 def test_progress_counts_only_the_replicates_of_the_frequency_asked(tmp_path):
     (tmp_path / "replicates").mkdir()
     today = likelihood_settings(Config().likelihood)  # the committed ones were fitted under an earlier default
-    for p in (COMMITTED / "replicates").glob("*.json"):
-        (tmp_path / "replicates" / p.name).write_text(json.dumps({**json.loads(p.read_text()),
-                                                                  "likelihood_settings": today}))
+    for r in finished(COMMITTED):
+        replicate_path(tmp_path, r["replicate"]).write_text(json.dumps({**r, "likelihood_settings": today}))
     seen = []
     run(Config(freq=0.5, replicates=100, tau_rtol=0.05), tmp_path, Serial(),  # the rule they were stopped by
         progress=lambda done, total: seen.append((done, total)))
-    at_half = sum(json.loads(p.read_text())["freq_hz"] == 0.5 for p in (COMMITTED / "replicates").glob("*.json"))
+    at_half = sum(r["freq_hz"] == 0.5 for r in finished(COMMITTED))
     assert at_half < 100 and seen == [(at_half, at_half)]
 
 
 def test_pairs_set_each_replicate_beside_the_same_record_fitted_otherwise(tmp_path):
     for side in ("a", "b"):
-        shutil.copytree(COMMITTED / "replicates", tmp_path / side / "replicates")
+        _copy_committed(tmp_path / side)
     first = tmp_path / "b" / "replicates" / "0000.json"
     one = json.loads(first.read_text())
     first.write_text(json.dumps({**one, "b_median": one["b_true"], "covered50": True, "width94_pct": 2 * one["width94_pct"]}))

@@ -47,6 +47,7 @@ from ..inference.sampling.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 from .output import write_json
+from .replicate_store import load_replicates, replicate_path
 
 __all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "run_calibration", "coverage_table",
            "compare_calibrations", "Config", "run", "case_name", "failed_items"]
@@ -168,10 +169,6 @@ def replicate(cs: CalibrationSettings, k: int, checkpoint=None) -> dict:
     return out
 
 
-def _replicate_file(out: Path, k: int) -> Path:
-    return out / "replicates" / f"{k:04d}.json"
-
-
 #: Where a replicate whose settings resume (``resumes``) runs its fit by default:
 #: ``out``/.running/<k>, removed when the replicate is done (not committed: .gitignore).
 #: A chain's checkpoint there is tens of megabytes: a study keeping its results small
@@ -188,7 +185,7 @@ def _worker(args):
             result = cs.replicate(k)
     except Exception as exc:  # one replicate's failure is reported, the others go on
         result = {"replicate": k, "error": f"{type(exc).__name__}: {exc}"}
-    path = _replicate_file(out, k)
+    path = replicate_path(out, k)
     write_json(path, result)
     return result
 
@@ -218,7 +215,7 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
 
     out = Path(out)
     check_output_folder(out)
-    (out / "replicates").mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     settings_file = out / "settings.json"
     mine = json.loads(json.dumps(asdict(cs), default=str))
     defaults = json.loads(json.dumps(asdict(type(cs)()), default=str))
@@ -226,7 +223,10 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
         raise ValueError(f"{out} holds replicates of other calibration settings; choose another output folder")
     settings_file.write_text(json.dumps(mine, indent=2) + "\n")
     write_manifest(out, {"settings": mine, "replicates": replicates, "processes": processes})
-    todo = [k for k in range(replicates) if not _replicate_file(out, k).exists()]
+    finished = load_replicates(out)
+    todo = [k for k in range(replicates) if k not in finished]
+    if todo:
+        replicate_path(out, 0).parent.mkdir(parents=True, exist_ok=True)
     done = replicates - len(todo)
     if progress:
         progress(done, replicates)
@@ -244,7 +244,8 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
     finally:
         if mine:
             executor.close()
-    return [json.loads(_replicate_file(out, k).read_text()) for k in range(replicates)]
+    finished = load_replicates(out)
+    return [finished[k] for k in range(replicates)]
 
 
 def run_calibration(cs: CalibrationSettings, out, replicates: int, *, processes: int = 1, progress=None,

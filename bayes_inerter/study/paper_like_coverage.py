@@ -59,6 +59,7 @@ from ..records.paper_like import PaperLike, laboratory, paper_like_record
 from . import stop_rule
 from .manifest import source_commit
 from .output import StudyOutput, write_json
+from .replicate_store import finished, load_replicates, replicate_path
 
 __all__ = ["Config", "run", "FAMILIES", "LEVELS", "replicate", "with_errors", "summarise", "likelihood_settings",
            "pairs"]
@@ -120,15 +121,11 @@ def _ladder_entry(tempering: Tempering | None) -> list | None:
     return None if tempering is None else [tempering.temps, tempering.beta_min]
 
 
-def _file(out: Path, k: int) -> Path:
-    return out / "replicates" / f"{k:04d}.json"
-
-
 def _run(job) -> dict:
     k, out, config, commit = job
     got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder(),
                     config.tau_rtol, config.duration)
-    path = _file(out, k)
+    path = replicate_path(out, k)
     write_json(path, got, indent=1)
     return got
 
@@ -148,7 +145,7 @@ def with_errors(r: dict) -> dict:
 
 
 def summarise(out: Path) -> list[dict]:
-    reps = [with_errors(json.loads(p.read_text())) for p in sorted((out / "replicates").glob("*.json"))]
+    reps = [with_errors(r) for r in finished(out)]
     with (out / "replicates.csv").open("w", newline="") as f:
         fields = ["replicate", "setting", "freq_hz", "seed", "b_true", "b_median", "hdi94", "hdi50", "covered94",
                   "covered50", "width94_pct", "identified", "converged", "steps", "tau_max", "seconds", "phi",
@@ -202,13 +199,12 @@ def pairs(out: Path, against: Path) -> list[dict]:
     counts held, the mean errors and the median ratios of the widths and of tau.
     ValueError where a replicate of both folders is not the same record."""
     out, against = Path(out), Path(against)
-    mine = {json.loads(p.read_text())["replicate"]: p for p in (out / "replicates").glob("*.json")}
+    mine, theirs = load_replicates(out), load_replicates(against)
     rows = []
     for k in sorted(mine):
-        other = _file(against, k)
-        if not other.exists():
+        if k not in theirs:
             continue
-        a, b = (with_errors(json.loads(p.read_text())) for p in (mine[k], other))
+        a, b = with_errors(mine[k]), with_errors(theirs[k])
         same = ("seed", "setting", "freq_hz", "family")
         if any(a.get(f, "default") != b.get(f, "default") for f in same):
             raise ValueError(f"replicate {k} is not the same record in {out} and {against}: "
@@ -327,15 +323,17 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     (ValueError).
     ``lines``: one per replicate fitted, then the coverage rows."""
     out = Path(out)
-    (out / "replicates").mkdir(parents=True, exist_ok=True)
-    found = [json.loads(p.read_text()) for p in (out / "replicates").glob("*.json")]
+    found = finished(out)
     if not config.summarise:
         _refuse_mixing(found, config, out)
     lines, failed = [], []
     if not config.summarise:
         commit = source_commit() or ""  # the code this run loaded, read once: HEAD may move while it runs
         wanted = [k for k in range(config.replicates) if config.freq is None or grid_case(k)[1] == config.freq]
-        todo = [k for k in wanted if not _file(out, k).exists()]
+        done = {r["replicate"] for r in found}
+        todo = [k for k in wanted if k not in done]
+        if todo:
+            replicate_path(out, 0).parent.mkdir(parents=True, exist_ok=True)
         jobs = [(k, out, config, commit) for k in todo]
         if progress:
             progress(len(wanted) - len(todo), len(wanted))
@@ -346,7 +344,7 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
                 failed.append((f"replicate {jobs[got.index][0]}", str(got.error)))
             if progress:
                 progress(i, len(wanted))
-    if not any((out / "replicates").glob("*.json")):
+    if not finished(out):
         raise ValueError(f"{out} holds no finished replicate; run without summarise first")
     rows = summarise(out)
     lines += map(_table_line, rows)

@@ -71,6 +71,7 @@ from ..inference.summaries.results import hdi
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 from . import stop_rule
+from .replicate_store import PACKED, finished
 
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
@@ -354,6 +355,9 @@ def raise_cap(out, max_steps: int) -> list[int]:
                          "there is no cap to raise")
     if not (isinstance(max_steps, int) and max_steps > old):
         raise ValueError(f"the new cap must be a whole number of steps above the folder's {old}, got {max_steps!r}")
+    if (out / PACKED).exists():
+        raise ValueError(f"{out}'s replicates are packed in {PACKED}; unpack them first "
+                         "(python studies/pack_replicates.py --unpack)")
     moved = []
     keep = out / f"capped-{old}"
     for f in sorted((out / "replicates").glob("[0-9]*.json")):
@@ -368,8 +372,9 @@ def raise_cap(out, max_steps: int) -> list[int]:
 
 def finished_replicates(out) -> list[dict]:
     """The replicates a run into ``out`` has finished so far (``out``/replicates, one
-    JSON each), in the order of their number: the state of a run that spans sessions."""
-    return [json.loads(f.read_text()) for f in sorted((Path(out) / "replicates").glob("[0-9]*.json"))]
+    JSON each, or packed: :mod:`.replicate_store`), in the order of their number: the
+    state of a run that spans sessions."""
+    return finished(out)
 
 
 def coverage_so_far(results: list[dict]) -> list[dict]:
