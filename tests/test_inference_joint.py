@@ -11,7 +11,8 @@ from scipy import integrate
 from bayes_inerter import paper_parameters
 from bayes_inerter.inference import PosteriorModel
 from bayes_inerter.inference.sampling.coordinates import default_coordinates
-from bayes_inerter.inference.fit import ALL_DRAWS_FILE, fit_joint
+from bayes_inerter.inference import fit as fit_module
+from bayes_inerter.inference.fit import ALL_DRAWS_FILE, DRAWS_FILE, fit_joint
 from bayes_inerter.inference.posterior.joint import JointModel, ar1_marginal
 from bayes_inerter.inference.sampling.identity import run_identity
 from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
@@ -117,7 +118,7 @@ def test_checkpoint_identity_depends_on_every_record(records):
 
 
 @pytest.mark.slow
-def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
+def test_fit_joint_writes_its_files_and_continues(records, tmp_path, monkeypatch):
     centres = []
     for rec in records:
         pm = PosteriorModel(rec, likelihood=AR1)
@@ -131,9 +132,15 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     names = [r["name"] for r in res.summary]
     assert names[:2] == ["b_A0", "b_A2"] and "phi" in names
     assert {"b_app_A0", "b_app_A2"} <= set(names)  # the inertance each setting shows through the nut
+    walkers = res.draws["b_A0"].shape[0]
+    monkeypatch.setattr(fit_module, "JOINT_DRAWS_KEPT", walkers)  # one draw a walker: the 9-step chain keeps more
     again = fit_joint(records, tmp_path / "joint", likelihood=AR1, centres=centres, steps=9, plots=False,
                       all_draws=True)
     assert again.iterations == 9  # continued the checkpoint, not started over
+    with np.load(tmp_path / "joint" / DRAWS_FILE) as saved:  # thinned evenly to the cap, every walker kept
+        assert saved["b_A0"].shape == (walkers, 1)
+        assert np.array_equal(saved["b_A0"], again.draws["b_A0"])
+    monkeypatch.undo()
     with np.load(tmp_path / "joint" / ALL_DRAWS_FILE) as every:  # every sampled parameter, b's as b_draws.npz's
         assert set(every.files) == set(JointModel(tuple(records), likelihood=AR1).names)
         assert np.array_equal(every["b_A0"], again.draws["b_A0"])
@@ -144,7 +151,7 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path):
     # the next run times only its own, so seconds per step stay right
     (tmp_path / "joint" / "fit.json").unlink()
     third = fit_joint(records, tmp_path / "joint", likelihood=AR1, centres=centres, steps=11, plots=False)
-    assert third.iterations == 11
+    assert third.iterations == 11 and third.draws["b_A0"].shape[1] > 1  # the default cap keeps them all
     assert third.timings["steps_timed"] == 2
     assert third.timings["sampling_all_runs"] == third.timings["sampling"]
     # a chain started over beside the fit.json of a longer, older chain (the new chain's first
