@@ -71,14 +71,20 @@ def provenance() -> dict:
 
 
 def record_row(name: str, row: dict) -> Path:
-    """Append ``row`` (with :func:`provenance`) to results/performance/<name>.csv."""
+    """Append ``row`` (with :func:`provenance`) to results/performance/<name>.csv. A row
+    with columns the file lacks widens it: the new columns go after the old ones, empty
+    in the rows measured before they existed."""
     path = PERFORMANCE / f"{name}.csv"
     full = {**provenance(), **row}
-    new = not path.exists()
     path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "a", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(full))
-        if new:
-            w.writeheader()
-        w.writerow(full)
+    rows, fields = [], list(full)
+    if path.exists():
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            rows = list(reader)
+            fields = list(reader.fieldnames or []) + [k for k in full if k not in (reader.fieldnames or [])]
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields, restval="")
+        w.writeheader()
+        w.writerows(rows + [full])
     return path

@@ -7,6 +7,9 @@ phases from its own callbacks:
 - **start search**: from the call to the sampler's first report (the start search and the
   likelihood's reference point);
 - **first step**: from there to the first step (the initial ensemble and one step);
+- of the start, as the fit reports it (``SamplerRun.start_seconds``, fit.json's
+  ``timings_s``): the search, the modes the walkers are shared among (the friction
+  split's mirror and the held ladder) and the initial ensemble, each on its own line;
 - **sampling**: the remaining steps, wall time, and in it
   - the evaluations: every ``PosteriorModel.log_prob`` call, counted and timed in the run;
   - the adaptation: ``Adaptation.fit``, the fitted moves' refits;
@@ -33,6 +36,7 @@ The machine is shared and noisy: the ratios within a run are what to read.
 """
 
 import argparse
+import math
 import tempfile
 import time
 from pathlib import Path
@@ -43,6 +47,7 @@ from _timing import record_row
 
 from bayes_inerter.inference import Adaptation, PosteriorModel, fit_record
 from bayes_inerter.inference.sampling.convergence import Monitor
+from bayes_inerter.inference.sampling.sampler import START_PHASES
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 
 TARGET_RATIO = 1.25
@@ -156,6 +161,10 @@ def main():
           f"{res.idata.posterior.sizes['chain']} walkers, one process")
     print(f"  start search      {start_s:8.1f} s  ({start_s / total:.1%} of the run)")
     print(f"  first step        {first_s:8.1f} s")
+    start = {phase: res.timings.get(f"start_{phase}", math.nan) for phase in START_PHASES}
+    print(f"    of the start: search {start['search']:.1f} s, modes (mirror and held ladder) "
+          f"{start['modes']:.1f} s, initial ensemble {start['ensemble']:.1f} s "
+          f"({sum(start.values()) / total:.1%} of the run together)")
     print(f"  sampling          {sampling_s:8.1f} s  ({clock.calls} evaluations)")
     print(f"    evaluations     {clock.eval_s:8.1f} s  (in the run: {1e3 * clock.eval_s / clock.calls:.3f} ms each)")
     print(f"    adaptation      {clock.adapt_s:8.1f} s  ({clock.adapt_s / total:.1%} of the run)")
@@ -174,7 +183,8 @@ def main():
         "outputs_s": round(outputs_s, 2), "ms_per_eval_alone": round(1e3 * alone, 4),
         "ratio": round(ratio, 3), "ratio_in_run": round(sampling_s / clock.eval_s, 3),
         "start_share": round(start_s / total, 3), "met": ratio <= TARGET_RATIO,
-        "converged": bool(res.converged) if not args.steps else "", "checks_s": round(clock.check_s, 2)})
+        "converged": bool(res.converged) if not args.steps else "", "checks_s": round(clock.check_s, 2),
+        **{f"start_{phase}_s": round(v, 2) for phase, v in start.items()}})
     print(f"wrote a row to {path}")
 
 

@@ -91,6 +91,8 @@ def test_fit_writes_every_output(tmp_path, ar1_record_file, capsys):
     # names only the ensemble moves the chain used (the fitted case: tests/test_inference_sampler.py)
     assert info["moves"] and not any(m.startswith("IndependenceMove") for m in info["moves"]), info["moves"]
     assert 0.0 < info["coordinates_domain_edge"] < 0.5  # how near the domain's edge its draws came
+    # the start's phases each on their own line of the timings (sampler.START_PHASES)
+    assert {"start_search", "start_modes", "start_ensemble"} <= set(info["timings_s"])
     # b's reported interval is the honest one, wider than the posterior's own, and printed
     iv = info["b_interval"]
     assert iv["method"] == "honest" and iv["sd_log_sensors"] > 0 and iv["sd_log_discrepancy"] >= 0

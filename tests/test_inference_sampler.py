@@ -8,7 +8,7 @@ import pytest
 from conftest import normal_posterior
 
 from bayes_inerter.inference import Convergence
-from bayes_inerter.inference.sampling.sampler import Adaptation, run_sampler
+from bayes_inerter.inference.sampling.sampler import START_PHASES, Adaptation, run_sampler
 
 CONV = Convergence(check_every=40, n_tau=20, min_ess=200, max_steps=2000)
 
@@ -142,6 +142,10 @@ def test_a_chain_keeps_its_likelihoods_reference_point_when_continued(tmp_path):
 
     again = run_sampler(pm, path, nwalkers=2 * pm.ndim + 2, seed=1, steps=8, start=no_search, adaptation=None)
     assert again.iteration == 8 and again.model.reference == first.model.reference
+    # a new chain's start is timed by phase; a continued chain has no start to time
+    assert set(first.start_seconds) == set(START_PHASES) and first.start_seconds["ensemble"] > 0
+    assert min(first.start_seconds.values()) >= 0
+    assert again.start_seconds == {}
 
 
 def test_a_searched_start_shares_the_walkers_with_a_held_viscous_sums_mode(tmp_path, monkeypatch):

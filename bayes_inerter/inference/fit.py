@@ -237,6 +237,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
             "stride": pm.stride, "record_metadata": record.metadata, "b_interval": b_interval.as_dict(),
             "interval_settings": dataclasses.asdict(interval_settings)})
         info["timings_s"] = {"sampling": got.seconds, "posterior_draws": t_post, "total": time.perf_counter() - t0,
+                             **_start_seconds(run),
                              **_sampling_all_runs(out, got.seconds, run, fresh or run.start_theta is not None)}
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
         return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, idata,
@@ -324,7 +325,7 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
         if plots:
             _write_joint_plots(out, jm, sample, warmup=int(run.warmup))
         info = _run_info("joint", jm, got, seed, {"records": joint_records(jm), "record_model": model})
-        info["timings_s"] = {"sampling": got.seconds, "total": time.perf_counter() - t0,
+        info["timings_s"] = {"sampling": got.seconds, "total": time.perf_counter() - t0, **_start_seconds(run),
                              **_sampling_all_runs(out, got.seconds, run, run.start_theta is not None)}
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
         return FitResult(out, got.rows, run.converged, run.reason, run.iteration, run.tau, None, info["timings_s"],
@@ -464,6 +465,13 @@ def _flag(rows: list, ended: list) -> list:
     for r in rows:
         r["flag"] = "; ".join(flags.get(r["name"], []))
     return ended
+
+
+def _start_seconds(run) -> dict:
+    """A new chain's start by phase, in the sampling time (``start_search``,
+    ``start_modes``, ``start_ensemble``: ``SamplerRun.start_seconds``); none where the
+    run continued a checkpoint."""
+    return {f"start_{phase}": seconds for phase, seconds in run.start_seconds.items()}
 
 
 def _sampling_all_runs(out: Path, t_sample: float, run, started_over: bool) -> dict:

@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator
 
@@ -48,7 +49,15 @@ from .target import Target, objective_at
 from .tempering import Tempering, sample_tempered, swap_rates
 
 __all__ = ["Convergence", "Adaptation", "Tempering", "CheckpointError", "SamplerRun", "SamplerStatus", "sample",
-           "run_sampler", "check_run_options", "default_moves", "default_walkers", "transient", "WARMUP"]
+           "run_sampler", "check_run_options", "default_moves", "default_walkers", "transient", "WARMUP",
+           "START_PHASES"]
+
+#: The phases of a new chain's start that ``SamplerRun.start_seconds`` times: the
+#: optimiser's search for the start (``optimize.find_start``, with the likelihood's
+#: reference point), the modes its walkers are shared among (``optimize.mirrored_modes``
+#: and ``optimize.held_modes``), and the initial ensemble drawn around each
+#: (``optimize.laplace_ensemble``).
+START_PHASES = ("search", "modes", "ensemble")
 
 #: Stretch and differential-evolution moves: DE moves travel along the friction ridges.
 DEFAULT_MOVES = [(emcee.moves.DEMove(), 0.6), (emcee.moves.DESnookerMove(), 0.1), (emcee.moves.StretchMove(), 0.3)]
@@ -131,6 +140,9 @@ class SamplerRun:
     tempering: Tempering | None = None
     #: each adjacent pair of temperatures' share of accepted swaps over the whole chain
     swap_rates: tuple = ()
+    #: seconds of a new chain's start, by phase (:data:`START_PHASES`); empty where the
+    #: run continued a checkpoint
+    start_seconds: dict = field(default_factory=dict)
 
     @property
     def iteration(self) -> int:
@@ -236,8 +248,12 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     if stored is not None:  # a checkpoint at a reference frequency within the records' resolution goes on in its own
         coords = continue_at(coords, stored.get("coordinates"), reference_tolerance(model))
     searched = start is None  # the search's start: its mirrored modes get walkers too (_first_walkers)
+    seconds = {}
     if getattr(model, "needs_reference", False):
+        t0 = time.perf_counter()
         model, start = _with_reference(model, stored, start, seed, processes, coords)
+        if stored is None or "reference" not in stored:
+            seconds["search"] = time.perf_counter() - t0
         if coords.kind == "impedance":
             coords = _reachable(model, coords, start, stored)
     target = Target(model, coords)
@@ -251,7 +267,8 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
         try:
             if done == 0:
                 temps = 1 if tempering is None else tempering.temps
-                drawn, start_theta = _first_walkers(target, nwalkers * temps, seed, start, executor, searched)
+                drawn, start_theta, first = _first_walkers(target, nwalkers * temps, seed, start, executor, searched)
+                seconds = {k: seconds.get(k, 0.0) + first.get(k, 0.0) for k in START_PHASES}
                 # each temperature's first walkers: every temps-th drawn, so each has its share of each mode
                 state = emcee.State(drawn.coords[::temps], random_state=drawn.random_state)
                 hot_starts = [drawn.coords[k::temps] for k in range(1, temps)]
@@ -274,7 +291,8 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
                                             blobs_dtype=float)
             rates = tuple(swap_rates(backend.extra, backend.iteration)) if tempering is not None else ()
             return SamplerRun(sampler, ok, check.tau, reason, start_theta, recovered, schedule.used(), coords,
-                              check.transient, done, check.warmup, model, tempering, rates)
+                              check.transient, done, check.warmup, model, tempering, rates,
+                              seconds if done == 0 else {})
         finally:
             try:  # a run stopped by Ctrl-C or an error: bring the twin up to date if possible
                 with interrupts_held():
@@ -404,9 +422,12 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
     other, and neither tau nor R-hat can see a mode no walker visits."""
     model, coords = target.model, target.coords
     rng = np.random.default_rng(seed)
+    seconds = dict.fromkeys(START_PHASES, 0.0)
+    t0 = time.perf_counter()
     if start is None:
         searched = True
         start = find_start(model, rng, many=_many(executor))
+        seconds["search"] = time.perf_counter() - t0
     elif callable(start):
         start = start()
     start_theta = np.asarray(start[0], dtype=float)
@@ -423,15 +444,19 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
         return bool(np.all(np.isfinite(coords.to_u(t))))
 
     centres = [start_theta]
+    t0 = time.perf_counter()
     if searched:
         lp = float(start[1]) if len(start) > 1 and start[1] is not None else model.log_prob(start_theta)[0]
         centres += [theta for theta, _ in mirrored_modes(model, start_theta, lp) if inside(theta)]
         centres += [theta for theta, _ in held_modes(model, start_theta, lp) if inside(theta)]
+    seconds["modes"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
     counts = [nwalkers // len(centres) + (k < nwalkers % len(centres)) for k in range(len(centres))]
     walkers = np.vstack([laplace_ensemble(model, centre, n, rng, accept=inside)[0]
                          for centre, n in zip(centres, counts)])
     state = emcee.State(coords.to_u(walkers), random_state=np.random.RandomState(seed).get_state())
-    return state, start_theta
+    seconds["ensemble"] = time.perf_counter() - t0
+    return state, start_theta, seconds
 
 
 def _status(backend, check: Check, done: int, conv: Convergence) -> SamplerStatus:
