@@ -184,7 +184,7 @@ def main():
         "ratio": round(ratio, 3), "ratio_in_run": round(sampling_s / clock.eval_s, 3),
         "start_share": round(start_s / total, 3), "met": ratio <= TARGET_RATIO,
         "converged": bool(res.converged) if not args.steps else "", "checks_s": round(clock.check_s, 2),
-        **{f"start_{phase}_s": round(v, 2) for phase, v in start.items()}})
+        **{f"phase_{phase}_s": round(v, 2) for phase, v in start.items()}})
     print(f"wrote a row to {path}")
 
 
