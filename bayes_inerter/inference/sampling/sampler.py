@@ -252,8 +252,7 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     if getattr(model, "needs_reference", False):
         t0 = time.perf_counter()
         model, start = _with_reference(model, stored, start, seed, processes, coords)
-        if stored is None or "reference" not in stored:
-            seconds["search"] = time.perf_counter() - t0
+        seconds["search"] = time.perf_counter() - t0  # kept only where the chain is new
         if coords.kind == "impedance":
             coords = _reachable(model, coords, start, stored)
     target = Target(model, coords)
