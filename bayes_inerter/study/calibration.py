@@ -46,8 +46,7 @@ from ..inference.summaries.results import ar1_noise, posterior_sample
 from ..inference.sampling.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
-from .output import write_json
-from .replicate_store import load_replicates, replicate_path
+from .replicate_store import load_replicates, write_replicate
 
 __all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "run_calibration", "coverage_table",
            "compare_calibrations", "Config", "run", "case_name", "failed_items"]
@@ -185,8 +184,7 @@ def _worker(args):
             result = cs.replicate(k)
     except Exception as exc:  # one replicate's failure is reported, the others go on
         result = {"replicate": k, "error": f"{type(exc).__name__}: {exc}"}
-    path = replicate_path(out, k)
-    write_json(path, result)
+    write_replicate(out, k, result)
     return result
 
 
@@ -225,8 +223,6 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
     write_manifest(out, {"settings": mine, "replicates": replicates, "processes": processes})
     finished = load_replicates(out)
     todo = [k for k in range(replicates) if k not in finished]
-    if todo:
-        replicate_path(out, 0).parent.mkdir(parents=True, exist_ok=True)
     done = replicates - len(todo)
     if progress:
         progress(done, replicates)

@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import json
 import math
 import tempfile
 import time
@@ -58,8 +57,8 @@ from ..inference.summaries.results import hdi
 from ..records.paper_like import PaperLike, laboratory, paper_like_record
 from . import stop_rule
 from .manifest import source_commit
-from .output import StudyOutput, write_json
-from .replicate_store import finished, load_replicates, replicate_path
+from .output import StudyOutput
+from .replicate_store import finished, load_replicates, write_replicate
 
 __all__ = ["Config", "run", "FAMILIES", "LEVELS", "replicate", "with_errors", "summarise", "likelihood_settings",
            "pairs"]
@@ -125,8 +124,7 @@ def _run(job) -> dict:
     k, out, config, commit = job
     got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder(),
                     config.tau_rtol, config.duration)
-    path = replicate_path(out, k)
-    write_json(path, got, indent=1)
+    write_replicate(out, k, got, indent=1)
     return got
 
 
@@ -332,8 +330,6 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
         wanted = [k for k in range(config.replicates) if config.freq is None or grid_case(k)[1] == config.freq]
         done = {r["replicate"] for r in found}
         todo = [k for k in wanted if k not in done]
-        if todo:
-            replicate_path(out, 0).parent.mkdir(parents=True, exist_ok=True)
         jobs = [(k, out, config, commit) for k in todo]
         if progress:
             progress(len(wanted) - len(todo), len(wanted))

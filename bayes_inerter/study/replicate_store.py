@@ -16,7 +16,7 @@ from pathlib import Path
 
 from .output import write_json
 
-__all__ = ["LOOSE", "PACKED", "replicate_path", "load_replicates", "finished", "pack", "unpack"]
+__all__ = ["LOOSE", "PACKED", "replicate_path", "write_replicate", "load_replicates", "finished", "pack", "unpack"]
 
 #: The folder of one JSON per replicate, under a study's output folder.
 LOOSE = "replicates"
@@ -27,6 +27,15 @@ PACKED = "replicates.jsonl"
 def replicate_path(out, k: int) -> Path:
     """Where a run writes replicate ``k`` of ``out`` when it finishes."""
     return Path(out) / LOOSE / f"{int(k):04d}.json"
+
+
+def write_replicate(out, k: int, value: dict, *, indent: int | None = None) -> Path:
+    """Write finished replicate ``k`` of ``out`` to its own file (its folder made where
+    needed), whole or not at all; returns the path."""
+    path = replicate_path(out, k)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_json(path, value, indent=indent)
+    return path
 
 
 def _loose_files(out: Path) -> list[Path]:
@@ -87,10 +96,8 @@ def unpack(out) -> int:
     files). Returns how many replicates were unpacked."""
     out = Path(out)
     reps = finished(out)
-    (out / LOOSE).mkdir(parents=True, exist_ok=True)
     for r in reps:
-        path = replicate_path(out, r["replicate"])
-        if not path.exists():
-            write_json(path, r)
+        if not replicate_path(out, r["replicate"]).exists():
+            write_replicate(out, r["replicate"], r)
     (out / PACKED).unlink(missing_ok=True)
     return len(reps)
