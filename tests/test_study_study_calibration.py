@@ -362,3 +362,36 @@ def test_gain_draws_counts_the_true_gains_inside_their_prior(tmp_path):
     (tmp_path / "settings.json").write_text(json.dumps({"likelihood": {"gain_sd": sd}}))
     write_coverage_so_far(tmp_path)
     assert (tmp_path / "gain_draws.csv").read_text().splitlines()[1].startswith("gain,5,")
+
+
+def test_drawn_deviations_move_the_force_harmonics_by_the_likelihoods_own_basis():
+    """The added signal's harmonics, as the likelihood measures them, are U beta with
+    beta drawn at the prior's sd: the record then follows the likelihood's model."""
+    from bayes_inerter.device import paper_parameters
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.records import generate_record
+    from bayes_inerter.study.study_calibration import drawn_deviations
+
+    lk = LikelihoodSettings(residual="motion")
+    params = paper_parameters("A3")
+    gen = GeneratorSettings(duration=6.0, ramp=1.0)
+    for freq in (1.0, 1.5):  # 1.5 Hz: a period is not a whole number of samples
+        rec = generate_record(params, freq, settings=gen, rng=np.random.default_rng(1), setting_name="A3")
+        got = drawn_deviations(rec, params, lk, np.random.default_rng(2))
+        assert np.array_equal(got.accel, rec.accel) and np.array_equal(got.disp, rec.disp)
+        before = PosteriorModel(rec, priors=STUDY_SBC_PRIORS, likelihood=lk).motion
+        after = PosteriorModel(got, priors=STUDY_SBC_PRIORS, likelihood=lk).motion
+        K = before.omega.shape[0]
+        s = before.scale @ np.array([params.f1_0, params.f2_0, 1.0])
+        X = before.basis @ (np.random.default_rng(2).normal(size=s.shape[0]) * s)
+        want = X[:K] + 1j * X[K:]
+        moved = after.harmonic.force - before.harmonic.force
+        assert np.max(np.abs(want)) > 1.0  # the deviations are forces of newtons, not nothing
+        assert np.allclose(moved, want, rtol=0, atol=1e-3 * np.max(np.abs(want)))
+        # the motion, and with it the basis, is the record's: unchanged
+        assert np.array_equal(after.basis, before.basis)
+
+
+def test_drawn_deviations_need_the_motion_likelihood():
+    with pytest.raises(ValueError, match="residual 'motion'"):
+        StudyCalibration(single=True, draw_deviations=True, likelihood=LikelihoodSettings(residual="ar1"))

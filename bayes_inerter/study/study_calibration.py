@@ -69,6 +69,7 @@ from ..inference.posterior.model import PosteriorModel
 from ..inference.posterior.priors import LogUniform, Uniform, tau_floor_prior
 from ..inference.summaries.results import hdi
 from ..records.generator import GeneratorSettings, generate_record
+from ..records.record import Record
 from ..simulate import SimulationError
 from . import stop_rule
 from .replicate_store import PACKED, finished
@@ -76,7 +77,7 @@ from .replicate_store import PACKED, finished
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
-           "RANK_CORRELATION", "IDENTIFIED", "gain_draws", "Config", "run"]
+           "RANK_CORRELATION", "IDENTIFIED", "gain_draws", "drawn_deviations", "Config", "run"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -128,6 +129,12 @@ class StudyCalibration:
         (``Convergence.tau_rtol``; default: the 0.05 its committed folders were stopped
         with, ``stop_rule.TAU_RTOL_BEFORE``, so that a folder saved before this option
         existed is continued under its own rule).
+    draw_deviations : add to each record's force the deviations the motion-in likelihood
+        marginalises and the generator's device lacks (the reversals' and the friction
+        law's), drawn from their prior (:func:`drawn_deviations`): the likelihood's own
+        generative model, so that the calibration checks the computation of the posterior
+        it defines (default False: the records of the model's physics alone, as the
+        folders saved before this option were made).
     """
 
     setting: str = "A3"
@@ -142,9 +149,12 @@ class StudyCalibration:
     tempering: Tempering | None = None
     tau_floor: float | None = None
     tau_rtol: float = stop_rule.TAU_RTOL_BEFORE
+    draw_deviations: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
+        if self.draw_deviations and self.likelihood.residual != "motion":
+            raise ValueError("draw_deviations draws the motion-in likelihood's deviations: use it with residual 'motion'")
         if len(self.frequencies) < 2 and not self.single:
             raise ValueError("the joint model needs at least two drive frequencies")
         if not (self.steps is None or (isinstance(self.steps, int) and self.steps >= 20)):
@@ -178,7 +188,8 @@ class StudyCalibration:
         return (f"{what} {', '.join(f'{f:g}' for f in self.frequencies)} Hz ({self.generator.duration:g} s, masses "
                 f"of {self.setting}, the {self.likelihood.residual} likelihood), {steps}, ranks among {self.draws} "
                 f"draws, seed {self.seed}" + ("" if self.tempering is None else f", {self.tempering.describe()}")
-                + ("" if self.tau_floor is None else f", tau's prior floor {self.tau_floor:g} N"))
+                + ("" if self.tau_floor is None else f", tau's prior floor {self.tau_floor:g} N")
+                + (", the likelihood's deviations drawn into the force" if self.draw_deviations else ""))
 
 
 @dataclass(frozen=True)
@@ -218,8 +229,43 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
         truth = base.values(theta)
         gain = truth.get("gain", 1.0)
         records = [dataclasses.replace(r, accel=r.accel * gain) for r in records]
+        if cs.draw_deviations:
+            records = [drawn_deviations(r, params, cs.likelihood, rng) for r in records]
         return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws)
     raise RuntimeError("100 prior draws in a row could not be simulated")
+
+
+def drawn_deviations(record: Record, params, likelihood: LikelihoodSettings, rng: np.random.Generator,
+                     envelope: float | None = None) -> Record:
+    """``record`` with the motion-in likelihood's marginalised deviations added to its
+    force: the reversals' and the friction law's (``MotionData.basis`` before the input
+    noise's shapes, which stand for noise the record already has), each coefficient drawn
+    normal with the prior sd the likelihood gives it at ``params``' Coulomb forces, as the
+    periodic signal sum_k Re(X_k exp(i k w t)) whose harmonics X = U beta are the ones
+    the likelihood compares (``drive`` from t = 0). It rises with a raised cosine over
+    ``envelope`` s (None: the generator's ramp, from the record's metadata) so that the
+    start-up stays smooth; the steady periods the likelihood takes hold it whole.
+
+    What it leaves out: the discrepancy tau k^(-alpha) (its log-uniform prior spans
+    1e-3 to 1e5 N, and draws from it would swamp most records) and the sampled
+    scale of the law's (``law_sampled``): the deviations are drawn at the fixed
+    ``friction_law.SD``."""
+    if likelihood.law_sampled:
+        raise ValueError("drawn_deviations draws at the fixed friction_law.SD; law_sampled samples that scale")
+    model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=likelihood)
+    motion = model.motion
+    K = motion.omega.shape[0]
+    s = motion.scale @ np.array([params.f1_0, params.f2_0, 1.0])
+    beta = rng.normal(size=s.shape[0]) * s
+    X = motion.basis @ beta
+    X = X[:K] + 1j * X[K:]
+    t = np.asarray(record.time, dtype=float)
+    delta = np.real(np.exp(1j * np.outer(t, motion.omega)) @ X)
+    rise = float(record.metadata.get("generator", {}).get("ramp", 0.0)) if envelope is None else float(envelope)
+    if rise > 0.0:
+        u = np.clip((t - t[0]) / rise, 0.0, 1.0)
+        delta = delta * 0.5 * (1.0 - np.cos(np.pi * u))
+    return dataclasses.replace(record, force=record.force + delta)
 
 
 def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
@@ -620,6 +666,8 @@ class Config:
     tau_rtol : the convergence rule's tolerance of tau's growth (``StudyCalibration.tau_rtol``;
         None: its default).
     freqs : the drive frequencies, Hz (None: the study's).
+    draw_deviations : the likelihood's marginalised deviations drawn into each record's
+        force (``StudyCalibration.draw_deviations``; with ``residual`` "motion").
     work : where each replicate's fit runs until done, continued by the next run
         (None: the output folder's ``.running``).
     raise_cap : raise the folder's cap to ``max_steps`` first (:func:`raise_cap`).
@@ -647,6 +695,8 @@ class Config:
         "help": "the convergence rule's tolerance of tau's growth between checks (default: 0.05, the one "
                 "the committed folders were stopped with; the package's is Convergence.tau_rtol)"})
     freqs: tuple[float, ...] | None = field(default=None, metadata={"help": "drive frequencies, Hz"})
+    draw_deviations: bool = field(default=False, metadata={
+        "help": "draw the motion-in likelihood's marginalised deviations into each record's force"})
     work: str | None = field(default=None, metadata={
         "help": "where each replicate's fit runs until done (default: OUT/.running)"})
     raise_cap: bool = field(default=False, metadata={"help": "raise the folder's cap to --max-steps first"})
@@ -675,6 +725,8 @@ class Config:
             extra["tau_floor"] = self.tau_floor
         if self.tau_rtol is not None:
             extra["tau_rtol"] = self.tau_rtol
+        if self.draw_deviations:
+            extra["draw_deviations"] = True
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 
