@@ -380,3 +380,36 @@ def test_the_tau_continuation_rescues_a_noise_free_start_in_another_basin():
     theta, lp = optimize.find_start(model, np.random.default_rng(0), continuation=(1000.0, 100.0, 10.0))
     assert lp > lp_plain + 100.0
     assert abs(model.parameters(theta).b / p.b - 1.0) < 1e-3 < abs(model.parameters(theta_plain).b / p.b - 1.0)
+
+
+def test_the_held_walks_on_worker_processes_give_the_serial_modes():
+    """held_modes' walks are independent: run at once on two forked workers (each holding
+    the model, as the sampler's target) they keep the same modes, in the same order."""
+    import functools
+    import types
+
+    from bayes_inerter.executor import make_executor
+    from bayes_inerter.inference.sampling.target import on_model
+
+    model = BrokenRidge(drop=2.0)
+    start = np.array([8.40, 7.0])
+    lp = model.log_prob(start)[0]
+    serial = held_modes(model, start, lp)
+    seen = []
+
+    def recording(fn, walks):
+        walks = list(walks)
+        seen.extend(w[2] for w in walks)
+        return [fn(model, w) for w in walks]
+
+    assert _same_modes(held_modes(model, start, lp, map=recording), serial)
+    assert seen == [(0.3, 0.1, 0.03), (3.0, 10.0, 30.0)]  # one walk per direction, outwards
+    with make_executor(2, state=types.SimpleNamespace(model=model)) as executor:
+        assert executor.workers == 2
+        on_workers = held_modes(model, start, lp,
+                                map=lambda fn, walks: executor.map_state(functools.partial(on_model, fn), walks))
+    assert _same_modes(on_workers, serial)
+
+
+def _same_modes(a, b) -> bool:
+    return len(a) == len(b) and all(np.array_equal(x, y) and lx == ly for (x, lx), (y, ly) in zip(a, b))

@@ -65,7 +65,7 @@ from ..posterior.priors import RHO_BOUNDS
 __all__ = ["find_start", "local_optimum", "laplace_ensemble", "laplace_covariance", "sse", "profiled_misfit",
            "rigid_guess", "velocity_estimate", "OBJECTIVES", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER",
            "NM_RESTARTS", "RESTART_GAIN", "POLISH_RIGID_GUESS", "mirrored_modes", "MIRROR_SHARES", "MIRROR_NATS",
-           "held_modes", "HELD_MODES", "HELD_SEPARATION",
+           "held_modes", "held_walk", "HELD_MODES", "HELD_SEPARATION",
            "MIRROR_SEPARATION", "tau_continued", "TAU_CONTINUATION", "held_optimum", "whitened_optimum"]
 
 DE_POPSIZE = 8  # population per parameter
@@ -379,7 +379,7 @@ def mirrored_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats:
 
 
 def held_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats: float | None = None,
-               holds: dict | None = None) -> list:
+               holds: dict | None = None, map=None) -> list:
     """The optima reached from ``theta`` with a parameter held away from its value and
     then freed (``holds``, default :data:`HELD_MODES`: for each parameter, the factors it
     is held at, walked outwards from 1 in each direction, each held polish started from
@@ -387,12 +387,17 @@ def held_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats: flo
     (theta, log posterior): those whose held parameter ended more than
     :data:`HELD_SEPARATION` in log from ``theta``'s, within ``nats`` (default
     :data:`MIRROR_NATS`) of ``lp``, and apart from one another. A parameter the model
-    does not sample, or does not sample in log scale, is passed over."""
+    does not sample, or does not sample in log scale, is passed over.
+
+    ``map``: callable(fn, walks) giving ``fn(model, walk)`` for each walk in order (for
+    example on a process pool, each worker holding the model): the walks, one per
+    parameter and direction, are independent, so they may run at once. The result does
+    not depend on it (None: one after the other, here)."""
     nats = MIRROR_NATS if nats is None else nats
     holds = HELD_MODES if holds is None else dict(holds)
     names = list(model.names)
     theta = np.asarray(theta, dtype=float)
-    out = []
+    walks = []
     for name, factors in holds.items():
         if name not in names or not model.all_priors[name].log_scale:
             continue
@@ -400,20 +405,40 @@ def held_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats: flo
         lo, hi = model.bounds()[i]
         if not all(f > 0 for f in factors):
             raise ValueError(f"held factors must be positive, got {tuple(factors)} for {name}")
-        # each direction walked outwards, each held polish started from the last one's
         for ladder in (sorted((f for f in factors if f < 1), reverse=True), sorted(f for f in factors if f > 1)):
-            held = theta
-            for factor in ladder:
-                level = float(np.clip(theta[i] + math.log(factor), lo, hi))
-                if abs(level - held[i]) < 1e-12 and held is not theta:
-                    break  # clipped at the prior's bound: the rest of the ladder is the same point
-                held = held_optimum(model, held, i, level)
-                got, got_lp = local_optimum(model, held, restarts=NM_RESTARTS)
-                apart = all(abs(float(got[i] - other[i])) > HELD_SEPARATION for other, _ in out)
-                if (math.isfinite(got_lp) and got_lp > lp - nats and abs(float(got[i] - theta[i])) > HELD_SEPARATION
-                        and apart):
-                    out.append((got, float(got_lp)))
+            if ladder:
+                walks.append((theta, i, tuple(ladder), float(lo), float(hi)))
+    if map is None:
+        polished = [held_walk(model, walk) for walk in walks]
+    else:
+        polished = list(map(held_walk, walks))
+    out = []
+    for (_, i, _, _, _), points in zip(walks, polished):
+        for got, got_lp in points:
+            apart = all(abs(float(got[i] - other[i])) > HELD_SEPARATION for other, _ in out)
+            if (math.isfinite(got_lp) and got_lp > lp - nats and abs(float(got[i] - theta[i])) > HELD_SEPARATION
+                    and apart):
+                out.append((got, float(got_lp)))
     return out
+
+
+def held_walk(model: PosteriorModel, walk: tuple) -> list:
+    """One direction of :func:`held_modes`' ladder, ``walk`` = (theta, i, factors, lo,
+    hi): entry ``i`` held at each factor in turn (walked outwards, each held polish
+    started from the one before, clipped at the prior's bounds ``lo``, ``hi``), then
+    freed; every freed optimum as (theta, log posterior), before any is kept."""
+    theta, i, ladder, lo, hi = walk
+    theta = np.asarray(theta, dtype=float)
+    held = theta
+    points = []
+    for factor in ladder:
+        level = float(np.clip(theta[i] + math.log(factor), lo, hi))
+        if abs(level - held[i]) < 1e-12 and held is not theta:
+            break  # clipped at the prior's bound: the rest of the ladder is the same point
+        held = held_optimum(model, held, i, level)
+        got, got_lp = local_optimum(model, held, restarts=NM_RESTARTS)
+        points.append((got, float(got_lp)))
+    return points
 
 
 _RAW_PAIRS = {"f_share": ("f1_0", "f2_0"), "c_share": ("c_f1", "c_f2")}

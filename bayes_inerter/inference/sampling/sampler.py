@@ -45,7 +45,7 @@ from .identity import run_identity
 from ..posterior.model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
 from .optimize import find_start, held_modes, laplace_ensemble, mirrored_modes
-from .target import Target, objective_at
+from .target import Target, objective_at, on_model
 from .tempering import Tempering, sample_tempered, swap_rates
 
 __all__ = ["Convergence", "Adaptation", "Tempering", "CheckpointError", "SamplerRun", "SamplerStatus", "sample",
@@ -382,6 +382,14 @@ def _many(executor: Executor):
     return lambda name, xs: executor.map_state(objective_at, [(name, x) for x in xs])
 
 
+def _model_map(executor: Executor):
+    """``fn(model, item)`` for many items on ``executor``'s workers, each holding the
+    target's model (None: one process): the held ladder's walks at once."""
+    if executor.workers <= 1:
+        return None
+    return lambda fn, items: executor.map_state(functools.partial(on_model, fn), list(items))
+
+
 def _with_reference(model, stored: dict | None, start, seed: int, processes: int, coords):
     """``model`` with its likelihood's reference point (``PosteriorModel.with_reference``)
     and the start to use: the reference of the checkpoint's identity ``stored`` where it
@@ -447,7 +455,8 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
     if searched:
         lp = float(start[1]) if len(start) > 1 and start[1] is not None else model.log_prob(start_theta)[0]
         centres += [theta for theta, _ in mirrored_modes(model, start_theta, lp) if inside(theta)]
-        centres += [theta for theta, _ in held_modes(model, start_theta, lp) if inside(theta)]
+        centres += [theta for theta, _ in held_modes(model, start_theta, lp, map=_model_map(executor))
+                    if inside(theta)]
     seconds["modes"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     counts = [nwalkers // len(centres) + (k < nwalkers % len(centres)) for k in range(len(centres))]

@@ -17,7 +17,7 @@ from .coordinates import Coordinates
 from ..posterior.model import PosteriorModel
 from .optimize import OBJECTIVES
 
-__all__ = ["Target", "log_prob_at", "objective_at"]
+__all__ = ["Target", "log_prob_at", "objective_at", "on_model"]
 
 
 @dataclass(frozen=True)
@@ -67,3 +67,9 @@ def objective_at(target: Target, job) -> float:
     physical parameters ``job[1]`` (for its differential evolution on worker processes)."""
     name, phys = job
     return OBJECTIVES[name](target.model, phys)
+
+
+def on_model(fn, target: Target, item):
+    """``fn(target.model, item)``: a function of the model run on a worker that holds the
+    target (``optimize.held_modes``' walks on worker processes)."""
+    return fn(target.model, item)
