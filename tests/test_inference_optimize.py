@@ -413,3 +413,26 @@ def test_the_held_walks_on_worker_processes_give_the_serial_modes():
 
 def _same_modes(a, b) -> bool:
     return len(a) == len(b) and all(np.array_equal(x, y) and lx == ly for (x, lx), (y, ly) in zip(a, b))
+
+
+def test_the_starts_polishes_through_a_map_give_the_serial_start():
+    """find_start's polishes (the evolved point's, the rigid guess's, the mirrors') taken
+    through ``map``, as the sampler runs them on its workers, end where one after the
+    other does: the same evolutions first, then each polish on its own point."""
+    from bayes_inerter.inference.sampling import optimize
+
+    pm = _short_record_model()
+    asked = []
+
+    def recording(fn, items):
+        items = list(items)
+        asked.append((fn.__name__, len(items)))
+        return [fn(pm, x) for x in items]
+
+    serial = optimize.find_start(pm, np.random.default_rng(3), popsize=4, maxiter=5, continuation=())
+    mapped = optimize.find_start(pm, np.random.default_rng(3), popsize=4, maxiter=5, continuation=(), map=recording)
+    assert np.array_equal(serial[0], mapped[0]) and serial[1] == mapped[1]
+    # the objectives' and the rigid guess's polishes in one batch, then the mirrors'
+    objectives = optimize.default_objectives(pm)
+    assert asked[0] == ("polished", len(objectives) + int(optimize.POLISH_RIGID_GUESS))
+    assert all(name == "polished" for name, _ in asked)

@@ -176,7 +176,7 @@ def test_a_searched_start_shares_the_walkers_with_a_held_viscous_sums_mode(tmp_p
     pm.log_prob = two_optima
     start = centre.copy()
     start[i] = high
-    monkeypatch.setattr(sampler, "find_start", lambda model, rng, many=None: (start, two_optima(start)[0]))
+    monkeypatch.setattr(sampler, "find_start", lambda model, rng, many=None, map=None: (start, two_optima(start)[0]))
     monkeypatch.setattr(optimize, "MIRROR_SHARES", ())
 
     def first_viscous(path):
@@ -214,7 +214,7 @@ def test_a_searched_start_puts_half_the_walkers_in_the_splits_mirrored_mode(tmp_
     pm.log_prob = two_ends
     start = centre.copy()
     start[i] = 0.1
-    monkeypatch.setattr(sampler, "find_start", lambda model, rng, many=None: (start, two_ends(start)[0]))
+    monkeypatch.setattr(sampler, "find_start", lambda model, rng, many=None, map=None: (start, two_ends(start)[0]))
 
     def first_shares(path, given=None):
         run = run_sampler(pm, path, nwalkers=24, seed=3, steps=1, start=given, adaptation=None)

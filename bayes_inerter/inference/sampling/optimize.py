@@ -65,7 +65,7 @@ from ..posterior.priors import RHO_BOUNDS
 __all__ = ["find_start", "local_optimum", "laplace_ensemble", "laplace_covariance", "sse", "profiled_misfit",
            "rigid_guess", "velocity_estimate", "OBJECTIVES", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER",
            "NM_RESTARTS", "RESTART_GAIN", "POLISH_RIGID_GUESS", "mirrored_modes", "MIRROR_SHARES", "MIRROR_NATS",
-           "held_modes", "held_walk", "HELD_MODES", "HELD_SEPARATION",
+           "held_modes", "held_walk", "polished", "HELD_MODES", "HELD_SEPARATION",
            "MIRROR_SEPARATION", "tau_continued", "TAU_CONTINUATION", "held_optimum", "whitened_optimum"]
 
 DE_POPSIZE = 8  # population per parameter
@@ -282,7 +282,7 @@ def _swaps(model: PosteriorModel, x: np.ndarray) -> list[np.ndarray]:
 
 
 def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_POPSIZE, maxiter=None,
-               objectives=None, many=None, continuation=None, mirrors=None):
+               objectives=None, many=None, continuation=None, mirrors=None, map=None):
     """Return (theta, log posterior) of a quick optimum (see module docstring).
 
     ``objectives``: names of :data:`OBJECTIVES` evolved in stage 1, each in turn with the
@@ -294,30 +294,47 @@ def find_start(model: PosteriorModel, rng: np.random.Generator, *, popsize=DE_PO
     factors of :func:`tau_continued` (None: :data:`TAU_CONTINUATION` as it is when
     called; (): none). ``mirrors``: the shares whose mirrors the search polishes and
     keeps where higher (:func:`mirrored_modes`; None: :data:`MIRROR_SHARES` as it is
-    when called).
+    when called). ``map``: callable(fn, items) giving ``fn(model, item)`` for each item in
+    order (for example on worker processes holding the model): the polishes that do not
+    depend on one another run through it. The result does not depend on it either.
     """
     maxiter = DE_MAXITER if maxiter is None else maxiter
     objectives = default_objectives(model) if objectives is None else tuple(objectives)
     unknown = [name for name in objectives if name not in OBJECTIVES]
     if unknown or not objectives:
         raise ValueError(f"start objectives must be some of {', '.join(OBJECTIVES)}, got {list(objectives)}")
-    best = None
-    for name in objectives:
-        evolved = _evolve(model, name, rng, popsize, maxiter, many)
-        theta, lp = local_optimum(model, _with_noise_estimate(model, evolved), restarts=NM_RESTARTS)
-        if best is None or lp > best[1]:
-            best = (theta, lp)
+    # every evolution first (they share ``rng``, in turn), then their polishes and the
+    # rigid guess's, which depend on nothing but their point, at once where ``map`` runs them
+    points = [_with_noise_estimate(model, _evolve(model, name, rng, popsize, maxiter, many)) for name in objectives]
     if POLISH_RIGID_GUESS:
-        theta, lp = local_optimum(model, _with_noise_estimate(model, _initial_point(model)), restarts=NM_RESTARTS)
-        if lp > best[1]:
+        points.append(_with_noise_estimate(model, _initial_point(model)))
+    best = None
+    for theta, lp in _each(model, map, polished, points):
+        if best is None or lp > best[1]:
             best = (theta, lp)
     continued = tau_continued(model, best[0], continuation)
     if continued is not None and continued[1] > best[1]:
         best = continued
-    for theta, lp in mirrored_modes(model, best[0], best[1], nats=math.inf, shares=mirrors):
+    for theta, lp in mirrored_modes(model, best[0], best[1], nats=math.inf, shares=mirrors, map=map):
         if lp > best[1]:
             best = (theta, lp)
     return best
+
+
+def polished(model: PosteriorModel, theta: np.ndarray) -> tuple:
+    """(theta, log posterior) of :func:`local_optimum` with :data:`NM_RESTARTS` restarts
+    from ``theta``: one of the start's polishes, as a function a worker can run."""
+    got, lp = local_optimum(model, theta, restarts=NM_RESTARTS)
+    return got, float(lp)
+
+
+def _each(model, map, fn, items) -> list:
+    """``fn(model, item)`` for each item, in order: here one after the other, or through
+    ``map`` (callable(fn, items), for example on worker processes holding the model)."""
+    items = list(items)
+    if map is None:
+        return [fn(model, item) for item in items]
+    return list(map(fn, items))
 
 
 def tau_continued(model: PosteriorModel, theta: np.ndarray, factors: tuple | None = None):
@@ -356,23 +373,21 @@ def held_optimum(model: PosteriorModel, theta: np.ndarray, i: int, value: float)
 
 
 def mirrored_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats: float | None = None,
-                   shares: tuple | None = None) -> list:
+                   shares: tuple | None = None, map=None) -> list:
     """The optima that ``theta``'s mirrors reach (``shares``, default :data:`MIRROR_SHARES`,
     each share x at 1 - x, polished by :func:`local_optimum` with restarts), as (theta,
     log posterior), those apart from ``theta`` by more than :data:`MIRROR_SEPARATION` in
     the share and within ``nats`` (default :data:`MIRROR_NATS`) of ``lp``; [] for a model
-    without those shares."""
+    without those shares. ``map``: as :func:`held_modes`' (the mirrors' polishes at once)."""
     nats = MIRROR_NATS if nats is None else nats
     shares = MIRROR_SHARES if shares is None else tuple(shares)
     unknown = [s for s in shares if s not in _RAW_PAIRS]
     if unknown:
         raise ValueError(f"mirrored shares must be some of {', '.join(_RAW_PAIRS)}, got {list(shares)}")
+    mirrored = [_mirror(model, np.asarray(theta, dtype=float), share) for share in shares]
+    mirrored = [(mirror, distance) for mirror, distance in mirrored if mirror is not None]
     out = []
-    for share in shares:
-        mirror, distance = _mirror(model, np.asarray(theta, dtype=float), share)
-        if mirror is None:
-            continue
-        got, got_lp = local_optimum(model, mirror, restarts=NM_RESTARTS)
+    for (_, distance), (got, got_lp) in zip(mirrored, _each(model, map, polished, [m for m, _ in mirrored])):
         if math.isfinite(got_lp) and got_lp > lp - nats and distance(got) > MIRROR_SEPARATION:
             out.append((got, float(got_lp)))
     return out
@@ -408,12 +423,8 @@ def held_modes(model: PosteriorModel, theta: np.ndarray, lp: float, *, nats: flo
         for ladder in (sorted((f for f in factors if f < 1), reverse=True), sorted(f for f in factors if f > 1)):
             if ladder:
                 walks.append((theta, i, tuple(ladder), float(lo), float(hi)))
-    if map is None:
-        polished = [held_walk(model, walk) for walk in walks]
-    else:
-        polished = list(map(held_walk, walks))
     out = []
-    for (_, i, _, _, _), points in zip(walks, polished):
+    for (_, i, _, _, _), points in zip(walks, _each(model, map, held_walk, walks)):
         for got, got_lp in points:
             apart = all(abs(float(got[i] - other[i])) > HELD_SEPARATION for other, _ in out)
             if (math.isfinite(got_lp) and got_lp > lp - nats and abs(float(got[i] - theta[i])) > HELD_SEPARATION

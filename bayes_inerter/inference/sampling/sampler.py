@@ -400,7 +400,8 @@ def _with_reference(model, stored: dict | None, start, seed: int, processes: int
         return model.with_reference(kept), start
     if start is None:
         with make_executor(processes, state=Target(model, coords)) as executor, interrupt_raised():
-            start = find_start(model, np.random.default_rng(seed), many=_many(executor))
+            start = find_start(model, np.random.default_rng(seed), many=_many(executor),
+                               map=_model_map(executor))
     elif callable(start):
         start = start()
     theta = np.asarray(start[0], dtype=float)
@@ -433,7 +434,7 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
     t0 = time.perf_counter()
     if start is None:
         searched = True
-        start = find_start(model, rng, many=_many(executor))
+        start = find_start(model, rng, many=_many(executor), map=_model_map(executor))
         seconds["search"] = time.perf_counter() - t0
     elif callable(start):
         start = start()
@@ -454,7 +455,8 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
     t0 = time.perf_counter()
     if searched:
         lp = float(start[1]) if len(start) > 1 and start[1] is not None else model.log_prob(start_theta)[0]
-        centres += [theta for theta, _ in mirrored_modes(model, start_theta, lp) if inside(theta)]
+        centres += [theta for theta, _ in mirrored_modes(model, start_theta, lp, map=_model_map(executor))
+                    if inside(theta)]
         centres += [theta for theta, _ in held_modes(model, start_theta, lp, map=_model_map(executor))
                     if inside(theta)]
     seconds["modes"] = time.perf_counter() - t0
