@@ -64,7 +64,7 @@ from ..posterior.priors import RHO_BOUNDS
 
 __all__ = ["find_start", "local_optimum", "laplace_ensemble", "laplace_covariance", "sse", "profiled_misfit",
            "rigid_guess", "velocity_estimate", "OBJECTIVES", "DE_POPSIZE", "DE_MAXITER", "NM_MAXITER",
-           "NM_RESTARTS", "RESTART_GAIN", "POLISH_RIGID_GUESS", "mirrored_modes", "MIRROR_SHARES", "MIRROR_NATS",
+           "NM_RESTARTS", "RESTART_GAIN", "NM_XATOL", "NM_FATOL", "POLISH_RIGID_GUESS", "mirrored_modes", "MIRROR_SHARES", "MIRROR_NATS",
            "held_modes", "held_walk", "polished", "HELD_MODES", "HELD_SEPARATION",
            "MIRROR_SEPARATION", "tau_continued", "TAU_CONTINUATION", "held_optimum", "whitened_optimum"]
 
@@ -88,6 +88,10 @@ NM_MAXITER = 800  # Nelder-Mead iterations a pass on the full posterior (read at
 #: more than RESTART_GAIN nats, at most NM_RESTARTS times.
 NM_RESTARTS = 6
 RESTART_GAIN = 0.5
+#: A Nelder-Mead pass of :func:`local_optimum` ends where its simplex spans at most
+#: NM_XATOL in every coordinate of theta and NM_FATOL nats (read at call time).
+NM_XATOL = 1e-6
+NM_FATOL = 1e-6
 
 #: Polish the rigid guess as well as each evolved point, and keep the higher log
 #: posterior (False: only the evolved points). The evolution often ends in another basin
@@ -555,7 +559,8 @@ def local_optimum(model: PosteriorModel, theta: np.ndarray, *, maxiter: int | No
     best = np.asarray(theta, dtype=float)
     f_best = neg(best)
     for _ in range(restarts + 1):
-        res = minimize(neg, best, method="Nelder-Mead", options={"maxiter": maxiter, "xatol": 1e-6, "fatol": 1e-6})
+        res = minimize(neg, best, method="Nelder-Mead",
+                       options={"maxiter": maxiter, "xatol": NM_XATOL, "fatol": NM_FATOL})
         gain = f_best - res.fun
         if gain > 0:
             best, f_best = res.x, float(res.fun)
