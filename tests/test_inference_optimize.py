@@ -385,11 +385,10 @@ def test_the_tau_continuation_rescues_a_noise_free_start_in_another_basin():
 def test_the_held_walks_on_worker_processes_give_the_serial_modes():
     """held_modes' walks are independent: run at once on two forked workers (each holding
     the model, as the sampler's target) they keep the same modes, in the same order."""
-    import functools
     import types
 
     from bayes_inerter.executor import make_executor
-    from bayes_inerter.inference.sampling.target import on_model
+    from bayes_inerter.inference.sampling.sampler import _model_map
 
     model = BrokenRidge(drop=2.0)
     start = np.array([8.40, 7.0])
@@ -406,8 +405,7 @@ def test_the_held_walks_on_worker_processes_give_the_serial_modes():
     assert seen == [(0.3, 0.1, 0.03), (3.0, 10.0, 30.0)]  # one walk per direction, outwards
     with make_executor(2, state=types.SimpleNamespace(model=model)) as executor:
         assert executor.workers == 2
-        on_workers = held_modes(model, start, lp,
-                                map=lambda fn, walks: executor.map_state(functools.partial(on_model, fn), walks))
+        on_workers = held_modes(model, start, lp, map=_model_map(executor))
     assert _same_modes(on_workers, serial)
 
 

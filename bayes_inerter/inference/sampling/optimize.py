@@ -451,8 +451,7 @@ def held_walk(model: PosteriorModel, walk: tuple) -> list:
         if abs(level - held[i]) < 1e-12 and held is not theta:
             break  # clipped at the prior's bound: the rest of the ladder is the same point
         held = held_optimum(model, held, i, level)
-        got, got_lp = local_optimum(model, held, restarts=NM_RESTARTS)
-        points.append((got, float(got_lp)))
+        points.append(polished(model, held))
     return points
 
 

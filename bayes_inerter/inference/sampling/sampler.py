@@ -384,7 +384,8 @@ def _many(executor: Executor):
 
 def _model_map(executor: Executor):
     """``fn(model, item)`` for many items on ``executor``'s workers, each holding the
-    target's model (None: one process): the held ladder's walks at once."""
+    target's model (None: one process): the start's independent polishes and the held
+    ladder's walks at once (``optimize.find_start``'s and ``held_modes``' ``map``)."""
     if executor.workers <= 1:
         return None
     return lambda fn, items: executor.map_state(functools.partial(on_model, fn), list(items))
