@@ -392,6 +392,26 @@ def test_drawn_deviations_move_the_force_harmonics_by_the_likelihoods_own_basis(
         assert np.array_equal(after.basis, before.basis)
 
 
+def test_drawn_deviation_groups_add_up_to_all_of_them():
+    """The reversals' and the law's draws are the parts of the whole draw: each group
+    alone moves the force by its own columns, and the two add up to "all"."""
+    from bayes_inerter.device import paper_parameters
+    from bayes_inerter.records import generate_record
+    from bayes_inerter.study.study_calibration import drawn_deviations
+
+    lk = LikelihoodSettings(residual="motion")
+    params = paper_parameters("A3")
+    rec = generate_record(params, 1.0, settings=GeneratorSettings(duration=6.0, ramp=1.0),
+                          rng=np.random.default_rng(1), setting_name="A3")
+    moved = {g: drawn_deviations(rec, params, lk, np.random.default_rng(2), groups=g).force - rec.force
+             for g in ("all", "reversals", "law")}
+    for g in ("reversals", "law"):
+        assert np.max(np.abs(moved[g])) > 0.1 * np.max(np.abs(moved["all"]))  # each group is there
+    assert np.allclose(moved["reversals"] + moved["law"], moved["all"], rtol=0, atol=1e-9)
+    with pytest.raises(ValueError, match="groups must be one of"):
+        drawn_deviations(rec, params, lk, np.random.default_rng(2), groups="tau")
+
+
 def test_drawn_deviations_need_the_motion_likelihood():
     with pytest.raises(ValueError, match="residual 'motion'"):
         StudyCalibration(single=True, draw_deviations=True, likelihood=LikelihoodSettings(residual="ar1"))

@@ -235,14 +235,20 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
 
+#: Which of the motion-in likelihood's deviations :func:`drawn_deviations` draws.
+DEVIATION_GROUPS = ("all", "reversals", "law")
+
+
 def drawn_deviations(record: Record, params, likelihood: LikelihoodSettings, rng: np.random.Generator,
-                     envelope: float | None = None) -> Record:
+                     envelope: float | None = None, groups: str = "all") -> Record:
     """``record`` with the motion-in likelihood's marginalised deviations added to its
     force: the reversals' and the friction law's (``MotionData.basis`` before the input
     noise's shapes, which stand for noise the record already has), each coefficient drawn
     normal with the prior sd the likelihood gives it at ``params``' Coulomb forces, as the
     periodic signal sum_k Re(X_k exp(i k w t)) whose harmonics X = U beta are the ones
-    the likelihood compares (``drive`` from t = 0). It rises with a raised cosine over
+    the likelihood compares (``drive`` from t = 0); ``groups`` (:data:`DEVIATION_GROUPS`)
+    draws only the reversals' or only the law's, the others left at zero (the same draws
+    of the kept ones as "all" gives, so that a group's share can be told apart). It rises with a raised cosine over
     ``envelope`` s (None: the generator's ramp, from the record's metadata) so that the
     start-up stays smooth; the steady periods the likelihood takes hold it whole.
 
@@ -252,11 +258,16 @@ def drawn_deviations(record: Record, params, likelihood: LikelihoodSettings, rng
     ``friction_law.SD``."""
     if likelihood.law_sampled:
         raise ValueError("drawn_deviations draws at the fixed friction_law.SD; law_sampled samples that scale")
+    if groups not in DEVIATION_GROUPS:
+        raise ValueError(f"groups must be one of {', '.join(DEVIATION_GROUPS)}, got {groups!r}")
     model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=likelihood)
     motion = model.motion
     K = motion.omega.shape[0]
     s = motion.scale @ np.array([params.f1_0, params.f2_0, 1.0])
     beta = rng.normal(size=s.shape[0]) * s
+    if groups != "all":
+        law = np.zeros(s.shape[0], dtype=bool) if motion.law_columns is None else np.asarray(motion.law_columns)
+        beta = np.where(law if groups == "law" else ~law, beta, 0.0)
     X = motion.basis @ beta
     X = X[:K] + 1j * X[K:]
     t = np.asarray(record.time, dtype=float)
