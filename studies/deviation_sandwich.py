@@ -24,7 +24,7 @@ narrow. This is a sandwich (a local, Gaussian stand-in for the chain), read besi
 chains of results/coverage-sbc-v12, not in their place.
 
     python studies/deviation_sandwich.py [--replicates 2 5 11 0 1] [--draws 100] [--seed 29]
-        [--out results/deviation-sandwich]
+        [--normaliser full] [--out results/deviation-sandwich]
 
 Writes ratios.csv (replicate, frequency, condition, quantity, ratio, its bootstrap 90 %
 interval, the mean score's shift in sd) and prints one line per replicate and condition.
@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bayes_inerter.inference.posterior.likelihood import NORMALISERS
 from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records import generate_record
 from bayes_inerter.study.study_calibration import Config, drawn_deviations, replicate_device
@@ -104,11 +105,15 @@ def main(argv=None) -> int:
     ap.add_argument("--replicates", type=int, nargs="+", default=[2, 5, 11, 0, 1])
     ap.add_argument("--draws", type=int, default=100)
     ap.add_argument("--seed", type=int, default=29)
+    ap.add_argument("--normaliser", choices=NORMALISERS, default=None,
+                    help="the likelihood's normaliser (LikelihoodSettings.normaliser; default: v12's)")
     ap.add_argument("--out", default=str(ROOT / "results" / "deviation-sandwich"))
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     cs = v12_settings()
+    if args.normaliser:
+        cs = dataclasses.replace(cs, likelihood=dataclasses.replace(cs.likelihood, normaliser=args.normaliser))
     rows = []
     for k in args.replicates:
         device = replicate_device(cs, k)
@@ -158,7 +163,9 @@ def main(argv=None) -> int:
             # ratio is the information identity along its axis, all parameters free
             ident = [j for j, i in enumerate(free) if names[i] in IDENTIFIED]
             Sigma = np.zeros_like(F)
-            Sigma[np.ix_(ident, ident)] = np.linalg.inv((F + P)[np.ix_(ident, ident)])
+            block = (F + P)[np.ix_(ident, ident)]
+            concave = bool(np.linalg.eigvalsh(block)[0] > 0.0)
+            Sigma[np.ix_(ident, ident)] = np.linalg.inv(block) if concave else np.nan
             quantities = {names[i]: np.eye(len(free))[j] for j, i in enumerate(free)}
             quantities["b/gain"] = quantities["b"] - quantities["gain"]
             rng = np.random.default_rng([args.seed, k, 99])
@@ -167,10 +174,16 @@ def main(argv=None) -> int:
                 w = Sigma @ g if q in IDENTIFIED or q == "b/gain" else g
                 proj = S @ w
                 model_var = float(w @ F @ w)
+                if not model_var > 0.0:  # the log posterior is not concave there: no Gaussian stand-in
+                    rows.append({"replicate": k, "frequency": freq, "normaliser": cs.likelihood.normaliser,
+                                 "condition": cond, "quantity": q, "ratio": "not concave", "ratio_q05": "",
+                                 "ratio_q95": "", "mean_shift_sd": "", "posterior_sd": "",
+                                 "delay": f"{theta0[di]:.3g}", "draws": len(models)})
+                    continue
                 ratio = float(np.var(proj, ddof=1)) / model_var
                 boot = [np.var(proj[rng.integers(0, proj.size, proj.size)], ddof=1) / model_var for _ in range(BOOT)]
                 shift = float(np.mean(proj)) / math.sqrt(float(np.var(proj, ddof=1)))
-                rows.append({"replicate": k, "frequency": freq, "condition": cond, "quantity": q,
+                rows.append({"replicate": k, "frequency": freq, "normaliser": cs.likelihood.normaliser, "condition": cond, "quantity": q,
                              "ratio": f"{ratio:.3f}", "ratio_q05": f"{np.quantile(boot, 0.05):.3f}",
                              "ratio_q95": f"{np.quantile(boot, 0.95):.3f}", "mean_shift_sd": f"{shift:+.3f}",
                              "posterior_sd": (f"{math.sqrt(float(g @ Sigma @ g)):.4g}"
@@ -178,7 +191,8 @@ def main(argv=None) -> int:
                              "delay": f"{theta0[di]:.3g}", "draws": len(models)})
                 if q in ("b/gain", "f_0", "c_f", "k_B"):
                     line.append(f"{q} {ratio:.2f}")
-            print(f"replicate {k} ({freq:g} Hz) {cond:9s}: " + ", ".join(line), flush=True)
+            print(f"replicate {k} ({freq:g} Hz) {cond:9s}: " + ", ".join(line)
+                  + ("" if concave else " (not concave at the truth)"), flush=True)
             with open(out / "ratios.csv", "w", newline="") as fh:
                 w_ = csv.DictWriter(fh, fieldnames=list(rows[0]))
                 w_.writeheader()

@@ -216,6 +216,12 @@ def test_inspecting_a_single_record_replicate_uses_its_one_record(tmp_path):
     assert list(by) == [*NAMES, "sigma", "rho"]  # one record: its own b, noise and AR(1) coefficient
     assert by["rho"]["truth"] is None and by["b"]["truth"] == replicate_device(cs, 2).truth["b"]
     assert np.isfinite(got["log_posterior_truth"]) and np.isfinite(got["log_posterior_median"])
+    q = got["log_posterior_draws"]
+    assert np.isfinite(q["q5"]) and q["q5"] <= q["q50"] <= q["q95"]
+    # the share of draws below the truth agrees with where the truth falls among the quantiles
+    below, truth = got["draws_below_truth"], got["log_posterior_truth"]
+    assert 0.0 <= below <= 1.0
+    assert below >= 0.9 if truth > q["q95"] else below <= 0.1 if truth < q["q5"] else 0.04 <= below <= 0.96
 
 
 def test_the_scripts_config_makes_the_settings_a_committed_folder_was_run_with():

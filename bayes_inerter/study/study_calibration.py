@@ -622,7 +622,9 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     likelihood's own parameters, having no true value, at their posterior medians) and
     at the posterior medians, and every sampled parameter's truth beside its median and
     94 % equal-tailed interval, under the likelihood the chain sampled (its reference
-    point, where it takes one, read from the checkpoint). The same seed
+    point, where it takes one, read from the checkpoint), and the log posterior of
+    :data:`INSPECT_DRAWS` kept draws beside the truth's (``draws_below_truth``: the share
+    of them below it). The same seed
     gives the same device, records and start as :func:`study_replicate`; a single-record
     calibration (``cs.single``) is inspected under its one record's model."""
     from ..inference.sampling.checkpoint import stored_identity
@@ -652,8 +654,21 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
 
     rows = [{"parameter": n, "truth": at_truth[n] if n not in unknown else None, "median": median[n],
              "q3": float(np.quantile(kept[n], 0.03)), "q97": float(np.quantile(kept[n], 0.97))} for n in jm.names]
+    # the kept draws' own log posterior: a truth whose log posterior lies above most
+    # draws' sits where the chain should have been and was not (a missed mode or ridge);
+    # one below nearly all lies where the posterior gives little mass (too narrow)
+    n_kept = len(kept[jm.names[0]])
+    pick = np.random.default_rng([cs.seed, k, 1]).choice(n_kept, min(INSPECT_DRAWS, n_kept), replace=False)
+    drawn = np.array([log_post({n: float(kept[n][i]) for n in jm.names}) for i in pick])
+    truth_lp = log_post(at_truth)
     return {"replicate": k, "steps": int(res.iterations), "tau_max": float(np.nanmax(res.tau)),
-            "log_posterior_truth": log_post(at_truth), "log_posterior_median": log_post(median), "parameters": rows}
+            "log_posterior_truth": truth_lp, "log_posterior_median": log_post(median),
+            "log_posterior_draws": {f"q{q}": float(np.quantile(drawn, q / 100)) for q in (5, 50, 95)},
+            "draws_below_truth": float(np.mean(drawn < truth_lp)), "parameters": rows}
+
+
+#: How many kept draws :func:`inspect_replicate` evaluates the log posterior at.
+INSPECT_DRAWS = 400
 
 
 @dataclass(frozen=True)
