@@ -59,8 +59,10 @@ from typing import ClassVar
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import minimize
 
 from ..device import TABLE_I, paper_parameters
+from ..inference.sampling import optimize
 from ..inference.sampling.convergence import Convergence
 from ..inference.sampling.tempering import Tempering
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
@@ -623,8 +625,10 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     at the posterior medians, and every sampled parameter's truth beside its median and
     94 % equal-tailed interval, under the likelihood the chain sampled (its reference
     point, where it takes one, read from the checkpoint), and the log posterior of
-    :data:`INSPECT_DRAWS` kept draws beside the truth's (``draws_below_truth``: the share
-    of them below it). The same seed
+    :data:`INSPECT_DRAWS` kept draws beside the truth's with the likelihood's own
+    parameters maximised there (``log_posterior_truth_profiled``; ``draws_below_truth``:
+    the share of the draws below it). A truth above most draws lies where the chain
+    should have gone and did not. The same seed
     gives the same device, records and start as :func:`study_replicate`; a single-record
     calibration (``cs.single``) is inspected under its one record's model."""
     from ..inference.sampling.checkpoint import stored_identity
@@ -660,15 +664,36 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     n_kept = len(kept[jm.names[0]])
     pick = np.random.default_rng([cs.seed, k, 1]).choice(n_kept, min(INSPECT_DRAWS, n_kept), replace=False)
     drawn = np.array([log_post({n: float(kept[n][i]) for n in jm.names}) for i in pick])
-    truth_lp = log_post(at_truth)
+    # ... beside the truth's with the likelihood's own parameters maximised there (from
+    # their medians and from the best draws' values): the medians of a curved posterior
+    # (the channels' delay against b / gain) can lie tens of nats below every draw, so
+    # the truth beside them says nothing of where the chain went
+    free = [i for i, n in enumerate(jm.names) if n in unknown]
+    base = np.array([math.log(at_truth[n]) if jm.all_priors[n].log_scale else at_truth[n] for n in jm.names])
+    starts = [base[free]] + [
+        np.array([math.log(kept[n][i]) if jm.all_priors[n].log_scale else kept[n][i] for n in jm.names])[free]
+        for i in pick[np.argsort(-drawn)[:PROFILE_STARTS]]]
+
+    def neg(u):
+        theta = base.copy()
+        theta[free] = u
+        lp = float(jm.log_prob(theta)[0])
+        return -lp if math.isfinite(lp) else math.inf
+    options = {"xatol": optimize.NM_XATOL, "fatol": optimize.NM_FATOL, "maxiter": optimize.NM_MAXITER}
+    truth_lp = (max(-float(minimize(neg, x0, method="Nelder-Mead", options=options).fun) for x0 in starts)
+                if free else log_post(at_truth))
     return {"replicate": k, "steps": int(res.iterations), "tau_max": float(np.nanmax(res.tau)),
-            "log_posterior_truth": truth_lp, "log_posterior_median": log_post(median),
+            "log_posterior_truth": log_post(at_truth), "log_posterior_median": log_post(median),
+            "log_posterior_truth_profiled": truth_lp,
             "log_posterior_draws": {f"q{q}": float(np.quantile(drawn, q / 100)) for q in (5, 50, 95)},
             "draws_below_truth": float(np.mean(drawn < truth_lp)), "parameters": rows}
 
 
 #: How many kept draws :func:`inspect_replicate` evaluates the log posterior at.
 INSPECT_DRAWS = 400
+#: Starts of :func:`inspect_replicate`'s maximisation of the likelihood's own parameters
+#: at the truth besides their medians: the best draws' values.
+PROFILE_STARTS = 3
 
 
 @dataclass(frozen=True)
