@@ -9,7 +9,11 @@ settings), with a fixed chain of ``--steps`` steps in place of the rule, and wri
 replicate's JSON as the calibration writes it (ranks and intervals) beside v12's:
 
     python studies/sbc_long_chains.py --replicates 11 29 35 2 5 8 [--steps 4000]
+        [--rule] [--mirror-shares f_share c_share] [--tempering 8 --hottest-beta 0.01]
         [--work runs/sbc-long-chains] [--out results/sbc-long-chains]
+
+``--rule`` keeps v12's convergence rule in place of the fixed length (to change only the
+start's mirrored shares, ``optimize.MIRROR_SHARES``, or the tempering ladder).
 
 A rerun skips the replicates already written. ``pairs.csv``: per replicate, v12's and
 the long chain's b / gain rank, 94 % and 50 % holds, and iterations.
@@ -24,6 +28,8 @@ import json
 import sys
 from pathlib import Path
 
+from bayes_inerter.inference.sampling import optimize
+from bayes_inerter.inference.sampling.tempering import Tempering
 from bayes_inerter.study.manifest import script_configuration, write_manifest
 from bayes_inerter.study.study_calibration import IDENTIFIED, Config, study_replicate
 
@@ -41,6 +47,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--replicates", type=int, nargs="+", required=True)
     ap.add_argument("--steps", type=int, default=4000)
+    ap.add_argument("--rule", action="store_true", help="v12's convergence rule, not --steps")
+    ap.add_argument("--mirror-shares", nargs="+", default=None, help="optimize.MIRROR_SHARES for the start")
+    ap.add_argument("--tempering", type=int, default=None, help="temperatures (default: v12's)")
+    ap.add_argument("--hottest-beta", type=float, default=None, help="the hottest beta (with --tempering)")
     ap.add_argument("--work", default="runs/sbc-long-chains")
     ap.add_argument("--out", default="results/sbc-long-chains")
     args = ap.parse_args(argv)
@@ -49,7 +59,13 @@ def main(argv=None) -> int:
         return 2
     out = Path(args.out)
     (out / "replicates").mkdir(parents=True, exist_ok=True)
-    cs = dataclasses.replace(v12_config().settings(), steps=args.steps)
+    cs = v12_config().settings()
+    if not args.rule:
+        cs = dataclasses.replace(cs, steps=args.steps)
+    if args.tempering is not None:
+        cs = dataclasses.replace(cs, tempering=Tempering.of(args.tempering, args.hottest_beta))
+    if args.mirror_shares:
+        optimize.MIRROR_SHARES = tuple(args.mirror_shares)  # read at each start search
     write_manifest(out, script_configuration())
     v12 = {r["replicate"]: r for r in map(json.loads, (V12 / "replicates.jsonl").read_text().splitlines())}
     for i, k in enumerate(args.replicates, 1):
