@@ -35,20 +35,20 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
-import json
 import math
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from bayes_inerter.cli.study_script import config_from_folder
 from bayes_inerter.inference.posterior.likelihood import NORMALISERS
 from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records import generate_record
 from bayes_inerter.study.study_calibration import Config, drawn_deviations, replicate_device
 
 ROOT = Path(__file__).resolve().parents[1]
-V12 = ROOT / "results" / "coverage-sbc-v12" / "manifest.json"
+V12 = ROOT / "results" / "coverage-sbc-v12"
 CONDITIONS = ("none", "reversals", "law", "all")
 TAU = 1e-3  # N: the floor of tau's prior; the records hold no discrepancy
 #: the central differences' step in the sampler's coordinates (chosen where the score
@@ -58,13 +58,6 @@ DEFAULT_STEP = 1e-3
 #: the parameters whose posterior the sandwich's Sigma spans (see main)
 IDENTIFIED = ("b", "f_0", "f_share", "c_f", "gain", "delay")
 BOOT = 400
-
-
-def v12_settings():
-    """SBC v12's calibration settings, read from its manifest."""
-    cfg = json.loads(V12.read_text())["runs"][0]["configuration"]["config"]
-    keys = {f.name for f in dataclasses.fields(Config)}
-    return Config(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in cfg.items() if k in keys}).settings()
 
 
 def record_again(cs, device, freq, condition, rng):
@@ -111,7 +104,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    cs = v12_settings()
+    cs = config_from_folder(Config, V12).settings()
     if args.normaliser:
         cs = dataclasses.replace(cs, likelihood=dataclasses.replace(cs.likelihood, normaliser=args.normaliser))
     rows = []

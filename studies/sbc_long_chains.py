@@ -28,6 +28,7 @@ import json
 import sys
 from pathlib import Path
 
+from bayes_inerter.cli.study_script import config_from_folder
 from bayes_inerter.inference.sampling import optimize
 from bayes_inerter.inference.sampling.tempering import Tempering
 from bayes_inerter.study.manifest import script_configuration, write_manifest
@@ -35,12 +36,6 @@ from bayes_inerter.study.study_calibration import IDENTIFIED, Config, study_repl
 
 ROOT = Path(__file__).resolve().parents[1]
 V12 = ROOT / "results" / "coverage-sbc-v12"
-
-
-def v12_config() -> Config:
-    cfg = json.loads((V12 / "manifest.json").read_text())["runs"][0]["configuration"]["config"]
-    keys = {f.name for f in dataclasses.fields(Config)}
-    return Config(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in cfg.items() if k in keys})
 
 
 def main(argv=None) -> int:
@@ -59,7 +54,7 @@ def main(argv=None) -> int:
         return 2
     out = Path(args.out)
     (out / "replicates").mkdir(parents=True, exist_ok=True)
-    cs = v12_config().settings()
+    cs = config_from_folder(Config, V12).settings()
     if not args.rule:
         cs = dataclasses.replace(cs, steps=args.steps)
     if args.tempering is not None:

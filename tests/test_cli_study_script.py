@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import pytest
 
 from bayes_inerter.cli.status import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
-from bayes_inerter.cli.study_script import study_main
+from bayes_inerter.cli.study_script import config_from_folder, study_main
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.output import StudyOutput
 
@@ -60,6 +60,20 @@ def test_every_simple_field_is_an_option_and_the_config_is_built_from_them(tmp_p
     manifest = json.loads((tmp_path / "here" / "manifest.json").read_text())
     (entry,) = manifest["runs"]
     assert entry["configuration"]["study"] == "fake" and entry["configuration"]["config"]["freqs"] == [1.0, 2.0, 3.0]
+
+
+def test_a_folders_run_gives_back_the_config_it_was_given(tmp_path):
+    """config_from_folder reads a run's configuration from the manifest as the command
+    line gave it (lists back to tuples); a field the run predates is at its default."""
+    module, seen = fake_study()
+    out = tmp_path / "here"
+    assert study_main(module, out=out, argv=["--freqs", "1", "2", "--method", "b", "--cap", "7", "--out", str(out),
+                                             "--processes", "1"]) == EXIT_OK
+    assert config_from_folder(Config, out) == seen["config"] == Config(freqs=(1.0, 2.0), method="b", cap=7)
+    manifest = json.loads((out / "manifest.json").read_text())
+    del manifest["runs"][0]["configuration"]["config"]["cap"]  # as if the run predated the option
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    assert config_from_folder(Config, out) == Config(freqs=(1.0, 2.0), method="b")
 
 
 def test_defaults_are_the_configs_own(tmp_path):

@@ -41,7 +41,7 @@ from typing import Any, Callable
 from ..study.output import StudyOutput
 from .status import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 
-__all__ = ["config_options", "config_from_arguments", "study_main", "StudyOutput"]
+__all__ = ["config_options", "config_from_arguments", "config_from_folder", "study_main", "StudyOutput"]
 
 
 def _simple(hint) -> tuple[type | None, bool]:
@@ -61,15 +61,23 @@ def _simple(hint) -> tuple[type | None, bool]:
     return (hint if hint in (int, float, str, bool) else None), False
 
 
+def _command_line_fields(config_type) -> list[tuple]:
+    """(field, element type, is a tuple) of each field of ``config_type`` the command line
+    can give."""
+    hints = typing.get_type_hints(config_type)
+    out = []
+    for f in dataclasses.fields(config_type):
+        elem, many = _simple(hints[f.name])
+        if elem is not None and not f.name.startswith("_"):
+            out.append((f, elem, many))
+    return out
+
+
 def config_options(parser: argparse.ArgumentParser, config_type) -> list[str]:
     """Add an option for each field of ``config_type`` the command line can give; returns
     the fields' names."""
-    hints = typing.get_type_hints(config_type)
     names = []
-    for f in dataclasses.fields(config_type):
-        elem, many = _simple(hints[f.name])
-        if elem is None or f.name.startswith("_"):
-            continue
+    for f, elem, many in _command_line_fields(config_type):
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
         flag = "--" + f.name.replace("_", "-")
         meta = dict(f.metadata)
@@ -96,6 +104,20 @@ def config_from_arguments(config_type, args: argparse.Namespace, names) -> Any:
         v = getattr(args, name)
         values[name] = tuple(v) if isinstance(v, list) else v
     return config_type(**values)
+
+
+def config_from_folder(config_type, folder, run: int = 0) -> Any:
+    """``config_type`` as a results folder's run was given it (its ``manifest.json``'s
+    entry ``run``, the fields a command line gives read as :func:`config_from_arguments`
+    reads them): to fit that folder's replicates again. A field newer than the run, or
+    one the command line cannot give, is at its default."""
+    import json
+
+    from ..study.manifest import MANIFEST
+
+    given = json.loads((Path(folder) / MANIFEST).read_text())["runs"][run]["configuration"]["config"]
+    names = [f.name for f, _, _ in _command_line_fields(config_type) if f.name in given]
+    return config_from_arguments(config_type, argparse.Namespace(**given), names)
 
 
 def _bar(desc: str) -> tuple[Callable, Callable]:
