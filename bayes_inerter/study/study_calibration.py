@@ -250,9 +250,10 @@ def drawn_deviations(record: Record, params, likelihood: LikelihoodSettings, rng
     periodic signal sum_k Re(X_k exp(i k w t)) whose harmonics X = U beta are the ones
     the likelihood compares (``drive`` from t = 0); ``groups`` (:data:`DEVIATION_GROUPS`)
     draws only the reversals' or only the law's, the others left at zero (the same draws
-    of the kept ones as "all" gives, so that a group's share can be told apart). It rises with a raised cosine over
-    ``envelope`` s (None: the generator's ramp, from the record's metadata) so that the
-    start-up stays smooth; the steady periods the likelihood takes hold it whole.
+    of the kept ones as "all" gives, so that a group's share can be told apart). It rises
+    with a raised cosine over ``envelope`` s (None: the generator's ramp, from the
+    record's metadata) so that the start-up stays smooth; the steady periods the
+    likelihood takes hold it whole.
 
     What it leaves out: the discrepancy tau k^(-alpha) (its log-uniform prior spans
     1e-3 to 1e5 N, and draws from it would swamp most records) and the sampled
@@ -652,9 +653,11 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     unknown = {n for n in jm.names if n not in known}
     at_truth = {**known, **{n: median[n] for n in unknown}}
 
+    def theta_of(values) -> np.ndarray:  # sampled parameters by name, in the sampler's coordinates
+        return np.array([math.log(values[n]) if jm.all_priors[n].log_scale else values[n] for n in jm.names])
+
     def log_post(values):
-        theta = [math.log(values[n]) if jm.all_priors[n].log_scale else values[n] for n in jm.names]
-        return float(jm.log_prob(theta)[0])
+        return float(jm.log_prob(theta_of(values))[0])
 
     rows = [{"parameter": n, "truth": at_truth[n] if n not in unknown else None, "median": median[n],
              "q3": float(np.quantile(kept[n], 0.03)), "q97": float(np.quantile(kept[n], 0.97))} for n in jm.names]
@@ -669,10 +672,9 @@ def inspect_replicate(cs: StudyCalibration, k: int, out) -> dict:
     # (the channels' delay against b / gain) can lie tens of nats below every draw, so
     # the truth beside them says nothing of where the chain went
     free = [i for i, n in enumerate(jm.names) if n in unknown]
-    base = np.array([math.log(at_truth[n]) if jm.all_priors[n].log_scale else at_truth[n] for n in jm.names])
-    starts = [base[free]] + [
-        np.array([math.log(kept[n][i]) if jm.all_priors[n].log_scale else kept[n][i] for n in jm.names])[free]
-        for i in pick[np.argsort(-drawn)[:PROFILE_STARTS]]]
+    base = theta_of(at_truth)
+    starts = [base[free]] + [theta_of({n: kept[n][i] for n in jm.names})[free]
+                             for i in pick[np.argsort(-drawn)[:PROFILE_STARTS]]]
 
     def neg(u):
         theta = base.copy()
