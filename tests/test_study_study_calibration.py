@@ -422,3 +422,46 @@ def test_drawn_deviation_groups_add_up_to_all_of_them():
 def test_drawn_deviations_need_the_motion_likelihood():
     with pytest.raises(ValueError, match="residual 'motion'"):
         StudyCalibration(single=True, draw_deviations=True, likelihood=LikelihoodSettings(residual="ar1"))
+
+
+def test_likelihood_force_puts_the_likelihoods_own_draw_in_the_force_harmonics():
+    """At the truth the residual the likelihood sees is exactly what was drawn: complex
+    normal noise of the likelihood's variance plus the marginalised deviations at their
+    prior sd; the motion and the period scatter stay the record's."""
+    from bayes_inerter.device import paper_parameters
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.inference.posterior.motion import deviation_sd, motion_variance, predicted_force
+    from bayes_inerter.records import generate_record
+    from bayes_inerter.study.study_calibration import likelihood_force
+
+    lk = LikelihoodSettings(residual="motion")
+    params = paper_parameters("A3")
+    rec = generate_record(params, 1.5, settings=GeneratorSettings(duration=6.0, ramp=1.0),
+                          rng=np.random.default_rng(1), setting_name="A3")
+    model = PosteriorModel(rec, priors=STUDY_SBC_PRIORS, likelihood=lk)
+    theta = model.to_theta(params, hyper={"gain": 1.002, "delay": 1e-4})
+    got = likelihood_force(rec, theta, lk, np.random.default_rng(2))
+    assert np.array_equal(got.accel, rec.accel) and np.array_equal(got.disp, rec.disp)
+    after = PosteriorModel(got, priors=STUDY_SBC_PRIORS, likelihood=lk).with_reference(theta).motion
+    before = model.with_reference(theta).motion
+    assert np.array_equal(after.basis, before.basis)
+    assert np.allclose(after.harmonic.var_force, before.harmonic.var_force, rtol=1e-9, atol=0)
+    x, h = model.field_vector(theta), model.hyper(theta)
+    F, _ = predicted_force(before, x, h["gain"], h["delay"])
+    V, _ = motion_variance(before, x, 0.0, 0.0, h["gain"], h["delay"])
+    rng = np.random.default_rng(2)  # the same draws in the same order
+    K = V.shape[0]
+    noise = (rng.normal(size=K) + 1j * rng.normal(size=K)) * np.sqrt(V / 2.0)
+    X = before.basis @ (rng.normal(size=before.basis.shape[1]) * deviation_sd(before, x))
+    want = noise + X[:K] + 1j * X[K:]
+    residual = after.harmonic.force - F
+    assert np.max(np.abs(X)) > 1.0  # the deviations are forces of newtons, not nothing
+    assert np.allclose(residual, want, rtol=0, atol=1e-3 * np.sqrt(np.min(V)))
+
+
+def test_likelihood_force_needs_the_motion_likelihood_and_no_drawn_deviations():
+    with pytest.raises(ValueError, match="residual 'motion'"):
+        StudyCalibration(single=True, likelihood_force=True, likelihood=LikelihoodSettings(residual="ar1"))
+    with pytest.raises(ValueError, match="leave draw_deviations off"):
+        StudyCalibration(single=True, likelihood_force=True, draw_deviations=True,
+                         likelihood=LikelihoodSettings(residual="motion"))

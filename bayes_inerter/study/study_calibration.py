@@ -68,6 +68,7 @@ from ..inference.sampling.tempering import Tempering
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
 from ..inference.posterior.likelihood import LikelihoodSettings
 from ..inference.posterior.model import PosteriorModel
+from ..inference.posterior.motion import deviation_sd, motion_variance, predicted_force
 from ..inference.posterior.priors import LogUniform, Uniform, tau_floor_prior
 from ..inference.summaries.results import hdi
 from ..records.generator import GeneratorSettings, generate_record
@@ -79,7 +80,7 @@ from .replicate_store import PACKED, finished
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
-           "RANK_CORRELATION", "IDENTIFIED", "gain_draws", "drawn_deviations", "Config", "run"]
+           "RANK_CORRELATION", "IDENTIFIED", "gain_draws", "drawn_deviations", "likelihood_force", "Config", "run"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -137,6 +138,10 @@ class StudyCalibration:
         generative model, so that the calibration checks the computation of the posterior
         it defines (default False: the records of the model's physics alone, as the
         folders saved before this option were made).
+    likelihood_force : replace each record's force harmonics by a draw from the motion-in
+        likelihood itself at the truth (:func:`likelihood_force`): a calibration of the
+        posterior's computation alone, the likelihood's approximations of the simulator
+        left out (default False).
     """
 
     setting: str = "A3"
@@ -152,11 +157,16 @@ class StudyCalibration:
     tau_floor: float | None = None
     tau_rtol: float = stop_rule.TAU_RTOL_BEFORE
     draw_deviations: bool = False
+    likelihood_force: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
         if self.draw_deviations and self.likelihood.residual != "motion":
             raise ValueError("draw_deviations draws the motion-in likelihood's deviations: use it with residual 'motion'")
+        if self.likelihood_force and self.likelihood.residual != "motion":
+            raise ValueError("likelihood_force draws from the motion-in likelihood: use it with residual 'motion'")
+        if self.likelihood_force and self.draw_deviations:
+            raise ValueError("likelihood_force draws the deviations itself: leave draw_deviations off")
         if len(self.frequencies) < 2 and not self.single:
             raise ValueError("the joint model needs at least two drive frequencies")
         if not (self.steps is None or (isinstance(self.steps, int) and self.steps >= 20)):
@@ -191,7 +201,8 @@ class StudyCalibration:
                 f"of {self.setting}, the {self.likelihood.residual} likelihood), {steps}, ranks among {self.draws} "
                 f"draws, seed {self.seed}" + ("" if self.tempering is None else f", {self.tempering.describe()}")
                 + ("" if self.tau_floor is None else f", tau's prior floor {self.tau_floor:g} N")
-                + (", the likelihood's deviations drawn into the force" if self.draw_deviations else ""))
+                + (", the likelihood's deviations drawn into the force" if self.draw_deviations else "")
+                + (", the force's harmonics drawn from the likelihood itself" if self.likelihood_force else ""))
 
 
 @dataclass(frozen=True)
@@ -233,6 +244,8 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
         records = [dataclasses.replace(r, accel=r.accel * gain) for r in records]
         if cs.draw_deviations:
             records = [drawn_deviations(r, params, cs.likelihood, rng) for r in records]
+        if cs.likelihood_force:
+            records = [likelihood_force(r, theta, cs.likelihood, rng) for r in records]
         return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws)
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
@@ -272,14 +285,53 @@ def drawn_deviations(record: Record, params, likelihood: LikelihoodSettings, rng
         law = np.zeros(s.shape[0], dtype=bool) if motion.law_columns is None else np.asarray(motion.law_columns)
         beta = np.where(law if groups == "law" else ~law, beta, 0.0)
     X = motion.basis @ beta
-    X = X[:K] + 1j * X[K:]
+    return _with_periodic_force(record, X[:K] + 1j * X[K:], motion.omega, envelope)
+
+
+def _with_periodic_force(record: Record, X: np.ndarray, omega: np.ndarray, envelope: float | None) -> Record:
+    """``record`` with sum_k Re(X_k exp(i w_k t)) added to its force (t from the record's
+    first sample, as the harmonic data's phases are), rising with a raised cosine over
+    ``envelope`` s (None: the generator's ramp, from the record's metadata)."""
     t = np.asarray(record.time, dtype=float)
-    delta = np.real(np.exp(1j * np.outer(t, motion.omega)) @ X)
+    delta = np.real(np.exp(1j * np.outer(t, omega)) @ X)
     rise = float(record.metadata.get("generator", {}).get("ramp", 0.0)) if envelope is None else float(envelope)
     if rise > 0.0:
         u = np.clip((t - t[0]) / rise, 0.0, 1.0)
         delta = delta * 0.5 * (1.0 - np.cos(np.pi * u))
     return dataclasses.replace(record, force=record.force + delta)
+
+
+def likelihood_force(record: Record, theta, likelihood: LikelihoodSettings, rng: np.random.Generator,
+                     envelope: float | None = None) -> Record:
+    """``record`` with its force's harmonics replaced by a draw from the motion-in
+    likelihood itself at ``theta`` (the truth, in the sampled coordinates of
+    :data:`STUDY_SBC_PRIORS`' model): the model's force given the record's measured
+    motion, F^_k(theta), plus complex normal noise of the likelihood's variance V_k
+    (both channels' noise as the record's period scatter gives it, no discrepancy: tau
+    0) and every deviation the likelihood marginalises (the reversals', the friction
+    law's and the measured motion's noise shapes, each drawn normal with the prior sd
+    the likelihood gives it at ``theta``, whose point is also the shapes' reference).
+
+    Only the force's mean harmonics 1..K change (a periodic signal is added, see
+    :func:`_with_periodic_force`): the motion, the period scatter and so everything
+    else the likelihood reads stay the record's. A calibration on such records checks
+    the computation of the posterior the likelihood defines (the sampler, its stopping
+    rule, the intervals), apart from how far the likelihood is from the simulator."""
+    if likelihood.law_sampled:
+        raise ValueError("likelihood_force draws at the fixed friction_law.SD; law_sampled samples that scale")
+    theta = np.asarray(theta, dtype=float)
+    model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=likelihood).with_reference(theta)
+    motion = model.motion
+    K = motion.omega.shape[0]
+    x, h = model.field_vector(theta), model.hyper(theta)
+    F, _ = predicted_force(motion, x, h["gain"], h["delay"], effects=model.effects(theta))
+    V, _ = motion_variance(motion, x, 0.0, 0.0, h["gain"], h["delay"])
+    noise = (rng.normal(size=K) + 1j * rng.normal(size=K)) * np.sqrt(V / 2.0)
+    s = deviation_sd(motion, x)
+    beta = rng.normal(size=s.shape[0]) * s
+    X = motion.basis @ beta
+    target = F + noise + X[:K] + 1j * X[K:]
+    return _with_periodic_force(record, target - motion.harmonic.force, motion.omega, envelope)
 
 
 def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
@@ -721,6 +773,8 @@ class Config:
     freqs : the drive frequencies, Hz (None: the study's).
     draw_deviations : the likelihood's marginalised deviations drawn into each record's
         force (``StudyCalibration.draw_deviations``; with ``residual`` "motion").
+    likelihood_force : each record's force harmonics drawn from the likelihood itself
+        (``StudyCalibration.likelihood_force``; with ``residual`` "motion").
     work : where each replicate's fit runs until done, continued by the next run
         (None: the output folder's ``.running``).
     raise_cap : raise the folder's cap to ``max_steps`` first (:func:`raise_cap`).
@@ -750,6 +804,9 @@ class Config:
     freqs: tuple[float, ...] | None = field(default=None, metadata={"help": "drive frequencies, Hz"})
     draw_deviations: bool = field(default=False, metadata={
         "help": "draw the motion-in likelihood's marginalised deviations into each record's force"})
+    likelihood_force: bool = field(default=False, metadata={
+        "help": "draw each record's force harmonics from the motion-in likelihood itself (calibrates the "
+                "posterior's computation alone)"})
     work: str | None = field(default=None, metadata={
         "help": "where each replicate's fit runs until done (default: OUT/.running)"})
     raise_cap: bool = field(default=False, metadata={"help": "raise the folder's cap to --max-steps first"})
@@ -780,6 +837,8 @@ class Config:
             extra["tau_rtol"] = self.tau_rtol
         if self.draw_deviations:
             extra["draw_deviations"] = True
+        if self.likelihood_force:
+            extra["likelihood_force"] = True
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 

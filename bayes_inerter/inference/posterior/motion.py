@@ -133,7 +133,7 @@ from .likelihood import REVERSAL_SCALES
 from . import friction_law
 from .reversals import SD, deviations_mean, switched_sign, reversal_correction, reversal_windows, window_basis
 
-__all__ = ["MotionData", "motion_data", "predicted_force", "bearing_force", "motion_variance", "motion_loglik",
+__all__ = ["MotionData", "motion_data", "predicted_force", "deviation_sd", "bearing_force", "motion_variance", "motion_loglik",
            "input_noise_variance", "input_noise_shapes", "with_input_noise", "with_input_shapes", "INPUT_NOISE_SEED",
            "fundamental_misfit", "plate_hump", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
            "DRIVE_MAX_PERIODS", "ORDER", "FUNDAMENTAL_MAX"]
@@ -334,6 +334,13 @@ def _variance(Y, tau, alpha, var_force, var_accel, cov, periods):
 def _deviation_sd(scale, x):
     """Each marginalised deviation's prior sd, N: ``scale[j] . (f1_0, f2_0, 1)``."""
     return scale[:, 0] * x[7] + scale[:, 1] * x[9] + scale[:, 2]
+
+
+def deviation_sd(data: MotionData, p, law: float | None = None) -> np.ndarray:
+    """(m,) N: the prior sd of each deviation the likelihood marginalises (the columns of
+    ``data.basis``) at the physical parameters ``p`` (by name, or a vector in
+    :data:`ORDER`), the law's scaled by a sampled ``law`` where given."""
+    return _deviation_sd(data.scale, _vector(p)) * _factors(data, law)
 
 
 def _factors(data: MotionData, law: float | None) -> np.ndarray:
