@@ -247,6 +247,11 @@ def test_the_scripts_config_makes_the_settings_a_committed_folder_was_run_with()
         Config(replicates=0)
     with pytest.raises(ValueError):
         Config(residual="no-such-likelihood")
+    assert config.settings().likelihood.normaliser == "reference"  # the library's, unless asked
+    asked = Config(single=True, residual="motion", normaliser="full", likelihood_force=True).settings()
+    assert asked.likelihood.normaliser == "full" and asked.likelihood_force
+    with pytest.raises(ValueError, match="normaliser must be one of"):
+        Config(residual="motion", normaliser="no-such-normaliser")
 
 
 def test_summarising_an_empty_folder_says_what_to_do(tmp_path):

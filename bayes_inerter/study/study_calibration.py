@@ -764,6 +764,8 @@ class Config:
     input_noise : draws of the drivetrain's input noise (0: off; None: the library's).
     law_sampled : sample the friction law's deviations' scale
         (``LikelihoodSettings.law_sampled``; the motion-in likelihood).
+    normaliser : the motion-in likelihood's normaliser (``LikelihoodSettings.normaliser``;
+        None: the library's).
     converge : each chain to the convergence rule, at most ``max_steps``.
     max_steps : the cap of a chain run to the rule.
     tempering : parallel tempering with this many temperatures, to beta 0.1 (None: none).
@@ -792,6 +794,8 @@ class Config:
         "help": "draws of the drivetrain's input noise (0: off; default: the library's)"})
     law_sampled: bool = field(default=False, metadata={
         "help": "sample the friction law's deviations' scale (LikelihoodSettings.law_sampled)"})
+    normaliser: str | None = field(default=None, metadata={
+        "help": "the motion-in likelihood's normaliser (LikelihoodSettings.normaliser; default: the library's)"})
     converge: bool = field(default=False, metadata={"help": "each chain to the convergence rule"})
     max_steps: int = field(default=StudyCalibration.max_steps, metadata={"help": "the cap of a chain run to the rule"})
     tempering: int | None = field(default=None, metadata={
@@ -822,11 +826,12 @@ class Config:
     def settings(self) -> StudyCalibration:
         """The calibration's own settings."""
         extra = {}
-        if self.residual or self.input_noise is not None or self.law_sampled:
+        if self.residual or self.input_noise is not None or self.law_sampled or self.normaliser:
             extra["likelihood"] = LikelihoodSettings(
                 **({"residual": self.residual} if self.residual else {}),
                 **({"input_noise": self.input_noise} if self.input_noise is not None else {}),
-                **({"law_sampled": True} if self.law_sampled else {}))
+                **({"law_sampled": True} if self.law_sampled else {}),
+                **({"normaliser": self.normaliser} if self.normaliser else {}))
         if self.freqs:
             extra["frequencies"] = tuple(self.freqs)
         if self.tempering is not None:
