@@ -248,8 +248,10 @@ def test_the_scripts_config_makes_the_settings_a_committed_folder_was_run_with()
     with pytest.raises(ValueError):
         Config(residual="no-such-likelihood")
     assert config.settings().likelihood.normaliser == "reference"  # the library's, unless asked
-    asked = Config(single=True, residual="motion", normaliser="full", likelihood_force=True).settings()
+    asked = Config(single=True, residual="motion", normaliser="full", deviation_scale="parameters",
+                   likelihood_force=True).settings()
     assert asked.likelihood.normaliser == "full" and asked.likelihood_force
+    assert asked.likelihood.deviation_scale == "parameters"
     with pytest.raises(ValueError, match="normaliser must be one of"):
         Config(residual="motion", normaliser="no-such-normaliser")
 

@@ -766,6 +766,8 @@ class Config:
         (``LikelihoodSettings.law_sampled``; the motion-in likelihood).
     normaliser : the motion-in likelihood's normaliser (``LikelihoodSettings.normaliser``;
         None: the library's).
+    deviation_scale : where the motion-in likelihood takes its deviations' prior sd
+        (``LikelihoodSettings.deviation_scale``; None: the library's).
     converge : each chain to the convergence rule, at most ``max_steps``.
     max_steps : the cap of a chain run to the rule.
     tempering : parallel tempering with this many temperatures, to beta 0.1 (None: none).
@@ -796,6 +798,9 @@ class Config:
         "help": "sample the friction law's deviations' scale (LikelihoodSettings.law_sampled)"})
     normaliser: str | None = field(default=None, metadata={
         "help": "the motion-in likelihood's normaliser (LikelihoodSettings.normaliser; default: the library's)"})
+    deviation_scale: str | None = field(default=None, metadata={
+        "help": "where the motion-in likelihood takes its deviations' prior sd (LikelihoodSettings."
+                "deviation_scale; default: the library's)"})
     converge: bool = field(default=False, metadata={"help": "each chain to the convergence rule"})
     max_steps: int = field(default=StudyCalibration.max_steps, metadata={"help": "the cap of a chain run to the rule"})
     tempering: int | None = field(default=None, metadata={
@@ -826,12 +831,13 @@ class Config:
     def settings(self) -> StudyCalibration:
         """The calibration's own settings."""
         extra = {}
-        if self.residual or self.input_noise is not None or self.law_sampled or self.normaliser:
+        if self.residual or self.input_noise is not None or self.law_sampled or self.normaliser or self.deviation_scale:
             extra["likelihood"] = LikelihoodSettings(
                 **({"residual": self.residual} if self.residual else {}),
                 **({"input_noise": self.input_noise} if self.input_noise is not None else {}),
                 **({"law_sampled": True} if self.law_sampled else {}),
-                **({"normaliser": self.normaliser} if self.normaliser else {}))
+                **({"normaliser": self.normaliser} if self.normaliser else {}),
+                **({"deviation_scale": self.deviation_scale} if self.deviation_scale else {}))
         if self.freqs:
             extra["frequencies"] = tuple(self.freqs)
         if self.tempering is not None:
