@@ -352,3 +352,28 @@ def test_a_checkpoint_within_the_records_resolution_goes_on_in_its_own_coordinat
     far = dict(near, impedance={**near["impedance"], "omega": coords.impedance.omega + 2 * tol})
     assert continue_at(coords, far, tol) is coords  # refused by the identity as before
     assert continue_at(coords, None, tol) is coords
+
+
+def test_a_start_outside_the_impedance_domain_falls_back_without_a_reference(monkeypatch, tmp_path):
+    """The motion-in likelihood with no reference point (the full normaliser, the
+    deviations' sd at each walker's own) searches its start before the coordinates are
+    fixed, so that a start outside the impedance map's domain moves the chain to the
+    unconstrained coordinates instead of stopping it."""
+    from bayes_inerter.inference.sampling import sampler
+
+    record = generate_record(paper_parameters("B2"), 1.5, rng=3, setting_name="B2")
+    model = PosteriorModel(record, likelihood=LikelihoodSettings(normaliser="full", deviation_scale="parameters"))
+    assert not model.needs_reference
+    coords = default_coordinates(model)
+    assert coords.kind == "impedance"
+    rng = np.random.default_rng(5)
+    outside = None
+    for _ in range(400):  # a prior draw the model can simulate but the impedance map cannot reach
+        theta = np.array([model.all_priors[n].sample(rng) for n in model.names])
+        if not np.all(np.isfinite(coords.to_u(theta))) and np.isfinite(model.log_prob(theta)[0]):
+            outside = theta
+            break
+    assert outside is not None
+    monkeypatch.setattr(sampler, "find_start", lambda *a, **k: (outside, model.log_prob(outside)[0]))
+    run = run_sampler(model, tmp_path / "chain.h5", nwalkers=2 * model.ndim, steps=20, seed=1)
+    assert run.coordinates.kind == "unconstrained"

@@ -255,6 +255,14 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
         seconds["search"] = time.perf_counter() - t0  # kept only where the chain is new
         if coords.kind == "impedance":
             coords = _reachable(model, coords, start, stored)
+    elif coords.kind == "impedance" and start is None and not stored and getattr(model, "motion", None) is not None:
+        # the motion-in likelihood without a reference point (normaliser "full" and the
+        # deviations' sd at each walker's own): its start is searched here too, so that
+        # the coordinates can fall back where it lies outside their domain
+        t0 = time.perf_counter()
+        start = _searched_start(model, seed, processes, coords)
+        seconds["search"] = time.perf_counter() - t0
+        coords = _reachable(model, coords, start, stored)
     target = Target(model, coords)
     schedule = Schedule(moves or default_moves(model, coordinates=coords), adaptation)
     identity = run_identity(model, coords, adaptation, schedule.base, nwalkers, tempering)
@@ -400,14 +408,19 @@ def _with_reference(model, stored: dict | None, start, seed: int, processes: int
     if kept is not None:
         return model.with_reference(kept), start
     if start is None:
-        with make_executor(processes, state=Target(model, coords)) as executor, interrupt_raised():
-            start = find_start(model, np.random.default_rng(seed), many=_many(executor),
-                               map=_model_map(executor))
+        start = _searched_start(model, seed, processes, coords)
     elif callable(start):
         start = start()
     theta = np.asarray(start[0], dtype=float)
     model = model.with_reference(theta)
     return model, (theta, model.log_prob(theta)[0])
+
+
+def _searched_start(model, seed: int, processes, coords: Coordinates):
+    """The optimiser's start (``optimize.find_start``, seeded by ``seed``), its search on
+    ``processes``."""
+    with make_executor(processes, state=Target(model, coords)) as executor, interrupt_raised():
+        return find_start(model, np.random.default_rng(seed), many=_many(executor), map=_model_map(executor))
 
 
 def _reachable(model, coords: Coordinates, start, stored: dict | None) -> Coordinates:
