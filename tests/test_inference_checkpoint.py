@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from bayes_inerter.inference.sampling.checkpoint import (IDENTITY_ATTR, CheckpointError, new_checkpoint, open_checkpoint,
-                                                read_chain, twin_path)
+                                                read_chain, stored_identity, twin_path)
 from bayes_inerter.inference.sampling.identity import CHECKPOINT_FORMAT
 
 IDENTITY = {"format": CHECKPOINT_FORMAT, "model": {"name": "two-port", "parameters": ["b", "sigma"]},
@@ -119,3 +119,13 @@ def test_a_checkpoint_of_a_newer_format_is_refused(tmp_path):
     _with_steps(path, identity={**IDENTITY, "format": CHECKPOINT_FORMAT + 1})
     with pytest.raises(CheckpointError, match="written by a newer version of bayes-inerter"):
         open_checkpoint(path, identity=IDENTITY)
+
+
+def test_an_empty_checkpoints_identity_pins_nothing(tmp_path):
+    """A chain whose start failed leaves a checkpoint with an identity and no step: the
+    next run must choose its own coordinates, so no identity is reported for it."""
+    empty = tmp_path / "empty.h5"
+    new_checkpoint(empty, identity=IDENTITY, write_seconds=0.0).flush()
+    assert stored_identity(empty) is None
+    _with_steps(tmp_path / "held.h5")
+    assert stored_identity(tmp_path / "held.h5") == IDENTITY

@@ -81,10 +81,12 @@ def _inspect(path: Path) -> _Inspection:
 
 def stored_identity(path) -> dict | None:
     """The run identity (:func:`.identity.run_identity`) that the checkpoint at ``path``
-    (or its twin) was written with, or None where neither holds one that can be read."""
+    (or its twin) was written with, or None where neither holds one that can be read, or
+    where it holds no step: a chain that never took one (its start failed) has nothing
+    to continue, and its identity must not pin the next run's coordinates."""
     path = Path(path)
     for s in (_inspect(path), _inspect(twin_path(path))):
-        if s.status == "intact":
+        if s.status == "intact" and s.steps > 0:
             return s.identity
     return None
 
