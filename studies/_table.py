@@ -86,6 +86,18 @@ def map_rows(func, jobs: list, processes: int) -> list[dict]:
         sys.exit(f"error: {exc}")
 
 
+def write_table(path, rows: list[dict]) -> Path:
+    """Write ``rows`` (dicts with the same keys) to the CSV file ``path``, its folder made
+    if needed; return the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
 def write_rows(path, rows: list[dict]) -> Path:
     """Write ``rows`` (dicts with the same keys) to the CSV file ``path`` (its folder made
     if needed, the run's entry added to its manifest.json), print each as
@@ -93,10 +105,7 @@ def write_rows(path, rows: list[dict]) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_manifest(path.parent, script_configuration())
-    with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_table(path, rows)
     for row in rows:
         print(", ".join(f"{k} {v}" for k, v in row.items()))
     return path

@@ -33,7 +33,6 @@ interval, the mean score's shift in sd) and prints one line per replicate and co
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import math
 import sys
@@ -46,6 +45,8 @@ from bayes_inerter.inference.posterior.likelihood import NORMALISERS
 from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records import generate_record
 from bayes_inerter.study.study_calibration import Config, drawn_deviations, replicate_device
+
+from _table import write_table
 
 ROOT = Path(__file__).resolve().parents[1]
 V12 = ROOT / "results" / "coverage-sbc-v12"
@@ -186,10 +187,7 @@ def main(argv=None) -> int:
                     line.append(f"{q} {ratio:.2f}")
             print(f"replicate {k} ({freq:g} Hz) {cond:9s}: " + ", ".join(line)
                   + ("" if concave else " (not concave at the truth)"), flush=True)
-            with open(out / "ratios.csv", "w", newline="") as fh:
-                w_ = csv.DictWriter(fh, fieldnames=list(rows[0]))
-                w_.writeheader()
-                w_.writerows(rows)
+            write_table(out / "ratios.csv", rows)
     return 0
 
 

@@ -21,7 +21,6 @@ their binomial se) and prints one line for each.
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 from pathlib import Path
 
@@ -30,6 +29,8 @@ from scipy import signal
 
 from bayes_inerter.inference.summaries.results import hdi
 from bayes_inerter.study.manifest import script_configuration, write_manifest
+
+from _table import write_table
 
 ROOT = Path(__file__).resolve().parents[1]
 LEVELS = (0.94, 0.50)
@@ -73,10 +74,7 @@ def main(argv=None) -> int:
             rows.append(row)
             print(f"{n} draws, rho {rho:g}: the 94 % interval held {row['held_94']} (se {row['se_94']}), "
                   f"the 50 % {row['held_50']} (se {row['se_50']})", flush=True)
-    with open(out / "coverage.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_table(out / "coverage.csv", rows)
     return 0
 
 

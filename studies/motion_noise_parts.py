@@ -30,7 +30,6 @@ one line per replicate and noise.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import math
 from pathlib import Path
@@ -44,6 +43,8 @@ from bayes_inerter.inference.posterior.motion import (deviation_sd, input_noise_
 from bayes_inerter.records import generate_record
 from bayes_inerter.study.manifest import script_configuration, write_manifest
 from bayes_inerter.study.study_calibration import Config, replicate_device
+
+from _table import write_table
 
 ROOT = Path(__file__).resolve().parents[1]
 V12 = ROOT / "results" / "coverage-sbc-v12"
@@ -136,10 +137,7 @@ def main(argv=None) -> int:
                   f"{np.round(residual[:SHOWN], 2).tolist()} (mean {residual.mean():.2f}); sign / V "
                   f"{np.round(sign[:SHOWN], 2).tolist()}; drivetrain / V {np.round(drive[:SHOWN], 2).tolist()}; "
                   f"whitened {white:.2f}", flush=True)
-            with open(out / "parts.csv", "w", newline="") as fh:
-                w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-                w.writeheader()
-                w.writerows(rows)
+            write_table(out / "parts.csv", rows)
     return 0
 
 

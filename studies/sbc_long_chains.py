@@ -22,7 +22,6 @@ the long chain's b / gain rank, 94 % and 50 % holds, and iterations.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import json
 import sys
@@ -33,6 +32,8 @@ from bayes_inerter.inference.sampling import optimize
 from bayes_inerter.inference.sampling.tempering import Tempering
 from bayes_inerter.study.manifest import script_configuration, write_manifest
 from bayes_inerter.study.study_calibration import IDENTIFIED, Config, study_replicate
+
+from _table import write_table
 
 ROOT = Path(__file__).resolve().parents[1]
 V12 = ROOT / "results" / "coverage-sbc-v12"
@@ -79,10 +80,7 @@ def main(argv=None) -> int:
                      "v12_held50": a["hdi"]["50"], "long_iterations": long_["iterations"], "long_rank": b["rank"],
                      "long_held94": b["hdi"]["94"], "long_held50": b["hdi"]["50"],
                      "long_tau_max": round(long_["tau_max"], 1) if long_["tau_max"] else None})
-    with open(out / "pairs.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_table(out / "pairs.csv", rows)
     for r in rows:
         print(f"replicate {r['replicate']} ({r['frequency']:g} Hz): rank {r['v12_rank']} -> {r['long_rank']}, "
               f"94 % {r['v12_held94']} -> {r['long_held94']}, 50 % {r['v12_held50']} -> {r['long_held50']}")
