@@ -831,13 +831,13 @@ class Config:
     def settings(self) -> StudyCalibration:
         """The calibration's own settings."""
         extra = {}
-        if self.residual or self.input_noise is not None or self.law_sampled or self.normaliser or self.deviation_scale:
-            extra["likelihood"] = LikelihoodSettings(
-                **({"residual": self.residual} if self.residual else {}),
-                **({"input_noise": self.input_noise} if self.input_noise is not None else {}),
-                **({"law_sampled": True} if self.law_sampled else {}),
-                **({"normaliser": self.normaliser} if self.normaliser else {}),
-                **({"deviation_scale": self.deviation_scale} if self.deviation_scale else {}))
+        # the likelihood's settings the command line gave (the others at the library's)
+        given = {"residual": self.residual or None, "input_noise": self.input_noise,
+                 "law_sampled": True if self.law_sampled else None, "normaliser": self.normaliser or None,
+                 "deviation_scale": self.deviation_scale or None}
+        changes = {k: v for k, v in given.items() if v is not None}
+        if changes:
+            extra["likelihood"] = LikelihoodSettings(**changes)
         if self.freqs:
             extra["frequencies"] = tuple(self.freqs)
         if self.tempering is not None:
