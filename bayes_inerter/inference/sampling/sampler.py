@@ -249,20 +249,21 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
         coords = continue_at(coords, stored.get("coordinates"), reference_tolerance(model))
     searched = start is None  # the search's start: its mirrored modes get walkers too (_first_walkers)
     seconds = {}
-    if getattr(model, "needs_reference", False):
+    needs_reference = getattr(model, "needs_reference", False)
+    # the motion-in likelihood without a reference point (normaliser "full" and the
+    # deviations' sd at each walker's own) searches its start here too, as the reference
+    # point's is, so that the coordinates can fall back where it lies outside their domain
+    search_first = (not needs_reference and coords.kind == "impedance" and start is None and not stored
+                    and getattr(model, "motion", None) is not None)
+    if needs_reference or search_first:
         t0 = time.perf_counter()
-        model, start = _with_reference(model, stored, start, seed, processes, coords)
+        if needs_reference:
+            model, start = _with_reference(model, stored, start, seed, processes, coords)
+        else:
+            start = _searched_start(model, seed, processes, coords)
         seconds["search"] = time.perf_counter() - t0  # kept only where the chain is new
         if coords.kind == "impedance":
             coords = _reachable(model, coords, start, stored)
-    elif coords.kind == "impedance" and start is None and not stored and getattr(model, "motion", None) is not None:
-        # the motion-in likelihood without a reference point (normaliser "full" and the
-        # deviations' sd at each walker's own): its start is searched here too, so that
-        # the coordinates can fall back where it lies outside their domain
-        t0 = time.perf_counter()
-        start = _searched_start(model, seed, processes, coords)
-        seconds["search"] = time.perf_counter() - t0
-        coords = _reachable(model, coords, start, stored)
     target = Target(model, coords)
     schedule = Schedule(moves or default_moves(model, coordinates=coords), adaptation)
     identity = run_identity(model, coords, adaptation, schedule.base, nwalkers, tempering)
