@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
+from bayes_inerter.inference.posterior.model import PosteriorModel
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.study_calibration import (IDENTIFIED, LEVELS, STUDY_SBC_PRIORS, StudyCalibration, chains_long_enough,
                                                   coverage_by_frequency, coverage_rows, coverage_so_far, finished_replicates,
@@ -188,6 +189,11 @@ def test_one_replicate_ranks_every_physical_parameter(tmp_path):
     assert device.truth == rep["truth"]
     assert device.params.b == pytest.approx(device.truth["b"])
     assert device.params.f1_0 + device.params.f2_0 == pytest.approx(device.truth["f_0"])
+    # the drawn vector behind them, in the fits' coordinates, gives the same truth back
+    model = PosteriorModel(device.records[0], priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+    assert len(device.theta) == model.ndim
+    back = model.values(np.array(device.theta))
+    assert {n: pytest.approx(back[n]) for n in device.truth} == device.truth
     again = replicate_device(cs, 0)
     assert len(device.records) == len(cs.frequencies)
     for a, b in zip(device.records, again.records):

@@ -209,12 +209,16 @@ class StudyCalibration:
 class ReplicateDevice:
     """Replicate k's device as the study draws it: its network's parameters, the true
     values of the ranked parameters (the sensors' gain among them), its records (the
-    acceleration channel scaled by the gain) and the prior draws the simulator refused."""
+    acceleration channel scaled by the gain), the prior draws the simulator refused, and
+    the whole drawn vector in the fits' sampled coordinates (``theta``: the likelihood's
+    own parameters too, the channels' delay that drew the records among them, and tau's
+    draw, which the records do not use: they carry no discrepancy)."""
 
     params: object
     truth: dict
     records: list
     redraws: int
+    theta: tuple = ()
 
 
 def replicate_device(cs: StudyCalibration, k: int) -> ReplicateDevice:
@@ -246,7 +250,8 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
             records = [drawn_deviations(r, params, cs.likelihood, rng) for r in records]
         if cs.likelihood_force:
             records = [likelihood_force(r, theta, cs.likelihood, rng) for r in records]
-        return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws)
+        return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws,
+                               tuple(float(v) for v in theta))
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
 

@@ -1,0 +1,154 @@
+"""Is a calibration replicate's posterior the density's, or the sampler's? (issue 39, item 4.)
+
+On records drawn from the likelihood itself (results/coverage-sbc-likelihood-force-exact)
+the fitted density is the one that drew the force, and yet the truths fall outside the
+intervals more often than nominal. If the chain were not sampling that density, other
+kernels would place the posterior elsewhere. This probe fits chosen replicates of a
+calibration folder again, the same device and records (its settings), under kernels that
+share as little as possible with the default:
+
+- ``ensemble``: the ensemble moves alone (no fitted moves), a fixed ``--steps``;
+- ``physical``: the same, walking theta itself (no impedance map, no logits);
+- ``at-truth``: the ensemble moves in theta, every walker started near the truth (the
+  drawn vector, :class:`ReplicateDevice`'s ``theta``; tau at its prior's floor), a fixed
+  ``--steps``, the first half left out;
+- ``tau-floor``: the default kernel and rule with tau's prior squeezed to its floor
+  (1e-3 to 1.001e-3 N): the records carry no discrepancy, while the fits sample tau from
+  a log-uniform prior from 1e-3 N, so this rules that mismatch in or out.
+
+and beside them the folder's own replicate (``rule``: the default kernel to the rule).
+Each row of ranks.csv: a replicate, a kernel, a ranked parameter, the share of the
+kernel's draws below the truth, the draws' 3, 50 and 97 % quantiles, and whether the
+94 % and 50 % highest-density intervals hold the truth.
+
+    python studies/kernel_agreement.py --folder results/coverage-sbc-likelihood-force-exact
+        --replicates 10 2 19 [--steps 8000] [--seed 1] [--work runs/kernel-agreement]
+        [--out results/kernel-agreement]
+
+A rerun skips the (replicate, kernel) pairs already in ranks.csv.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bayes_inerter.cli.study_script import config_from_folder
+from bayes_inerter.inference import LogUniform, PosteriorModel, fit_record, run_sampler
+from bayes_inerter.inference.summaries.results import hdi
+from bayes_inerter.study import stop_rule
+from bayes_inerter.study.manifest import script_configuration, write_manifest
+from bayes_inerter.study.replicate_store import load_replicates
+from bayes_inerter.study.study_calibration import LEVELS, Config, replicate_device
+
+from _table import write_table
+
+KERNELS = ("rule", "ensemble", "physical", "at-truth", "tau-floor")
+TAU_FLOOR = LogUniform(1e-3, 1.001e-3)
+
+
+def _rows(k, kernel, draws: dict, truth: dict, steps: int, seconds: float) -> list[dict]:
+    rows = []
+    for name, t in truth.items():
+        x = np.asarray(draws[name], dtype=float)
+        row = {"replicate": k, "kernel": kernel, "steps": steps, "seconds": round(seconds, 1), "parameter": name,
+               "truth": t, "rank_share": round(float(np.mean(x < t)), 4)}
+        for q in (0.03, 0.5, 0.97):
+            row[f"q{round(100 * q):02d}"] = float(np.quantile(x, q))
+        for level in LEVELS:
+            lo, hi = hdi(x, level)
+            row[f"hdi{round(100 * level)}"] = bool(lo <= t <= hi)
+        rows.append(row)
+    return rows
+
+
+def _rule_rows(folder: Path, k: int, truth: dict) -> list[dict]:
+    """The folder's own replicate: ranks among its L draws and its intervals' holds."""
+    rep = load_replicates(folder)[k]
+    rows = []
+    for name, t in truth.items():
+        rows.append({"replicate": k, "kernel": "rule", "steps": rep["iterations"], "seconds": None, "parameter": name,
+                     "truth": t, "rank_share": round(rep["ranks"][name] / (rep["L"] + 1), 4),
+                     "q03": None, "q50": None, "q97": None,
+                     **{f"hdi{round(100 * lv)}": rep["hdi"][f"{round(100 * lv)}"][name] for lv in LEVELS}})
+    return rows
+
+
+def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path) -> tuple[dict, int]:
+    record = device.records[0]
+    if kernel == "at-truth":
+        model = PosteriorModel(record, priors=cs.priors(), likelihood=cs.likelihood)
+        theta = np.array(device.theta)
+        theta[model.names.index("tau")] = model.bounds()[model.names.index("tau")][0] + 1e-6
+        model = model.with_reference(theta)
+        out.mkdir(parents=True, exist_ok=True)
+        run = run_sampler(model, out / "chain.h5", steps=steps, seed=seed, fresh=True,
+                          start=(theta, model.log_prob(theta)[0]), coordinates="physical", adaptation=None,
+                          tempering=cs.tempering)
+        chain = run.chain(discard=steps // 2)
+        flat = chain.reshape(-1, chain.shape[-1])
+        values = [model.values(t) for t in flat[:: max(1, len(flat) // 4000)]]
+        return {n: np.array([v[n] for v in values]) for n in device.truth}, steps
+    kw = dict(seed=seed, priors=cs.priors(), plots=False, likelihood=cs.likelihood, interval="posterior",
+              tempering=cs.tempering)
+    if kernel == "tau-floor":
+        kw.update(priors={**cs.priors(), "tau": TAU_FLOOR}, convergence=stop_rule.convergence(cs.max_steps, cs.tau_rtol))
+    else:
+        kw.update(steps=steps, adaptation=None, coordinates="physical" if kernel == "physical" else "impedance")
+    res = fit_record(record, out, **kw)
+    post = res.idata.posterior
+    return {n: np.asarray(post[n]).ravel() for n in device.truth}, int(res.iterations)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--folder", required=True, help="a single-record calibration folder (its settings.json)")
+    ap.add_argument("--replicates", type=int, nargs="+", required=True)
+    ap.add_argument("--kernels", nargs="+", default=list(KERNELS), choices=KERNELS)
+    ap.add_argument("--steps", type=int, default=8000, help="steps of the fixed-length kernels")
+    ap.add_argument("--seed", type=int, default=1, help="the refits' sampler seed")
+    ap.add_argument("--work", default="runs/kernel-agreement")
+    ap.add_argument("--out", default="results/kernel-agreement")
+    args = ap.parse_args(argv)
+    folder, out = Path(args.folder), Path(args.out)
+    if not (folder / "settings.json").is_file():
+        print(f"error: {folder} holds no calibration (no settings.json); give a folder of study_calibration.py",
+              file=sys.stderr)
+        return 2
+    if args.steps < 100:
+        print(f"error: --steps must be at least 100, got {args.steps}", file=sys.stderr)
+        return 2
+    cs = config_from_folder(Config, folder).settings()
+    if not cs.single:
+        print("error: the probe refits single-record calibrations; this folder holds joint fits", file=sys.stderr)
+        return 2
+    cs = dataclasses.replace(cs, steps=None)
+    out.mkdir(parents=True, exist_ok=True)
+    write_manifest(out, script_configuration())
+    table = out / "ranks.csv"
+    rows = list(csv.DictReader(table.open())) if table.exists() else []
+    done = {(int(r["replicate"]), r["kernel"]) for r in rows}
+    todo = [(k, kern) for k in args.replicates for kern in args.kernels if (k, kern) not in done]
+    for i, (k, kernel) in enumerate(todo, 1):
+        device = replicate_device(cs, k)
+        t0 = time.perf_counter()
+        if kernel == "rule":
+            got = _rule_rows(folder, k, device.truth)
+        else:
+            draws, steps = _fit(cs, device, kernel, args.steps, args.seed, Path(args.work) / f"{k:04d}-{kernel}")
+            got = _rows(k, kernel, draws, device.truth, steps, time.perf_counter() - t0)
+        rows += got
+        write_table(table, rows)
+        held = sum(str(r["hdi50"]) == "True" for r in got)
+        print(f"[{i}/{len(todo)}] replicate {k}, {kernel}: 50 % intervals held {held} of {len(got)}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
