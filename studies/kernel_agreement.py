@@ -68,9 +68,8 @@ def _rows(k, kernel, draws: dict, truth: dict, steps: int, seconds: float) -> li
     return rows
 
 
-def _rule_rows(folder: Path, k: int, truth: dict) -> list[dict]:
-    """The folder's own replicate: ranks among its L draws and its intervals' holds."""
-    rep = load_replicates(folder)[k]
+def _rule_rows(rep: dict, k: int, truth: dict) -> list[dict]:
+    """The folder's own replicate ``rep``: ranks among its L draws and its intervals' holds."""
     rows = []
     for name, t in truth.items():
         rows.append({"replicate": k, "kernel": "rule", "steps": rep["iterations"], "seconds": None, "parameter": name,
@@ -85,7 +84,8 @@ def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path) -> tuple[dic
     if kernel == "at-truth":
         model = PosteriorModel(record, priors=cs.priors(), likelihood=cs.likelihood)
         theta = np.array(device.theta)
-        theta[model.names.index("tau")] = model.bounds()[model.names.index("tau")][0] + 1e-6
+        i = model.names.index("tau")
+        theta[i] = model.bounds()[i][0] + 1e-6
         model = model.with_reference(theta)
         out.mkdir(parents=True, exist_ok=True)
         run = run_sampler(model, out / "chain.h5", steps=steps, seed=seed, fresh=True,
@@ -135,11 +135,15 @@ def main(argv=None) -> int:
     rows = list(csv.DictReader(table.open())) if table.exists() else []
     done = {(int(r["replicate"]), r["kernel"]) for r in rows}
     todo = [(k, kern) for k in args.replicates for kern in args.kernels if (k, kern) not in done]
+    stored = load_replicates(folder) if any(kern == "rule" for _, kern in todo) else {}
+    devices = {}  # each replicate's device and records, drawn once for all its kernels
     for i, (k, kernel) in enumerate(todo, 1):
-        device = replicate_device(cs, k)
+        if k not in devices:
+            devices[k] = replicate_device(cs, k)
+        device = devices[k]
         t0 = time.perf_counter()
         if kernel == "rule":
-            got = _rule_rows(folder, k, device.truth)
+            got = _rule_rows(stored[k], k, device.truth)
         else:
             draws, steps = _fit(cs, device, kernel, args.steps, args.seed, Path(args.work) / f"{k:04d}-{kernel}")
             got = _rows(k, kernel, draws, device.truth, steps, time.perf_counter() - t0)
