@@ -153,6 +153,33 @@ def test_physical_coordinates_keep_the_ridge_move(tmp_path, record_file):
     assert any(m.startswith("NutRidgeMove") for m in info["moves"]), info["moves"]
 
 
+def test_thinned_draws_keep_every_walker_and_space_the_draws_evenly():
+    from bayes_inerter.inference.fit import thinned_draws
+
+    values = np.arange(4 * 10 * 2, dtype=float).reshape(4, 10, 2)  # walkers, draws, parameters
+    kept = thinned_draws(values, most=20)  # 5 a walker: every second draw
+    assert kept.shape == (4, 5, 2) and np.array_equal(kept, values[:, ::2])
+    assert np.array_equal(thinned_draws(values, most=1000), values)  # under the cap: all of them
+    assert thinned_draws(values, most=1).shape == (4, 1, 2)  # never fewer than one a walker
+
+
+def test_a_records_fit_can_keep_the_draws_its_summary_comes_from(tmp_path, record_file):
+    """``all_draws``: the draws.npz of a single record holds the draws summary.csv's
+    numbers are made from (a short chain: none thinned away), where posterior.nc holds
+    only those that carry a simulation."""
+    from bayes_inerter.inference.fit import ALL_DRAWS_FILE
+    from bayes_inerter.records import read_record
+
+    res = fit_record(read_record(record_file), tmp_path / "fit", steps=6, walkers=24, plots=False,
+                     all_draws=True, tempering=None)
+    rows = {r["name"]: r for r in res.summary}
+    with np.load(tmp_path / "fit" / ALL_DRAWS_FILE) as every:
+        assert set(every.files) == {n for n, r in rows.items() if r["kind"] == "sampled"}
+        for name in every.files:
+            assert every[name].shape[0] == 24
+            assert float(np.mean(every[name])) == pytest.approx(rows[name]["mean"], rel=1e-12, abs=1e-300)
+
+
 @pytest.mark.slow
 def test_no_adaptation_leaves_the_ensemble_moves_alone(tmp_path, record_file):
     out = tmp_path / "fit"

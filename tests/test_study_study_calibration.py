@@ -32,6 +32,8 @@ def test_settings_are_checked():
     with pytest.raises(ValueError, match="steps"):
         StudyCalibration(steps=5)
     assert StudyCalibration(frequencies=[0.5, 1]).frequencies == (0.5, 1.0)
+    with pytest.raises(ValueError, match="interval_draws"):
+        StudyCalibration(interval_draws="all")
 
 
 def _fake(k, held: bool, rank=5, tau=10.0):
@@ -363,6 +365,41 @@ def test_a_replicate_that_samples_the_gain_ranks_b_over_gain_too(tmp_path, monke
     assert got["rank"] == 0 and not got["hdi"]["94"] and not got["central"]["94"]
     assert rep["hdi"]["94"]["b"]  # b's own interval, widened by the gain's, holds it
     assert json.loads(json.dumps(rep)) == rep
+
+
+def test_a_single_records_intervals_come_from_the_kept_draws_where_asked(tmp_path, monkeypatch):
+    """``interval_draws="kept"``: the fit is asked for its kept draws and the intervals
+    and ranks come from them, not from posterior.nc's simulated draws (here put far
+    from the truth, so that reading them would miss)."""
+    import types
+
+    import xarray as xr
+
+    from bayes_inerter.inference.fit import ALL_DRAWS_FILE
+    from bayes_inerter.study import study_calibration
+
+    asked = []
+    for where in ("kept", "simulated"):
+        cs = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), single=True, frequencies=(1.0,),
+                              steps=None, max_steps=900, draws=19, interval_draws=where)
+        truth = replicate_device(cs, 0).truth
+        rng = np.random.default_rng(0)
+        near = {n: v * np.exp(0.01 * rng.standard_normal((4, 100))) for n, v in truth.items()}
+        post = xr.Dataset({n: (("chain", "draw"), np.full((1, 400), 2.0 * v)) for n, v in truth.items()})
+
+        def fake_fit(record, out, all_draws=False, **options):
+            asked.append(all_draws)
+            if all_draws:
+                out.mkdir(parents=True, exist_ok=True)
+                np.savez_compressed(out / ALL_DRAWS_FILE, **near)
+            return types.SimpleNamespace(idata=types.SimpleNamespace(posterior=post), tau=[10.0], iterations=900,
+                                         converged=True, coordinates="unconstrained", tau_by_parameter={})
+
+        monkeypatch.setattr(study_calibration, "fit_record", fake_fit)
+        rep = study_replicate(cs, 0, tmp_path / where)
+        held = all(rep["hdi"]["94"].values())
+        assert held if where == "kept" else not any(rep["hdi"]["94"].values())
+    assert asked == [True, False]
 
 
 def test_gain_draws_counts_the_true_gains_inside_their_prior(tmp_path):

@@ -36,13 +36,14 @@ from .sampling.sampler import Adaptation, Convergence, Tempering, check_run_opti
 from .sampling.tempering import default_convergence
 
 __all__ = ["fit_record", "fit_joint", "FitResult", "check_output_folder", "versions", "DRAWS_FILE",
-           "ALL_DRAWS_FILE", "JOINT_DRAWS_KEPT"]
+           "ALL_DRAWS_FILE", "JOINT_DRAWS_KEPT", "thinned_draws"]
 
 #: The joint model's kept draws of each b (``b_<setting>``: walkers x draws), numpy's npz:
 #: what the study's regression per flywheel needs, kept beside the summary because the
 #: chain itself is too large to keep with the results.
 DRAWS_FILE = "b_draws.npz"
-#: Every sampled parameter's kept draws of a joint fit, by name (``fit_joint(all_draws=True)``).
+#: Every sampled parameter's kept draws, by name (``fit_joint(all_draws=True)``,
+#: ``fit_record(all_draws=True)``).
 ALL_DRAWS_FILE = "draws.npz"
 #: At most this many draws of each parameter go to ``DRAWS_FILE`` and ``ALL_DRAWS_FILE``
 #: (and into the ``FitResult``'s draws that a study's tables are made from): the chain's
@@ -150,8 +151,14 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                checkpoint_seconds: float = WRITE_SECONDS,
                interval: str | IntervalSettings | None = None, freq: float | None = None,
                name: str | None = None, modal: bool | None = None, masses: Masses | None = None,
-               tempering: Tempering | None = Tempering()) -> FitResult:
+               tempering: Tempering | None = Tempering(), all_draws: bool = False) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
+
+    ``all_draws``: also write every sampled parameter's kept draws, by name, to
+    ``ALL_DRAWS_FILE`` (at most ``JOINT_DRAWS_KEPT``, thinned evenly along the steps,
+    every walker kept, as the joint fit's): the draws summary.csv's intervals come from,
+    where posterior.nc holds at most ``summaries.results.MAX_DRAWS`` of them (those that
+    carry a simulation).
 
     ``modal``: the bearing's damper sampled as the plate mode's damping ratio under its
     physical prior (``model.PosteriorModel``; None: wherever the model can).
@@ -229,6 +236,9 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                                         else None, phi=float(np.median(sample.phi)),
                                         settings=interval_settings, rng=np.random.default_rng(seed + 2))
         got = _finish(out, pm, got, steps, convergence, b_identified=b_interval.identified)
+        if all_draws:
+            kept = thinned_draws(sample.values)
+            np.savez_compressed(out / ALL_DRAWS_FILE, **{n: kept[:, :, i] for i, n in enumerate(pm.names)})
         figures = _write_plots(out, pm, sample, sims, label=_label(pm, name), warmup=int(run.warmup),
                                b_interval=b_interval, b_theory=b_theory) if plots else ()
         info = _run_info(model, pm, got, seed, {
@@ -245,6 +255,16 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                          b_theory=b_theory, b_interval=b_interval, drive=drive, burn_in=sample.burn,
                          warmup=int(run.warmup), thin=sample.thin, loo=loo, tau_by_parameter=info["tau"],
                          coordinates=info["coordinates"], figures=figures, tempering=info["tempering"])
+
+
+def thinned_draws(values: np.ndarray, most: int | None = None) -> np.ndarray:
+    """``values`` (walkers, draws, ...) thinned evenly along the draws to at most
+    ``most`` in all (None: ``JOINT_DRAWS_KEPT``), every walker kept (every step-th of
+    each walker's draws)."""
+    most = JOINT_DRAWS_KEPT if most is None else most
+    n_walkers, n_kept = values.shape[:2]
+    per_walker = max(1, most // n_walkers)
+    return values[:, ::math.ceil(n_kept / per_walker)]
 
 
 def _interval_settings(interval) -> IntervalSettings:
@@ -315,9 +335,7 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
         got = _finish(out, jm, got, steps, convergence)
         run, sample = got.run, got.sample
         nb = len(jm.settings)
-        n_walkers, n_kept = sample.values.shape[:2]
-        per_walker = max(1, JOINT_DRAWS_KEPT // n_walkers)  # every step-th of a walker's draws
-        kept = sample.values[:, ::math.ceil(n_kept / per_walker)]
+        kept = thinned_draws(sample.values)
         draws = {name: kept[:, :, i] for i, name in enumerate(jm.names[:nb])}
         np.savez_compressed(out / DRAWS_FILE, **draws)
         if all_draws:

@@ -80,7 +80,8 @@ from .replicate_store import PACKED, finished
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
-           "RANK_CORRELATION", "IDENTIFIED", "gain_draws", "drawn_deviations", "likelihood_force", "Config", "run"]
+           "RANK_CORRELATION", "IDENTIFIED", "INTERVAL_DRAWS", "gain_draws", "drawn_deviations", "likelihood_force", "Config",
+           "run"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -105,6 +106,9 @@ STUDY_SBC_PRIORS = {
 
 #: The interval levels checked: the study's 94 % and the 50 %.
 LEVELS = (0.94, 0.5)
+
+#: Where a single-record replicate's intervals are taken from (``StudyCalibration.interval_draws``).
+INTERVAL_DRAWS = ("simulated", "kept")
 
 
 @dataclass(frozen=True)
@@ -142,6 +146,15 @@ class StudyCalibration:
         likelihood itself at the truth (:func:`likelihood_force`): a calibration of the
         posterior's computation alone, the likelihood's approximations of the simulator
         left out (default False).
+    interval_draws : where a single-record replicate's intervals (and ranks) are taken
+        from (:data:`INTERVAL_DRAWS`): "simulated", the at most
+        ``summaries.results.MAX_DRAWS`` (600) draws of the fit's InferenceData, the
+        default, so that a folder saved before this option existed is continued as it was
+        made; or "kept", the chain's kept draws thinned to at most
+        ``fit.JOINT_DRAWS_KEPT`` (4,000), as the joint fit's always are and as near as a
+        file keeps them to the draws summary.csv's intervals come from. An interval's
+        ends estimated from fewer draws hold a fresh draw less often than its level
+        (docs/inference.md).
     """
 
     setting: str = "A3"
@@ -158,9 +171,12 @@ class StudyCalibration:
     tau_rtol: float = stop_rule.TAU_RTOL_BEFORE
     draw_deviations: bool = False
     likelihood_force: bool = False
+    interval_draws: str = "simulated"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
+        if self.interval_draws not in INTERVAL_DRAWS:
+            raise ValueError(f"interval_draws must be one of {', '.join(INTERVAL_DRAWS)}, got {self.interval_draws!r}")
         if self.draw_deviations and self.likelihood.residual != "motion":
             raise ValueError("draw_deviations draws the motion-in likelihood's deviations: use it with residual 'motion'")
         if self.likelihood_force and self.likelihood.residual != "motion":
@@ -348,11 +364,16 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     truth, records, redraws = device.truth, device.records, device.redraws
     convergence = stop_rule.convergence(cs.max_steps, cs.tau_rtol)
     if cs.single:
+        kept_draws = cs.interval_draws == "kept"
         res = fit_record(records[0], out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=cs.priors(),
                          plots=False, likelihood=cs.likelihood, convergence=convergence, interval="posterior",
-                         tempering=cs.tempering)
-        post = res.idata.posterior
-        kept = {n: np.asarray(post[n]).ravel() for n in post.data_vars}
+                         tempering=cs.tempering, all_draws=kept_draws)
+        if kept_draws:
+            with np.load(out / ALL_DRAWS_FILE) as f:
+                kept = {n: f[n].ravel() for n in f.files}
+        else:
+            post = res.idata.posterior
+            kept = {n: np.asarray(post[n]).ravel() for n in post.data_vars}
         kept[f"b_{cs.setting}"] = kept.pop("b")
     else:
         res = fit_joint(records, out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=cs.priors(),
@@ -784,6 +805,8 @@ class Config:
         force (``StudyCalibration.draw_deviations``; with ``residual`` "motion").
     likelihood_force : each record's force harmonics drawn from the likelihood itself
         (``StudyCalibration.likelihood_force``; with ``residual`` "motion").
+    interval_draws : where a single record's intervals come from
+        (``StudyCalibration.interval_draws``; None: its default).
     work : where each replicate's fit runs until done, continued by the next run
         (None: the output folder's ``.running``).
     raise_cap : raise the folder's cap to ``max_steps`` first (:func:`raise_cap`).
@@ -821,6 +844,9 @@ class Config:
     likelihood_force: bool = field(default=False, metadata={
         "help": "draw each record's force harmonics from the motion-in likelihood itself (calibrates the "
                 "posterior's computation alone)"})
+    interval_draws: str | None = field(default=None, metadata={
+        "help": "a single record's intervals from the fit's 600 'simulated' draws (the default) or its 'kept' "
+                "draws (up to 4,000)"})
     work: str | None = field(default=None, metadata={
         "help": "where each replicate's fit runs until done (default: OUT/.running)"})
     raise_cap: bool = field(default=False, metadata={"help": "raise the folder's cap to --max-steps first"})
@@ -855,6 +881,8 @@ class Config:
             extra["draw_deviations"] = True
         if self.likelihood_force:
             extra["likelihood_force"] = True
+        if self.interval_draws:
+            extra["interval_draws"] = self.interval_draws
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 
