@@ -1,6 +1,7 @@
 """Simulation-based calibration in the study's configuration: the interval, the counts
 (failed replicates are misses), the reports, and one real replicate (slow)."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -400,6 +401,27 @@ def test_a_single_records_intervals_come_from_the_kept_draws_where_asked(tmp_pat
         held = all(rep["hdi"]["94"].values())
         assert held if where == "kept" else not any(rep["hdi"]["94"].values())
     assert asked == [True, False]
+
+
+def test_domain_draws_again_only_the_devices_outside_the_impedance_domain():
+    """``domain``: a device outside the impedance coordinates' domain (the prior a fit in
+    them assumes) is drawn again; one inside is the same device, records and all."""
+    from bayes_inerter.inference.sampling.coordinates import default_coordinates
+
+    box = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), single=True, frequencies=(1.5,),
+                           steps=None, seed=0, generator=GeneratorSettings(duration=4.0, ramp=0.8))
+    held = dataclasses.replace(box, domain=True)
+
+    def inside(device):
+        model = PosteriorModel(device.records[0], priors=box.priors(), likelihood=box.likelihood)
+        return bool(np.all(np.isfinite(default_coordinates(model, "impedance").to_u(np.array(device.theta)))))
+
+    same, redrawn = [replicate_device(c, 0) for c in (box, held)], [replicate_device(c, 1) for c in (box, held)]
+    assert inside(same[0]) and same[0].theta == same[1].theta
+    assert np.array_equal(same[0].records[0].force, same[1].records[0].force)
+    assert not inside(redrawn[0]) and inside(redrawn[1]) and redrawn[1].redraws > redrawn[0].redraws
+    with pytest.raises(ValueError, match="single"):
+        StudyCalibration(domain=True)
 
 
 def test_gain_draws_counts_the_true_gains_inside_their_prior(tmp_path):

@@ -64,6 +64,7 @@ from scipy.optimize import minimize
 from ..device import TABLE_I, paper_parameters
 from ..inference.sampling import optimize
 from ..inference.sampling.convergence import Convergence
+from ..inference.sampling.coordinates import default_coordinates
 from ..inference.sampling.tempering import Tempering
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
 from ..inference.posterior.likelihood import LikelihoodSettings
@@ -154,7 +155,13 @@ class StudyCalibration:
         ``fit.JOINT_DRAWS_KEPT`` (4,000), as the joint fit's always are and as near as a
         file keeps them to the draws summary.csv's intervals come from. An interval's
         ends estimated from fewer draws hold a fresh draw less often than its level
-        (docs/inference.md).
+        (results/hdi-from-draws).
+    domain : draw the devices from the prior restricted to the impedance coordinates'
+        domain (``posterior.impedance``), the prior a fit in those coordinates assumes:
+        a device outside is drawn again (default False: the whole prior box, as the
+        folders saved before this option were made; a fit can then never cover a truth
+        outside the domain unless its start lies outside too and it walks the
+        unconstrained coordinates). Single-record calibrations only.
     """
 
     setting: str = "A3"
@@ -172,9 +179,12 @@ class StudyCalibration:
     draw_deviations: bool = False
     likelihood_force: bool = False
     interval_draws: str = "simulated"
+    domain: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
+        if self.domain and not self.single:
+            raise ValueError("domain checks a single record's impedance coordinates: use it with single")
         if self.interval_draws not in INTERVAL_DRAWS:
             raise ValueError(f"interval_draws must be one of {', '.join(INTERVAL_DRAWS)}, got {self.interval_draws!r}")
         if self.draw_deviations and self.likelihood.residual != "motion":
@@ -245,7 +255,9 @@ def replicate_device(cs: StudyCalibration, k: int) -> ReplicateDevice:
 
 def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> ReplicateDevice:
     """A device from the prior and its records (a draw the simulator refuses is drawn
-    again: the posterior gives it zero density too)."""
+    again: the posterior gives it zero density too; so is one outside the impedance
+    coordinates' domain where ``cs.domain`` asks). A draw kept is the same whether or
+    not ``cs.domain`` is set: the check draws nothing."""
     template = generate_record(paper_parameters(cs.setting), cs.frequencies[0], settings=cs.generator,
                                rng=np.random.default_rng([cs.seed, 10**6]), setting_name=cs.setting)
     base = PosteriorModel(template, priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
@@ -259,6 +271,8 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
                        for f in freqs]
         except (SimulationError, ValueError):
             continue
+        if cs.domain and not _in_domain(cs, records[0], theta):
+            continue
         truth = base.values(theta)
         gain = truth.get("gain", 1.0)
         records = [dataclasses.replace(r, accel=r.accel * gain) for r in records]
@@ -269,6 +283,13 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
         return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws,
                                tuple(float(v) for v in theta))
     raise RuntimeError("100 prior draws in a row could not be simulated")
+
+
+def _in_domain(cs: StudyCalibration, record: Record, theta: np.ndarray) -> bool:
+    """Whether ``theta`` lies in the domain of the impedance coordinates a fit of
+    ``record`` walks (``posterior.impedance``: the prior restricted to it)."""
+    model = PosteriorModel(record, priors=cs.priors(), likelihood=cs.likelihood)
+    return bool(np.all(np.isfinite(default_coordinates(model, "impedance").to_u(theta))))
 
 
 #: Which of the motion-in likelihood's deviations :func:`drawn_deviations` draws.
@@ -805,6 +826,8 @@ class Config:
         force (``StudyCalibration.draw_deviations``; with ``residual`` "motion").
     likelihood_force : each record's force harmonics drawn from the likelihood itself
         (``StudyCalibration.likelihood_force``; with ``residual`` "motion").
+    domain : devices from the prior restricted to the impedance coordinates' domain
+        (``StudyCalibration.domain``; with ``single``).
     interval_draws : where a single record's intervals come from
         (``StudyCalibration.interval_draws``; None: its default).
     work : where each replicate's fit runs until done, continued by the next run
@@ -844,6 +867,8 @@ class Config:
     likelihood_force: bool = field(default=False, metadata={
         "help": "draw each record's force harmonics from the motion-in likelihood itself (calibrates the "
                 "posterior's computation alone)"})
+    domain: bool = field(default=False, metadata={
+        "help": "draw the devices from the prior restricted to the impedance coordinates' domain (with --single)"})
     interval_draws: str | None = field(default=None, metadata={
         "help": "a single record's intervals from the fit's 600 'simulated' draws (the default) or its 'kept' "
                 "draws (up to 4,000)"})
@@ -883,6 +908,8 @@ class Config:
             extra["likelihood_force"] = True
         if self.interval_draws:
             extra["interval_draws"] = self.interval_draws
+        if self.domain:
+            extra["domain"] = True
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 
