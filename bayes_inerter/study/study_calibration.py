@@ -81,8 +81,8 @@ from .replicate_store import PACKED, finished
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
-           "RANK_CORRELATION", "IDENTIFIED", "INTERVAL_DRAWS", "gain_draws", "drawn_deviations", "likelihood_force", "Config",
-           "run"]
+           "RANK_CORRELATION", "IDENTIFIED", "INTERVAL_DRAWS", "in_domain", "gain_draws", "drawn_deviations",
+           "likelihood_force", "Config", "run"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -271,7 +271,7 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
                        for f in freqs]
         except (SimulationError, ValueError):
             continue
-        if cs.domain and not _in_domain(cs, records[0], theta):
+        if cs.domain and not in_domain(cs, records[0], theta):
             continue
         truth = base.values(theta)
         gain = truth.get("gain", 1.0)
@@ -285,11 +285,11 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
 
-def _in_domain(cs: StudyCalibration, record: Record, theta: np.ndarray) -> bool:
+def in_domain(cs: StudyCalibration, record: Record, theta) -> bool:
     """Whether ``theta`` lies in the domain of the impedance coordinates a fit of
     ``record`` walks (``posterior.impedance``: the prior restricted to it)."""
     model = PosteriorModel(record, priors=cs.priors(), likelihood=cs.likelihood)
-    return bool(np.all(np.isfinite(default_coordinates(model, "impedance").to_u(theta))))
+    return bool(np.all(np.isfinite(default_coordinates(model, "impedance").to_u(np.asarray(theta, dtype=float)))))
 
 
 #: Which of the motion-in likelihood's deviations :func:`drawn_deviations` draws.
