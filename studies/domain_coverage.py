@@ -11,10 +11,11 @@ restricted prior, and those outside are what ``--domain`` would have drawn again
 
 For every finished replicate of ``--folder`` this remakes its device (no fit), says
 whether it lies inside, and writes coverage_in_domain.csv into the folder: per ranked
-parameter the 94 % and 50 % intervals held over the replicates inside, beside the
-expected count and its binomial se, and over all parameters with the se from the
-replicates' own spread (a replicate's intervals are not independent); the replicates
-outside are listed on standard output.
+parameter the 94 % and 50 % intervals held over the replicates inside (highest-density,
+``held_``, and equal-tailed, ``central_``), beside the expected count and its binomial
+se, and over all parameters with the se from the replicates' own spread of their
+highest-density intervals (a replicate's intervals are not independent); the
+replicates outside are listed on standard output.
 
     python studies/domain_coverage.py --folder results/coverage-sbc-likelihood-force-exact-s22
 """
@@ -38,7 +39,8 @@ LEVELS = ("94", "50")
 
 
 def held_rows(replicates: list[dict]) -> list[dict]:
-    """Held counts per parameter and over all of them (see module docstring)."""
+    """Held counts per parameter and over all of them (see module docstring), of the
+    highest-density intervals (``held_``) and the equal-tailed ones (``central_``)."""
     n = len(replicates)
     names = list(replicates[0]["hdi"]["94"])
     rows = []
@@ -47,15 +49,19 @@ def held_rows(replicates: list[dict]) -> list[dict]:
         for lv in LEVELS:
             p = int(lv) / 100
             row[f"held_{lv}"] = sum(r["hdi"][lv][name] for r in replicates)
+            row[f"central_{lv}"] = sum(r["central"][lv][name] for r in replicates)
             row[f"expected_{lv}"] = round(n * p, 1)
             row[f"se_{lv}"] = round(math.sqrt(n * p * (1 - p)), 1)
         rows.append(row)
     row = {"parameter": "all", "replicates": n}
     for lv in LEVELS:
-        shares = np.array([np.mean([r["hdi"][lv][m] for m in names]) for r in replicates])
-        row[f"held_{lv}"] = int(round(shares.sum() * len(names)))
+        for form, key in (("hdi", "held"), ("central", "central")):
+            shares = np.array([np.mean([r[form][lv][m] for m in names]) for r in replicates])
+            row[f"{key}_{lv}"] = int(round(shares.sum() * len(names)))
+            if form == "hdi":  # the se from the replicates' own spread of held shares
+                se = float(np.std(shares, ddof=1) / math.sqrt(n)) * n * len(names)
         row[f"expected_{lv}"] = round(n * len(names) * int(lv) / 100, 1)
-        row[f"se_{lv}"] = round(float(np.std(shares, ddof=1) / math.sqrt(n)) * n * len(names), 1)
+        row[f"se_{lv}"] = round(se, 1)
     rows.append(row)
     return rows
 
