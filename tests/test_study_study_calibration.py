@@ -424,6 +424,20 @@ def test_domain_draws_again_only_the_devices_outside_the_impedance_domain():
         StudyCalibration(domain=True)
 
 
+def test_the_report_lists_the_priors_the_fits_sample():
+    """The motion-in model samples the bearing's damper as the plate mode's damping
+    ratio: the report's prior list names zeta_B with the model's prior, not the c_B the
+    prior dict also holds; the other physical parameters keep the dict's priors."""
+    from bayes_inerter.study.study_calibration import fitted_priors
+
+    cs = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), single=True, frequencies=(1.5,),
+                          steps=None, generator=GeneratorSettings(duration=4.0, ramp=0.8))
+    priors = fitted_priors(cs)
+    assert "zeta_B" in priors and "c_B" not in priors
+    assert all(priors[n] == STUDY_SBC_PRIORS[n] for n in priors if n in STUDY_SBC_PRIORS)
+    assert set(priors) >= {"b", "f_0", "f_share", "c_f", "c_share", "c_n", "k_n", "k_B"}
+
+
 def test_gain_draws_counts_the_true_gains_inside_their_prior(tmp_path):
     """A gain the records leave at its prior holds the truth as often as the draws fall
     inside the prior's interval: the count says whether a shortfall is the draws'."""

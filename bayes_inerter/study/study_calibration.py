@@ -81,8 +81,8 @@ from .replicate_store import PACKED, finished
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
-           "RANK_CORRELATION", "IDENTIFIED", "INTERVAL_DRAWS", "in_domain", "gain_draws", "drawn_deviations",
-           "likelihood_force", "Config", "run"]
+           "RANK_CORRELATION", "IDENTIFIED", "INTERVAL_DRAWS", "in_domain", "fitted_priors", "gain_draws",
+           "drawn_deviations", "likelihood_force", "Config", "run"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -258,9 +258,7 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
     again: the posterior gives it zero density too; so is one outside the impedance
     coordinates' domain where ``cs.domain`` asks). A draw kept is the same whether or
     not ``cs.domain`` is set: the check draws nothing."""
-    template = generate_record(paper_parameters(cs.setting), cs.frequencies[0], settings=cs.generator,
-                               rng=np.random.default_rng([cs.seed, 10**6]), setting_name=cs.setting)
-    base = PosteriorModel(template, priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+    base = _base_model(cs, STUDY_SBC_PRIORS)
     ranked = base.names[: base.n_phys] + [n for n in base.names[base.n_phys:] if n == "gain"]
     freqs = cs.frequencies if not cs.single else (cs.frequencies[k % len(cs.frequencies)],)
     for redraws in range(100):
@@ -283,6 +281,23 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
         return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws,
                                tuple(float(v) for v in theta))
     raise RuntimeError("100 prior draws in a row could not be simulated")
+
+
+def _base_model(cs: StudyCalibration, priors: dict) -> PosteriorModel:
+    """The model of a record of the paper's ``cs.setting`` at the first frequency under
+    ``priors``: the parameters a replicate's fit samples, and their priors."""
+    template = generate_record(paper_parameters(cs.setting), cs.frequencies[0], settings=cs.generator,
+                               rng=np.random.default_rng([cs.seed, 10**6]), setting_name=cs.setting)
+    return PosteriorModel(template, priors=priors, likelihood=cs.likelihood)
+
+
+def fitted_priors(cs: StudyCalibration) -> dict:
+    """The priors of the physical parameters the fits sample, by name, as the model
+    takes them from ``cs.priors()`` (the bearing's damper as the plate mode's damping
+    ratio zeta_B where the model samples it so, in place of the c_B the prior dict
+    also holds)."""
+    base = _base_model(cs, cs.priors())
+    return {n: base.all_priors[n] for n in base.names[: base.n_phys]}
 
 
 def in_domain(cs: StudyCalibration, record: Record, theta) -> bool:
@@ -701,7 +716,7 @@ def write_study_calibration(out, cs: StudyCalibration, results: list[dict], vers
         plt.close(fig)
     report, section = study_calibration_report(out, cs, rows, results, versions,
                                                long_enough=chains_long_enough(results), levels=LEVELS,
-                                               priors=cs.priors())
+                                               priors=fitted_priors(cs))
     return {"coverage": rows, "replicates": len(results), "failed": [r for r in results if "error" in r],
             "report": report, "section": section}
 
