@@ -420,6 +420,11 @@ def test_domain_draws_again_only_the_devices_outside_the_impedance_domain():
     assert inside(same[0]) and same[0].theta == same[1].theta
     assert np.array_equal(same[0].records[0].force, same[1].records[0].force)
     assert not inside(redrawn[0]) and inside(redrawn[1]) and redrawn[1].redraws > redrawn[0].redraws
+    # a raised floor of tau's prior is not the impedance map's domain: the same device
+    floored = dataclasses.replace(held, tau_floor=5e4)
+    assert same[1].theta[PosteriorModel(same[1].records[0], priors=box.priors(),
+                                        likelihood=box.likelihood).names.index("tau")] < np.log(5e4)
+    assert replicate_device(floored, 0).theta == same[1].theta
     with pytest.raises(ValueError, match="single"):
         StudyCalibration(domain=True)
 

@@ -302,8 +302,10 @@ def fitted_priors(cs: StudyCalibration) -> dict:
 
 def in_domain(cs: StudyCalibration, record: Record, theta) -> bool:
     """Whether ``theta`` lies in the domain of the impedance coordinates a fit of
-    ``record`` walks (``posterior.impedance``: the prior restricted to it)."""
-    model = PosteriorModel(record, priors=cs.priors(), likelihood=cs.likelihood)
+    ``record`` walks (``posterior.impedance``: the prior restricted to it). Read under
+    :data:`STUDY_SBC_PRIORS`, the box ``theta`` is drawn from: a raised floor of tau's
+    prior (``cs.tau_floor``) says nothing of the impedance map's domain."""
+    model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
     return bool(np.all(np.isfinite(default_coordinates(model, "impedance").to_u(np.asarray(theta, dtype=float)))))
 
 
