@@ -55,13 +55,12 @@ def held_rows(replicates: list[dict]) -> list[dict]:
         rows.append(row)
     row = {"parameter": "all", "replicates": n}
     for lv in LEVELS:
-        for form, key in (("hdi", "held"), ("central", "central")):
-            shares = np.array([np.mean([r[form][lv][m] for m in names]) for r in replicates])
-            row[f"{key}_{lv}"] = int(round(shares.sum() * len(names)))
-            if form == "hdi":  # the se from the replicates' own spread of held shares
-                se = float(np.std(shares, ddof=1) / math.sqrt(n)) * n * len(names)
+        row[f"held_{lv}"] = sum(r["hdi"][lv][m] for r in replicates for m in names)
+        row[f"central_{lv}"] = sum(r["central"][lv][m] for r in replicates for m in names)
         row[f"expected_{lv}"] = round(n * len(names) * int(lv) / 100, 1)
-        row[f"se_{lv}"] = round(se, 1)
+        # the se from the replicates' own spread of their held shares
+        shares = np.array([np.mean([r["hdi"][lv][m] for m in names]) for r in replicates])
+        row[f"se_{lv}"] = round(float(np.std(shares, ddof=1) / math.sqrt(n)) * n * len(names), 1)
     rows.append(row)
     return rows
 
