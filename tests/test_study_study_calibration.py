@@ -556,3 +556,27 @@ def test_likelihood_force_needs_the_motion_likelihood_and_no_drawn_deviations():
     with pytest.raises(ValueError, match="leave draw_deviations off"):
         StudyCalibration(single=True, likelihood_force=True, draw_deviations=True,
                          likelihood=LikelihoodSettings(residual="motion"))
+
+
+def test_an_independent_motion_device_makes_the_motion_and_the_truth_the_force():
+    """``motion_device`` "independent": the records' motion is a second device's, drawn
+    apart from the truth; the truth is the same draw as with its own motion, and its
+    force harmonics are the likelihood's draw at the truth on the other motion."""
+    from bayes_inerter.study.study_calibration import likelihood_force
+
+    own = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), single=True, frequencies=(1.5,),
+                           steps=None, seed=3, generator=GeneratorSettings(duration=4.0, ramp=0.8),
+                           likelihood_force=True)
+    other = dataclasses.replace(own, motion_device="independent")
+    a, b = replicate_device(own, 0), replicate_device(other, 0)
+    assert a.theta == b.theta and a.truth == b.truth
+    assert not np.allclose(a.records[0].accel, b.records[0].accel)
+    # the force the fit sees is the likelihood's draw at the truth on the other device's motion
+    model = PosteriorModel(b.records[0], priors=STUDY_SBC_PRIORS, likelihood=own.likelihood)
+    lp_truth = model.log_likelihood(np.array(b.theta))[0]
+    assert np.isfinite(lp_truth)
+    assert "independent device" in other.describe()
+    with pytest.raises(ValueError, match="likelihood_force"):
+        StudyCalibration(single=True, motion_device="independent", likelihood=LikelihoodSettings(residual="motion"))
+    with pytest.raises(ValueError, match="motion_device must be one of"):
+        dataclasses.replace(own, motion_device="servo")

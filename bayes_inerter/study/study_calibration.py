@@ -82,7 +82,7 @@ __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", 
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
            "finished_replicates", "coverage_so_far", "coverage_by_frequency", "write_coverage_so_far", "rank_correlations",
            "RANK_CORRELATION", "IDENTIFIED", "INTERVAL_DRAWS", "in_domain", "fitted_priors", "gain_draws",
-           "drawn_deviations", "likelihood_force", "Config", "run"]
+           "drawn_deviations", "likelihood_force", "MOTION_DEVICES", "Config", "run"]
 
 _F0 = TABLE_I["f1_0"] + TABLE_I["f2_0"]
 _CF = TABLE_I["c_f1"] + TABLE_I["c_f2"]
@@ -110,6 +110,9 @@ LEVELS = (0.94, 0.5)
 
 #: Where a single-record replicate's intervals are taken from (``StudyCalibration.interval_draws``).
 INTERVAL_DRAWS = ("simulated", "kept")
+
+#: Which device makes a replicate's motion (``StudyCalibration.motion_device``).
+MOTION_DEVICES = ("truth", "independent")
 
 
 @dataclass(frozen=True)
@@ -162,6 +165,15 @@ class StudyCalibration:
         folders saved before this option were made; a fit can then never cover a truth
         outside the domain unless its start lies outside too and it walks the
         unconstrained coordinates). Single-record calibrations only.
+    motion_device : which device makes the records' motion (:data:`MOTION_DEVICES`):
+        "truth", the default, the drawn device itself; or "independent", a second device
+        drawn from the same prior, independently of the truth, whose records' motion (and
+        period scatter) the truth's force is then drawn on (with ``likelihood_force``
+        only). The motion-in likelihood conditions on the measured motion and leaves out
+        what the motion itself says of the device (the servo yields to the device's
+        force); with the motion independent of the truth there is nothing to leave out,
+        so the fits' posterior is the exact one and its coverage nominal if the sampler,
+        its rule and the intervals are right.
     """
 
     setting: str = "A3"
@@ -180,9 +192,15 @@ class StudyCalibration:
     likelihood_force: bool = False
     interval_draws: str = "simulated"
     domain: bool = False
+    motion_device: str = "truth"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
+        if self.motion_device not in MOTION_DEVICES:
+            raise ValueError(f"motion_device must be one of {', '.join(MOTION_DEVICES)}, got {self.motion_device!r}")
+        if self.motion_device != "truth" and not self.likelihood_force:
+            raise ValueError("an independent motion device needs the force drawn from the likelihood: "
+                             "use motion_device with likelihood_force")
         if self.domain and not self.single:
             raise ValueError("domain checks a single record's impedance coordinates: use it with single")
         if self.interval_draws not in INTERVAL_DRAWS:
@@ -228,7 +246,8 @@ class StudyCalibration:
                 f"draws, seed {self.seed}" + ("" if self.tempering is None else f", {self.tempering.describe()}")
                 + ("" if self.tau_floor is None else f", tau's prior floor {self.tau_floor:g} N")
                 + (", the likelihood's deviations drawn into the force" if self.draw_deviations else "")
-                + (", the force's harmonics drawn from the likelihood itself" if self.likelihood_force else ""))
+                + (", the force's harmonics drawn from the likelihood itself" if self.likelihood_force else "")
+                + (", the motion made by an independent device" if self.motion_device == "independent" else ""))
 
 
 @dataclass(frozen=True)
@@ -269,6 +288,8 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
                        for f in freqs]
         except (SimulationError, ValueError):
             continue
+        if cs.motion_device == "independent":
+            records = _independent_motion(cs, base, freqs, rng)
         if cs.domain and not in_domain(cs, records[0], theta):
             continue
         truth = base.values(theta)
@@ -280,6 +301,20 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
             records = [likelihood_force(r, theta, cs.likelihood, rng) for r in records]
         return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws,
                                tuple(float(v) for v in theta))
+    raise RuntimeError("100 prior draws in a row could not be simulated")
+
+
+def _independent_motion(cs: StudyCalibration, base: PosteriorModel, freqs, rng: np.random.Generator) -> list:
+    """Records of a second device drawn from ``base``'s prior (drawn again until the
+    generator simulates it), whose motion a truth's force is drawn on
+    (``StudyCalibration.motion_device`` "independent")."""
+    for _ in range(100):
+        other = np.array([base.all_priors[n].sample(rng) for n in base.names])
+        try:
+            return [generate_record(base.parameters(other), f, settings=cs.generator, rng=rng,
+                                    setting_name=cs.setting) for f in freqs]
+        except (SimulationError, ValueError):
+            continue
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
 
@@ -847,6 +882,8 @@ class Config:
         (``StudyCalibration.domain``; with ``single``).
     interval_draws : where a single record's intervals come from
         (``StudyCalibration.interval_draws``; None: its default).
+    motion_device : which device makes the records' motion
+        (``StudyCalibration.motion_device``; None: its default; with ``likelihood_force``).
     work : where each replicate's fit runs until done, continued by the next run
         (None: the output folder's ``.running``).
     raise_cap : raise the folder's cap to ``max_steps`` first (:func:`raise_cap`).
@@ -889,6 +926,9 @@ class Config:
     interval_draws: str | None = field(default=None, metadata={
         "help": "a single record's intervals from the fit's 600 'simulated' draws (the default) or its 'kept' "
                 "draws (up to 4,000)"})
+    motion_device: str | None = field(default=None, metadata={
+        "help": "which device makes the records' motion: the 'truth' (default) or an 'independent' draw "
+                "(with --likelihood-force)"})
     work: str | None = field(default=None, metadata={
         "help": "where each replicate's fit runs until done (default: OUT/.running)"})
     raise_cap: bool = field(default=False, metadata={"help": "raise the folder's cap to --max-steps first"})
@@ -927,6 +967,8 @@ class Config:
             extra["interval_draws"] = self.interval_draws
         if self.domain:
             extra["domain"] = True
+        if self.motion_device:
+            extra["motion_device"] = self.motion_device
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 
