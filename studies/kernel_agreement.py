@@ -12,6 +12,12 @@ share as little as possible with the default:
 - ``at-truth``: the ensemble moves in theta, every walker started near the truth (the
   drawn vector, :class:`ReplicateDevice`'s ``theta``; tau at its prior's floor), a fixed
   ``--steps``, the first half left out;
+- ``metropolis``: another family altogether, one chain of adaptive random-walk
+  Metropolis (Haario, Saksman and Tamminen 2001: a normal proposal of covariance
+  2.38^2/d times the chain's own so far) in the fit's impedance coordinates, started at
+  the truth (tau at its prior's floor), ``--iterations`` steps; the proposal adapts in
+  the first half and is frozen in the second, which alone is kept (an exact Metropolis
+  chain there), thinned to 4,000 draws;
 - ``tau-floor``: the default kernel and rule with tau's prior squeezed to its floor
   (1e-3 to 1.001e-3 N): the records carry no discrepancy, while the fits sample tau from
   a log-uniform prior from 1e-3 N, so this rules that mismatch in or out.
@@ -22,7 +28,7 @@ kernel's draws below the truth, the draws' 3, 50 and 97 % quantiles, and whether
 94 % and 50 % highest-density intervals hold the truth.
 
     python studies/kernel_agreement.py --folder results/coverage-sbc-likelihood-force-exact
-        --replicates 10 2 19 [--steps 8000] [--seed 1] [--work runs/kernel-agreement]
+        --replicates 10 2 19 [--steps 8000] [--iterations 200000] [--seed 1] [--work runs/kernel-agreement]
         [--out results/kernel-agreement]
 
 A rerun skips the (replicate, kernel) pairs already in ranks.csv.
@@ -41,6 +47,9 @@ import numpy as np
 
 from bayes_inerter.cli.study_script import config_from_folder
 from bayes_inerter.inference import LogUniform, PosteriorModel, fit_record, run_sampler
+from bayes_inerter.inference.sampling.convergence import integrated_time
+from bayes_inerter.inference.sampling.coordinates import default_coordinates
+from bayes_inerter.inference.sampling.target import Target
 from bayes_inerter.inference.summaries.results import hdi
 from bayes_inerter.study import stop_rule
 from bayes_inerter.study.manifest import script_configuration, write_manifest
@@ -49,7 +58,7 @@ from bayes_inerter.study.study_calibration import LEVELS, Config, replicate_devi
 
 from _table import write_table
 
-KERNELS = ("rule", "ensemble", "physical", "at-truth", "tau-floor")
+KERNELS = ("rule", "ensemble", "physical", "at-truth", "metropolis", "tau-floor")
 TAU_FLOOR = LogUniform(1e-3, 1.001e-3)
 
 
@@ -79,14 +88,62 @@ def _rule_rows(rep: dict, k: int, truth: dict) -> list[dict]:
     return rows
 
 
-def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path) -> tuple[dict, int]:
+def _at_truth(cs, device) -> tuple:
+    """The model of ``device``'s record and the truth as a start (tau at its prior's floor:
+    the records carry no discrepancy)."""
+    model = PosteriorModel(device.records[0], priors=cs.priors(), likelihood=cs.likelihood)
+    theta = np.array(device.theta)
+    i = model.names.index("tau")
+    theta[i] = model.bounds()[i][0] + 1e-6
+    return model.with_reference(theta), theta
+
+
+def metropolis(model, theta, iterations: int, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
+    """Adaptive random-walk Metropolis from ``theta`` in ``model``'s impedance coordinates
+    (see module docstring): the second half's states, mapped back to theta, and the
+    chain's acceptance and slowest integrated autocorrelation time there."""
+    target = Target(model, default_coordinates(model, "impedance"))
+    u = np.asarray(target.coords.to_u(theta), dtype=float).reshape(-1)
+    lp = target(u)[0]
+    if not np.isfinite(lp):
+        raise ValueError("the truth lies outside the impedance coordinates' domain")
+    d, half = u.size, iterations // 2
+    chol = np.eye(d) * 1e-2
+    mean, cov = u.copy(), np.zeros((d, d))
+    kept, accepted = np.empty((iterations - half, d)), 0
+    for t in range(iterations):
+        if 0 < t < half and t % 100 == 0 and t >= 1000:
+            chol = np.linalg.cholesky(2.38 ** 2 / d * cov + 1e-12 * np.eye(d))
+        proposal = u + chol @ rng.normal(size=d)
+        lp_new = target(proposal)[0]
+        if np.log(rng.uniform()) < lp_new - lp:
+            u, lp = proposal, lp_new
+            accepted += t >= half
+        if t < half:  # the running mean and covariance the proposal learns from
+            delta = u - mean
+            mean += delta / (t + 1)
+            cov += (np.outer(delta, u - mean) - cov) / (t + 1)
+        else:
+            kept[t - half] = u
+    tau = float(np.max(integrated_time(kept[:, None, :])))
+    thetas, _ = target.coords.transform(kept[:: max(1, len(kept) // 4000)])
+    return thetas, {"acceptance": accepted / len(kept), "tau": tau}
+
+
+def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path, iterations: int = 200_000,
+         chains: list | None = None) -> tuple[dict, int]:
     record = device.records[0]
+    if kernel == "metropolis":
+        model, theta = _at_truth(cs, device)
+        thetas, info = metropolis(model, theta, iterations, np.random.default_rng(seed))
+        if chains is not None:
+            kept = iterations - iterations // 2
+            chains.append({"iterations": iterations, "kept": kept, "acceptance": round(info["acceptance"], 4),
+                           "tau_slowest": round(info["tau"], 1), "effective_draws": round(kept / info["tau"])})
+        values = [model.values(t) for t in thetas]
+        return {n: np.array([v[n] for v in values]) for n in device.truth}, iterations
     if kernel == "at-truth":
-        model = PosteriorModel(record, priors=cs.priors(), likelihood=cs.likelihood)
-        theta = np.array(device.theta)
-        i = model.names.index("tau")
-        theta[i] = model.bounds()[i][0] + 1e-6
-        model = model.with_reference(theta)
+        model, theta = _at_truth(cs, device)
         out.mkdir(parents=True, exist_ok=True)
         run = run_sampler(model, out / "chain.h5", steps=steps, seed=seed, fresh=True,
                           start=(theta, model.log_prob(theta)[0]), coordinates="physical", adaptation=None,
@@ -112,6 +169,7 @@ def main(argv=None) -> int:
     ap.add_argument("--replicates", type=int, nargs="+", required=True)
     ap.add_argument("--kernels", nargs="+", default=list(KERNELS), choices=KERNELS)
     ap.add_argument("--steps", type=int, default=8000, help="steps of the fixed-length kernels")
+    ap.add_argument("--iterations", type=int, default=200_000, help="steps of the metropolis kernel's chain")
     ap.add_argument("--seed", type=int, default=1, help="the refits' sampler seed")
     ap.add_argument("--work", default="runs/kernel-agreement")
     ap.add_argument("--out", default="results/kernel-agreement")
@@ -120,6 +178,9 @@ def main(argv=None) -> int:
     if not (folder / "settings.json").is_file():
         print(f"error: {folder} holds no calibration (no settings.json); give a folder of study_calibration.py",
               file=sys.stderr)
+        return 2
+    if args.iterations < 2000:
+        print(f"error: --iterations must be at least 2000, got {args.iterations}", file=sys.stderr)
         return 2
     if args.steps < 100:
         print(f"error: --steps must be at least 100, got {args.steps}", file=sys.stderr)
@@ -145,8 +206,14 @@ def main(argv=None) -> int:
         if kernel == "rule":
             got = _rule_rows(stored[k], k, device.truth)
         else:
-            draws, steps = _fit(cs, device, kernel, args.steps, args.seed, Path(args.work) / f"{k:04d}-{kernel}")
+            chain = []
+            draws, steps = _fit(cs, device, kernel, args.steps, args.seed, Path(args.work) / f"{k:04d}-{kernel}",
+                                args.iterations, chain)
             got = _rows(k, kernel, draws, device.truth, steps, time.perf_counter() - t0)
+            if chain:  # the metropolis chain's own mixing, beside its ranks
+                table_chains = out / "metropolis.csv"
+                old = list(csv.DictReader(table_chains.open())) if table_chains.exists() else []
+                write_table(table_chains, old + [{"replicate": k, "seed": args.seed, **chain[0]}])
         rows += got
         write_table(table, rows)
         held = sum(str(r["hdi50"]) == "True" for r in got)
