@@ -224,3 +224,44 @@ def test_a_searched_start_puts_half_the_walkers_in_the_splits_mirrored_mode(tmp_
     assert 8 <= np.sum(searched > 0.5) <= 16 and np.sum(np.abs(searched - 0.9) < 0.1) >= 8
     given = first_shares(tmp_path / "given.h5", given=(start, two_ends(start)[0]))
     assert np.all(given < 0.5)
+
+
+def test_on_a_flat_likelihood_the_chain_is_the_prior_inside_the_impedance_domain(tmp_path):
+    """The default moves, their fitted proposals and the impedance coordinates (logits at
+    the uniform priors' walls, the modal damping ratio's and the hyper-parameters'
+    priors) sample the motion-in model's prior restricted to the coordinates' domain,
+    the prior a fit in them assumes: the chain's marginals are those of exact draws,
+    by a two-sample KS test on the chain thinned to about one draw per autocorrelation
+    time."""
+    from scipy import stats
+
+    from bayes_inerter import paper_parameters
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.sampling.convergence import integrated_time
+    from bayes_inerter.inference.sampling.coordinates import default_coordinates
+    from bayes_inerter.records import GeneratorSettings, generate_record
+    from bayes_inerter.study.study_calibration import STUDY_SBC_PRIORS
+
+    record = generate_record(paper_parameters("A3"), 1.5, settings=GeneratorSettings(duration=4.0, ramp=0.8),
+                             rng=2, setting_name="A3")
+
+    class Flat(PosteriorModel):  # the record says nothing (a subclass: the sampler may replace() the model)
+        def log_likelihood(self, theta, *, marginal_scale=False):
+            return 0.0, 1.0
+
+    model = Flat(record, priors=STUDY_SBC_PRIORS)
+    coords = default_coordinates(model, "impedance")
+    assert coords.kind == "impedance"
+    rng = np.random.default_rng(7)
+    exact = np.array([[model.all_priors[n].sample(rng) for n in model.names] for _ in range(30000)])
+    exact = exact[np.all(np.isfinite(coords.to_u(exact)), axis=1)]
+    assert 0.5 < len(exact) / 30000 < 1.0  # the domain cuts the box, but not most of it
+    start = exact[0]
+    run = run_sampler(model, tmp_path / "chain.h5", steps=2000, seed=4, start=(start, model.log_prob(start)[0]),
+                      coordinates=coords)
+    chain = run.chain(discard=1000)  # walkers started around one point spread out over the prior
+    tau = float(np.max(integrated_time(chain)))
+    draws = chain[:: max(1, round(tau))].reshape(-1, model.ndim)
+    assert len(draws) > 300
+    p = [stats.ks_2samp(draws[:, i], exact[:, i]).pvalue for i in range(model.ndim)]
+    assert min(p) > 1e-3, dict(zip(model.names, np.round(p, 4)))
