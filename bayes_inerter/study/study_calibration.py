@@ -281,13 +281,10 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
     ranked = base.names[: base.n_phys] + [n for n in base.names[base.n_phys:] if n == "gain"]
     freqs = cs.frequencies if not cs.single else (cs.frequencies[k % len(cs.frequencies)],)
     for redraws in range(100):
-        theta = np.array([base.all_priors[n].sample(rng) for n in base.names])
-        try:
-            params = base.parameters(theta)
-            records = [generate_record(params, f, settings=cs.generator, rng=rng, setting_name=cs.setting)
-                       for f in freqs]
-        except (SimulationError, ValueError):
+        drawn = _simulated_draw(cs, base, freqs, rng)
+        if drawn is None:
             continue
+        theta, params, records = drawn
         if cs.motion_device == "independent":
             records = _independent_motion(cs, base, freqs, rng)
         if cs.domain and not in_domain(cs, records[0], theta):
@@ -304,17 +301,26 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
 
+def _simulated_draw(cs: StudyCalibration, base: PosteriorModel, freqs, rng: np.random.Generator):
+    """(theta, parameters, records) of one draw from ``base``'s prior recorded at
+    ``freqs``, or None where the generator refuses it."""
+    theta = np.array([base.all_priors[n].sample(rng) for n in base.names])
+    try:
+        params = base.parameters(theta)
+        return theta, params, [generate_record(params, f, settings=cs.generator, rng=rng, setting_name=cs.setting)
+                               for f in freqs]
+    except (SimulationError, ValueError):
+        return None
+
+
 def _independent_motion(cs: StudyCalibration, base: PosteriorModel, freqs, rng: np.random.Generator) -> list:
     """Records of a second device drawn from ``base``'s prior (drawn again until the
     generator simulates it), whose motion a truth's force is drawn on
     (``StudyCalibration.motion_device`` "independent")."""
     for _ in range(100):
-        other = np.array([base.all_priors[n].sample(rng) for n in base.names])
-        try:
-            return [generate_record(base.parameters(other), f, settings=cs.generator, rng=rng,
-                                    setting_name=cs.setting) for f in freqs]
-        except (SimulationError, ValueError):
-            continue
+        drawn = _simulated_draw(cs, base, freqs, rng)
+        if drawn is not None:
+            return drawn[2]
     raise RuntimeError("100 prior draws in a row could not be simulated")
 
 
