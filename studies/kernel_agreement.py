@@ -14,10 +14,12 @@ share as little as possible with the default:
   ``--steps``, the first half left out;
 - ``metropolis``: another family altogether, one chain of adaptive random-walk
   Metropolis (Haario, Saksman and Tamminen 2001: a normal proposal of covariance
-  2.38^2/d times the chain's own so far) in the fit's impedance coordinates, started at
-  the truth (tau at its prior's floor), ``--iterations`` steps; the proposal adapts in
-  the first half and is frozen in the second, which alone is kept (an exact Metropolis
-  chain there), thinned to 4,000 draws;
+  2.38^2/d times the chain's own after a tenth's burn-in, with Roberts and Rosenthal's
+  fixed small proposal in 5 % of the steps) in the fit's impedance coordinates, started
+  at the truth (tau at e times its prior's floor, inside the range the chain walks),
+  ``--iterations`` steps; the proposal adapts in the first half and is frozen in the
+  second, which alone is kept (an exact Metropolis chain there), thinned to at most
+  4,000 draws;
 - ``tau-floor``: the default kernel and rule with tau's prior squeezed to its floor
   (1e-3 to 1.001e-3 N): the records carry no discrepancy, while the fits sample tau from
   a log-uniform prior from 1e-3 N, so this rules that mismatch in or out.
@@ -59,6 +61,8 @@ from bayes_inerter.study.study_calibration import LEVELS, Config, replicate_devi
 from _table import write_table
 
 KERNELS = ("rule", "ensemble", "physical", "at-truth", "metropolis", "tau-floor")
+#: The metropolis kernel's kept half is thinned to at most this many draws.
+METROPOLIS_DRAWS = 4000
 TAU_FLOOR = LogUniform(1e-3, 1.001e-3)
 
 
@@ -100,33 +104,38 @@ def _at_truth(cs, device) -> tuple:
 
 def metropolis(model, theta, iterations: int, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
     """Adaptive random-walk Metropolis from ``theta`` in ``model``'s impedance coordinates
-    (see module docstring): the second half's states, mapped back to theta, and the
-    chain's acceptance and slowest integrated autocorrelation time there."""
+    (see module docstring): the second half's states, mapped back to theta (thinned to
+    at most :data:`METROPOLIS_DRAWS`), and the chain's acceptance and slowest integrated
+    autocorrelation time there (NaN where it never moved)."""
     target = Target(model, default_coordinates(model, "impedance"))
     u = np.asarray(target.coords.to_u(theta), dtype=float).reshape(-1)
     lp = target(u)[0]
     if not np.isfinite(lp):
         raise ValueError("the truth lies outside the impedance coordinates' domain")
-    d, half = u.size, iterations // 2
-    chol = np.eye(d) * 1e-2
-    mean, cov = u.copy(), np.zeros((d, d))
+    d, half, burn = u.size, iterations // 2, iterations // 10
+    fixed = np.eye(d) * 0.1 / np.sqrt(d)  # Roberts and Rosenthal's safeguard, a share of every step
+    chol = fixed
+    mean, cov, n = u.copy(), np.zeros((d, d)), 0
     kept, accepted = np.empty((iterations - half, d)), 0
     for t in range(iterations):
-        if 0 < t < half and t % 100 == 0 and t >= 1000:
-            chol = np.linalg.cholesky(2.38 ** 2 / d * cov + 1e-12 * np.eye(d))
-        proposal = u + chol @ rng.normal(size=d)
+        if burn + 1000 <= t < half and t % 100 == 0:  # learnt from the states after the burn-in
+            chol = np.linalg.cholesky(2.38 ** 2 / d * cov + 1e-6 * np.eye(d))
+        step = fixed if rng.uniform() < 0.05 else chol  # a mixture of symmetric proposals: still symmetric
+        proposal = u + step @ rng.normal(size=d)
         lp_new = target(proposal)[0]
         if np.log(rng.uniform()) < lp_new - lp:
             u, lp = proposal, lp_new
             accepted += t >= half
-        if t < half:  # the running mean and covariance the proposal learns from
+        if burn <= t < half:  # the running mean and covariance the proposal learns from
+            n += 1
             delta = u - mean
-            mean += delta / (t + 1)
-            cov += (np.outer(delta, u - mean) - cov) / (t + 1)
-        else:
+            mean += delta / n
+            cov += (np.outer(delta, u - mean) - cov) / n
+        elif t >= half:
             kept[t - half] = u
-    tau = float(np.max(integrated_time(kept[:, None, :])))
-    thetas, _ = target.coords.transform(kept[:: max(1, len(kept) // 4000)])
+    moved = np.ptp(kept, axis=0) > 0
+    tau = float(np.max(integrated_time(kept[:, None, moved]))) if moved.all() else float("nan")
+    thetas, _ = target.coords.transform(kept[:: -(-len(kept) // METROPOLIS_DRAWS)])
     return thetas, {"acceptance": accepted / len(kept), "tau": tau}
 
 
@@ -135,11 +144,14 @@ def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path, iterations: 
     record = device.records[0]
     if kernel == "metropolis":
         model, theta = _at_truth(cs, device)
+        i = model.names.index("tau")
+        theta[i] = model.bounds()[i][0] + 1.0  # e times the floor: no discrepancy to speak of, yet not the wall
         thetas, info = metropolis(model, theta, iterations, np.random.default_rng(seed))
         if chains is not None:
-            kept = iterations - iterations // 2
+            kept, tau = iterations - iterations // 2, info["tau"]
             chains.append({"iterations": iterations, "kept": kept, "acceptance": round(info["acceptance"], 4),
-                           "tau_slowest": round(info["tau"], 1), "effective_draws": round(kept / info["tau"])})
+                           "tau_slowest": round(tau, 1) if np.isfinite(tau) else None,
+                           "effective_draws": round(kept / tau) if np.isfinite(tau) else 0})
         values = [model.values(t) for t in thetas]
         return {n: np.array([v[n] for v in values]) for n in device.truth}, iterations
     if kernel == "at-truth":
@@ -179,8 +191,9 @@ def main(argv=None) -> int:
         print(f"error: {folder} holds no calibration (no settings.json); give a folder of study_calibration.py",
               file=sys.stderr)
         return 2
-    if args.iterations < 2000:
-        print(f"error: --iterations must be at least 2000, got {args.iterations}", file=sys.stderr)
+    if args.iterations < 20000:
+        print(f"error: --iterations must be at least 20000 (the proposal learns from the first half after a "
+              f"tenth's burn-in), got {args.iterations}", file=sys.stderr)
         return 2
     if args.steps < 100:
         print(f"error: --steps must be at least 100, got {args.steps}", file=sys.stderr)
@@ -210,12 +223,13 @@ def main(argv=None) -> int:
             draws, steps = _fit(cs, device, kernel, args.steps, args.seed, Path(args.work) / f"{k:04d}-{kernel}",
                                 args.iterations, chain)
             got = _rows(k, kernel, draws, device.truth, steps, time.perf_counter() - t0)
-            if chain:  # the metropolis chain's own mixing, beside its ranks
-                table_chains = out / "metropolis.csv"
-                old = list(csv.DictReader(table_chains.open())) if table_chains.exists() else []
-                write_table(table_chains, old + [{"replicate": k, "seed": args.seed, **chain[0]}])
         rows += got
         write_table(table, rows)
+        if kernel == "metropolis":  # the chain's own mixing, beside its ranks (written after them: a rerun redoes both)
+            table_chains = out / "metropolis.csv"
+            old = list(csv.DictReader(table_chains.open())) if table_chains.exists() else []
+            write_table(table_chains, [r for r in old if int(r["replicate"]) != k]
+                        + [{"replicate": k, "seed": args.seed, **chain[0]}])
         held = sum(str(r["hdi50"]) == "True" for r in got)
         print(f"[{i}/{len(todo)}] replicate {k}, {kernel}: 50 % intervals held {held} of {len(got)}", flush=True)
     return 0
