@@ -232,7 +232,7 @@ def test_on_a_flat_likelihood_the_chain_is_the_prior_inside_the_impedance_domain
     priors) sample the motion-in model's prior restricted to the coordinates' domain,
     the prior a fit in them assumes: the chain's marginals are those of exact draws,
     by a two-sample KS test on the chain thinned to about one draw per autocorrelation
-    time."""
+    time, and so is its share of draws in every pair of parameters' joint corners."""
     from scipy import stats
 
     from bayes_inerter import paper_parameters
@@ -265,3 +265,12 @@ def test_on_a_flat_likelihood_the_chain_is_the_prior_inside_the_impedance_domain
     assert len(draws) > 300
     p = [stats.ks_2samp(draws[:, i], exact[:, i]).pvalue for i in range(model.ndim)]
     assert min(p) > 1e-3, dict(zip(model.names, np.round(p, 4)))
+    # the corners jointly: for every pair, the share of draws beyond both parameters'
+    # exact 10 or 90 % quantiles at once (a corner of the pair's square), within 4 se
+    lo, hi = np.quantile(exact, [0.1, 0.9], axis=0)
+    out_chain, out_exact = (draws < lo) | (draws > hi), (exact < lo) | (exact > hi)
+    for i in range(model.ndim):
+        for j in range(i):
+            want = np.mean(out_exact[:, i] & out_exact[:, j])
+            got = np.mean(out_chain[:, i] & out_chain[:, j])
+            assert abs(got - want) < 4 * np.sqrt(want * (1 - want) / len(draws)), (model.names[i], model.names[j])

@@ -523,7 +523,6 @@ def test_likelihood_force_puts_the_likelihoods_own_draw_in_the_force_harmonics()
     from bayes_inerter.inference.posterior.model import PosteriorModel
     from bayes_inerter.inference.posterior.motion import deviation_sd, motion_variance, predicted_force
     from bayes_inerter.records import generate_record
-    from bayes_inerter.study.study_calibration import likelihood_force
 
     lk = LikelihoodSettings(residual="motion")
     params = paper_parameters("A3")
@@ -561,20 +560,29 @@ def test_likelihood_force_needs_the_motion_likelihood_and_no_drawn_deviations():
 def test_an_independent_motion_device_makes_the_motion_and_the_truth_the_force():
     """``motion_device`` "independent": the records' motion is a second device's, drawn
     apart from the truth; the truth is the same draw as with its own motion, and its
-    force harmonics are the likelihood's draw at the truth on the other motion."""
-    from bayes_inerter.study.study_calibration import likelihood_force
+    force harmonics are the likelihood's draw at the truth on the other motion (replayed
+    here from the replicate's random stream)."""
+    from bayes_inerter.study.study_calibration import _base_model, _simulated_draw, likelihood_force
 
     own = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), single=True, frequencies=(1.5,),
                            steps=None, seed=3, generator=GeneratorSettings(duration=4.0, ramp=0.8),
                            likelihood_force=True)
     other = dataclasses.replace(own, motion_device="independent")
     a, b = replicate_device(own, 0), replicate_device(other, 0)
-    assert a.theta == b.theta and a.truth == b.truth
+    assert a.theta == b.theta and a.truth == b.truth and a.redraws == b.redraws == 0
     assert not np.allclose(a.records[0].accel, b.records[0].accel)
-    # the force the fit sees is the likelihood's draw at the truth on the other device's motion
-    model = PosteriorModel(b.records[0], priors=STUDY_SBC_PRIORS, likelihood=own.likelihood)
-    lp_truth = model.log_likelihood(np.array(b.theta))[0]
-    assert np.isfinite(lp_truth)
+    rng = np.random.default_rng([other.seed, 0])
+    base = _base_model(other, STUDY_SBC_PRIORS)
+    truth = _simulated_draw(other, base, other.frequencies, rng)
+    assert tuple(truth[0]) == b.theta
+    second = None
+    while second is None:
+        second = _simulated_draw(other, base, other.frequencies, rng)
+    assert not np.allclose(second[0], truth[0])
+    seen = dataclasses.replace(second[2][0], accel=second[2][0].accel * b.truth["gain"])
+    want = likelihood_force(seen, np.array(b.theta), other.likelihood, rng)
+    assert np.array_equal(b.records[0].accel, want.accel) and np.array_equal(b.records[0].disp, want.disp)
+    assert np.array_equal(b.records[0].force, want.force)
     assert "independent device" in other.describe()
     with pytest.raises(ValueError, match="likelihood_force"):
         StudyCalibration(single=True, motion_device="independent", likelihood=LikelihoodSettings(residual="motion"))

@@ -171,9 +171,14 @@ class StudyCalibration:
         period scatter) the truth's force is then drawn on (with ``likelihood_force``
         only). The motion-in likelihood conditions on the measured motion and leaves out
         what the motion itself says of the device (the servo yields to the device's
-        force); with the motion independent of the truth there is nothing to leave out,
-        so the fits' posterior is the exact one and its coverage nominal if the sampler,
-        its rule and the intervals are right.
+        force). With the motion independent of the truth there is almost nothing left
+        out: the acceleration channel is still read through the truth's sensor gain (the
+        gain is the truth's, as it is a sensor's), which the motion's amplitude then
+        tells; and the truth is still one the generator simulates (a refused one is
+        drawn again, as with its own motion). Apart from those two, the fits' posterior
+        is the exact one, and its coverage nominal if the sampler, its rule and the
+        intervals are right. ``ReplicateDevice.redraws`` counts the truth's redraws
+        only.
     """
 
     setting: str = "A3"
