@@ -523,6 +523,7 @@ def test_likelihood_force_puts_the_likelihoods_own_draw_in_the_force_harmonics()
     from bayes_inerter.inference.posterior.model import PosteriorModel
     from bayes_inerter.inference.posterior.motion import deviation_sd, motion_variance, predicted_force
     from bayes_inerter.records import generate_record
+    from bayes_inerter.study.study_calibration import likelihood_force
 
     lk = LikelihoodSettings(residual="motion")
     params = paper_parameters("A3")
