@@ -7,6 +7,8 @@ kernels would place the posterior elsewhere. This probe fits chosen replicates o
 calibration folder again, the same device and records (its settings), under kernels that
 share as little as possible with the default:
 
+- ``long``: the default kernel (the folder's moves, fitted proposals, coordinates and
+  tempering) run a fixed ``--steps`` instead of to the rule, from its own start search;
 - ``ensemble``: the ensemble moves alone (no fitted moves), a fixed ``--steps``;
 - ``physical``: the same, walking theta itself (no impedance map, no logits);
 - ``at-truth``: the ensemble moves in theta, every walker started near the truth (the
@@ -60,7 +62,7 @@ from bayes_inerter.study.study_calibration import LEVELS, Config, replicate_devi
 
 from _table import write_table
 
-KERNELS = ("rule", "ensemble", "physical", "at-truth", "metropolis", "tau-floor")
+KERNELS = ("rule", "long", "ensemble", "physical", "at-truth", "metropolis", "tau-floor")
 #: The metropolis kernel's kept half is thinned to at most this many draws.
 METROPOLIS_DRAWS = 4000
 TAU_FLOOR = LogUniform(1e-3, 1.001e-3)
@@ -168,6 +170,8 @@ def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path, iterations: 
               tempering=cs.tempering)
     if kernel == "tau-floor":
         kw.update(priors={**cs.priors(), "tau": TAU_FLOOR}, convergence=stop_rule.convergence(cs.max_steps, cs.tau_rtol))
+    elif kernel == "long":
+        kw.update(steps=steps)
     else:
         kw.update(steps=steps, adaptation=None, coordinates="physical" if kernel == "physical" else "impedance")
     res = fit_record(record, out, **kw)
