@@ -589,3 +589,10 @@ def test_an_independent_motion_device_makes_the_motion_and_the_truth_the_force()
         StudyCalibration(single=True, motion_device="independent", likelihood=LikelihoodSettings(residual="motion"))
     with pytest.raises(ValueError, match="motion_device must be one of"):
         dataclasses.replace(own, motion_device="servo")
+
+
+def test_no_law_leaves_the_friction_laws_deviations_out_of_the_fits():
+    from bayes_inerter.study.study_calibration import Config
+
+    assert Config(single=True, residual="motion").settings().likelihood.law
+    assert not Config(single=True, residual="motion", law=False).settings().likelihood.law

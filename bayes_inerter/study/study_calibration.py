@@ -874,6 +874,8 @@ class Config:
     input_noise : draws of the drivetrain's input noise (0: off; None: the library's).
     law_sampled : sample the friction law's deviations' scale
         (``LikelihoodSettings.law_sampled``; the motion-in likelihood).
+    law : marginalise the friction law's deviations (``LikelihoodSettings.law``;
+        default True, the library's).
     normaliser : the motion-in likelihood's normaliser (``LikelihoodSettings.normaliser``;
         None: the library's).
     deviation_scale : where the motion-in likelihood takes its deviations' prior sd
@@ -912,6 +914,9 @@ class Config:
         "help": "draws of the drivetrain's input noise (0: off; default: the library's)"})
     law_sampled: bool = field(default=False, metadata={
         "help": "sample the friction law's deviations' scale (LikelihoodSettings.law_sampled)"})
+    law: bool = field(default=True, metadata={
+        "help": "marginalise the friction law's deviations (LikelihoodSettings.law; --no-law leaves them out of "
+                "the fits, and of the force --likelihood-force draws)"})
     normaliser: str | None = field(default=None, metadata={
         "help": "the motion-in likelihood's normaliser (LikelihoodSettings.normaliser; default: the library's)"})
     deviation_scale: str | None = field(default=None, metadata={
@@ -957,7 +962,8 @@ class Config:
         extra = {}
         # the likelihood's settings the command line gave (the others at the library's)
         given = {"residual": self.residual or None, "input_noise": self.input_noise,
-                 "law_sampled": True if self.law_sampled else None, "normaliser": self.normaliser or None,
+                 "law_sampled": True if self.law_sampled else None, "law": None if self.law else False,
+                 "normaliser": self.normaliser or None,
                  "deviation_scale": self.deviation_scale or None}
         changes = {k: v for k, v in given.items() if v is not None}
         if changes:
