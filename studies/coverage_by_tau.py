@@ -64,8 +64,9 @@ def main(argv=None) -> int:
         return 2
     rows = tau_rows(kept, args.groups)
     path = write_table(folder / "coverage_by_tau.csv", rows)
+    ranked = len(kept[0]["hdi"]["94"])
     for r in rows:
-        print(f"tau {r['tau_from']:g} to {r['tau_to']:g}: 94 % held {r['held_94']} of {r['replicates'] * 10} "
+        print(f"tau {r['tau_from']:g} to {r['tau_to']:g}: 94 % held {r['held_94']} of {r['replicates'] * ranked} "
               f"(expected {r['expected_94']}, se {r['se_94']}); 50 % held {r['held_50']}")
     print(f"wrote {path}")
     return 0

@@ -94,13 +94,13 @@ def _rule_rows(rep: dict, k: int, truth: dict) -> list[dict]:
     return rows
 
 
-def _at_truth(cs, device) -> tuple:
-    """The model of ``device``'s record and the truth as a start (tau at its prior's floor:
-    the records carry no discrepancy)."""
+def _at_truth(cs, device, tau_above_floor: float = 1e-6) -> tuple:
+    """The model of ``device``'s record and the truth as a start, tau ``tau_above_floor``
+    above its prior's floor in its log (the records carry no discrepancy)."""
     model = PosteriorModel(device.records[0], priors=cs.priors(), likelihood=cs.likelihood)
     theta = np.array(device.theta)
     i = model.names.index("tau")
-    theta[i] = model.bounds()[i][0] + 1e-6
+    theta[i] = model.bounds()[i][0] + tau_above_floor
     return model.with_reference(theta), theta
 
 
@@ -108,7 +108,7 @@ def metropolis(model, theta, iterations: int, rng: np.random.Generator) -> tuple
     """Adaptive random-walk Metropolis from ``theta`` in ``model``'s impedance coordinates
     (see module docstring): the second half's states, mapped back to theta (thinned to
     at most :data:`METROPOLIS_DRAWS`), and the chain's acceptance and slowest integrated
-    autocorrelation time there (NaN where it never moved)."""
+    autocorrelation time there (NaN where it never moved), with the kept states' count."""
     target = Target(model, default_coordinates(model, "impedance"))
     u = np.asarray(target.coords.to_u(theta), dtype=float).reshape(-1)
     lp = target(u)[0]
@@ -138,24 +138,23 @@ def metropolis(model, theta, iterations: int, rng: np.random.Generator) -> tuple
     moved = np.ptp(kept, axis=0) > 0
     tau = float(np.max(integrated_time(kept[:, None, moved]))) if moved.all() else float("nan")
     thetas, _ = target.coords.transform(kept[:: -(-len(kept) // METROPOLIS_DRAWS)])
-    return thetas, {"acceptance": accepted / len(kept), "tau": tau}
+    return thetas, {"kept": len(kept), "acceptance": accepted / len(kept), "tau": tau}
 
 
-def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path, iterations: int = 200_000,
-         chains: list | None = None) -> tuple[dict, int]:
+def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path,
+         iterations: int = 200_000) -> tuple[dict, int, dict | None]:
+    """(draws by ranked name, the chain's steps, the metropolis chain's mixing or None)."""
     record = device.records[0]
     if kernel == "metropolis":
-        model, theta = _at_truth(cs, device)
-        i = model.names.index("tau")
-        theta[i] = model.bounds()[i][0] + 1.0  # e times the floor: no discrepancy to speak of, yet not the wall
+        # tau at e times its floor: no discrepancy to speak of, yet not the wall
+        model, theta = _at_truth(cs, device, tau_above_floor=1.0)
         thetas, info = metropolis(model, theta, iterations, np.random.default_rng(seed))
-        if chains is not None:
-            kept, tau = iterations - iterations // 2, info["tau"]
-            chains.append({"iterations": iterations, "kept": kept, "acceptance": round(info["acceptance"], 4),
-                           "tau_slowest": round(tau, 1) if np.isfinite(tau) else None,
-                           "effective_draws": round(kept / tau) if np.isfinite(tau) else 0})
+        tau = info["tau"]
+        mixing = {"iterations": iterations, "kept": info["kept"], "acceptance": round(info["acceptance"], 4),
+                  "tau_slowest": round(tau, 1) if np.isfinite(tau) else None,
+                  "effective_draws": round(info["kept"] / tau) if np.isfinite(tau) else 0}
         values = [model.values(t) for t in thetas]
-        return {n: np.array([v[n] for v in values]) for n in device.truth}, iterations
+        return {n: np.array([v[n] for v in values]) for n in device.truth}, iterations, mixing
     if kernel == "at-truth":
         model, theta = _at_truth(cs, device)
         out.mkdir(parents=True, exist_ok=True)
@@ -165,7 +164,7 @@ def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path, iterations: 
         chain = run.chain(discard=steps // 2)
         flat = chain.reshape(-1, chain.shape[-1])
         values = [model.values(t) for t in flat[:: max(1, len(flat) // 4000)]]
-        return {n: np.array([v[n] for v in values]) for n in device.truth}, steps
+        return {n: np.array([v[n] for v in values]) for n in device.truth}, steps, None
     kw = dict(seed=seed, priors=cs.priors(), plots=False, likelihood=cs.likelihood, interval="posterior",
               tempering=cs.tempering)
     if kernel == "tau-floor":
@@ -176,7 +175,7 @@ def _fit(cs, device, kernel: str, steps: int, seed: int, out: Path, iterations: 
         kw.update(steps=steps, adaptation=None, coordinates="physical" if kernel == "physical" else "impedance")
     res = fit_record(record, out, **kw)
     post = res.idata.posterior
-    return {n: np.asarray(post[n]).ravel() for n in device.truth}, int(res.iterations)
+    return {n: np.asarray(post[n]).ravel() for n in device.truth}, int(res.iterations), None
 
 
 def main(argv=None) -> int:
@@ -223,9 +222,8 @@ def main(argv=None) -> int:
         if kernel == "rule":
             got = _rule_rows(stored[k], k, device.truth)
         else:
-            chain = []
-            draws, steps = _fit(cs, device, kernel, args.steps, args.seed, Path(args.work) / f"{k:04d}-{kernel}",
-                                args.iterations, chain)
+            draws, steps, mixing = _fit(cs, device, kernel, args.steps, args.seed,
+                                        Path(args.work) / f"{k:04d}-{kernel}", args.iterations)
             got = _rows(k, kernel, draws, device.truth, steps, time.perf_counter() - t0)
         rows += got
         write_table(table, rows)
@@ -233,7 +231,7 @@ def main(argv=None) -> int:
             table_chains = out / "metropolis.csv"
             old = list(csv.DictReader(table_chains.open())) if table_chains.exists() else []
             write_table(table_chains, [r for r in old if int(r["replicate"]) != k]
-                        + [{"replicate": k, "seed": args.seed, **chain[0]}])
+                        + [{"replicate": k, "seed": args.seed, **mixing}])
         held = sum(str(r["hdi50"]) == "True" for r in got)
         print(f"[{i}/{len(todo)}] replicate {k}, {kernel}: 50 % intervals held {held} of {len(got)}", flush=True)
     return 0
