@@ -637,6 +637,28 @@ def test_a_sampled_law_scale_is_the_fixed_one_at_its_value_and_no_law_at_zero():
     assert math.isfinite(wide) and without > fixed > wide
 
 
+def test_no_reversals_leaves_only_the_laws_deviations_and_neither_leaves_none():
+    """``reversals=False``: the basis keeps the law's columns alone (the same columns, in
+    the same order), and without the law too it is empty, so that the deviations'
+    marginal adds nothing and the log-likelihood is the independent harmonics' alone."""
+    p = paper_parameters("A3")
+    rec = generate_record(p, 1.0, settings=GeneratorSettings(), rng=2, setting_name="A3")
+    full = motion_data(rec, 1.0, cutoff=30.0)
+    no_rev = motion_data(rec, 1.0, cutoff=30.0, reversals=False)
+    none = motion_data(rec, 1.0, cutoff=30.0, reversals=False, law=False)
+    law = np.asarray(full.law_columns)
+    assert 0 < law.sum() < law.size  # both kinds are there: the checks below have teeth
+    np.testing.assert_array_equal(no_rev.basis, full.basis[:, law])
+    np.testing.assert_array_equal(no_rev.scale, full.scale[law])
+    assert none.basis.shape == (2 * full.harmonics, 0) and none.scale.shape == (0, 3)
+    x = {n: getattr(p, n) for n in _rigid()}
+    values = [motion_loglik(d, x, 1.0, 0.0)[0] for d in (full, no_rev, none)]
+    assert all(math.isfinite(v) for v in values) and len(set(values)) == 3
+    # with no deviation, the terms are the harmonics' Gaussians: the same as an all-zero prior sd
+    zero = dataclasses.replace(full, scale=np.zeros_like(full.scale))
+    assert values[2] == pytest.approx(motion_loglik(zero, x, 1.0, 0.0)[0], rel=1e-12)
+
+
 def test_the_law_scale_is_sampled_last_with_its_prior():
     """With ``law_sampled`` the posterior samples ``law`` after the other likelihood
     parameters; at ``friction_law.SD`` its log posterior is the fixed model's plus the

@@ -596,3 +596,11 @@ def test_no_law_leaves_the_friction_laws_deviations_out_of_the_fits():
 
     assert Config(single=True, residual="motion").settings().likelihood.law
     assert not Config(single=True, residual="motion", law=False).settings().likelihood.law
+
+
+def test_no_reversals_leaves_the_reversals_deviations_out_of_the_fits():
+    from bayes_inerter.study.study_calibration import Config
+
+    assert Config(single=True, residual="motion").settings().likelihood.reversals
+    settings = Config(single=True, residual="motion", reversals=False).settings().likelihood
+    assert not settings.reversals and settings.law

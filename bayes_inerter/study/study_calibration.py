@@ -876,6 +876,8 @@ class Config:
         (``LikelihoodSettings.law_sampled``; the motion-in likelihood).
     law : marginalise the friction law's deviations (``LikelihoodSettings.law``;
         default True, the library's).
+    reversals : marginalise the friction's deviations at the plate's reversals
+        (``LikelihoodSettings.reversals``; default True, the library's).
     normaliser : the motion-in likelihood's normaliser (``LikelihoodSettings.normaliser``;
         None: the library's).
     deviation_scale : where the motion-in likelihood takes its deviations' prior sd
@@ -917,6 +919,9 @@ class Config:
     law: bool = field(default=True, metadata={
         "help": "marginalise the friction law's deviations (LikelihoodSettings.law; --no-law leaves them out of "
                 "the fits, and of the force --likelihood-force draws)"})
+    reversals: bool = field(default=True, metadata={
+        "help": "marginalise the friction's deviations at the plate's reversals (LikelihoodSettings.reversals; "
+                "--no-reversals leaves them out of the fits, and of the force --likelihood-force draws)"})
     normaliser: str | None = field(default=None, metadata={
         "help": "the motion-in likelihood's normaliser (LikelihoodSettings.normaliser; default: the library's)"})
     deviation_scale: str | None = field(default=None, metadata={
@@ -963,6 +968,7 @@ class Config:
         # the likelihood's settings the command line gave (the others at the library's)
         given = {"residual": self.residual or None, "input_noise": self.input_noise,
                  "law_sampled": True if self.law_sampled else None, "law": None if self.law else False,
+                 "reversals": None if self.reversals else False,
                  "normaliser": self.normaliser or None,
                  "deviation_scale": self.deviation_scale or None}
         changes = {k: v for k, v in given.items() if v is not None}

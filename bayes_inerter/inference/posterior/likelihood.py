@@ -103,6 +103,10 @@ class LikelihoodSettings:
         filters of unequal bandwidth, whose group delays differ by tens to hundreds of
         microseconds) for the motion-in likelihood, none for the others; 0: the
         channels taken as simultaneous.
+    reversals : motion-in likelihood only: marginalise the friction's deviations in
+        windows around the plate's velocity reversals (:mod:`.reversals`; default True).
+        False leaves them out (a diagnostic: with ``law`` False too the likelihood
+        marginalises no deviation, only the noise and the discrepancy tau remain).
     law : motion-in likelihood only: marginalise an odd deviation of the plate's friction
         from Coulomb's and the viscous law, a function of the measured velocity
         (:mod:`.friction_law`; default True).
@@ -165,6 +169,7 @@ class LikelihoodSettings:
     decay: bool = False
     normaliser: str = "reference"
     law: bool = True
+    reversals: bool = True
     delay_sd: float | None = None
     law_orthogonal: bool = True
     law_beyond_viscous: bool = True

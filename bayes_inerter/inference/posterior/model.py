@@ -267,7 +267,7 @@ class PosteriorModel:
         self.observed = self.measured_lp[self.grid]
         self.motion = (motion_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle, law=lk.law,
                                   law_orthogonal=lk.law_orthogonal, law_beyond_viscous=lk.law_beyond_viscous,
-                                  reversal_scale=lk.reversal_scale)
+                                  reversal_scale=lk.reversal_scale, reversals=lk.reversals)
                        if lk.residual == "motion" else None)
         self.harmonic = (self.motion.harmonic if self.motion is not None else
                          harmonic_data(rec, self.drive.hz, cutoff=lk.cutoff, pool=lk.pool, settle=lk.settle)

@@ -236,8 +236,11 @@ def _plate_motion(record: Record, freq: float, band: float, pool: int, settle: i
 
 def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, settle: int = 1,
                 sign_band: float = SIGN_BAND, law: bool = True, law_orthogonal: bool = True,
-                law_beyond_viscous: bool = True, reversal_scale: str = "total") -> MotionData:
+                law_beyond_viscous: bool = True, reversal_scale: str = "total",
+                reversals: bool = True) -> MotionData:
     """:class:`MotionData` of ``record`` driven at ``freq`` Hz (see module docstring);
+    ``reversals``: marginalise the friction's deviations at the plate's reversals
+    (False leaves them out of the basis; the windows still place the sign's switches);
     ``law_orthogonal``: the law's deviations with the plate's own Coulomb and viscous
     harmonics taken out (``friction_law.beyond``), the viscous ones only where
     ``law_beyond_viscous``; ``reversal_scale``: the reversals'
@@ -250,11 +253,11 @@ def motion_data(record: Record, freq: float, *, cutoff: float, pool: int = 2, se
     # fit made in a study's worker (its share of the cores) be refused by `report` after
     with threadpoolctl.threadpool_limits(limits=1, user_api="blas"):
         return _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogonal, law_beyond_viscous,
-                            reversal_scale)
+                            reversal_scale, reversals)
 
 
 def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogonal, law_beyond_viscous,
-                 reversal_scale) -> MotionData:
+                 reversal_scale, reversals) -> MotionData:
     data = harmonic_data(record, freq, cutoff=cutoff, pool=pool, settle=settle)
     velocity, accel, sigma_v, (fine_omega, fine_var) = _plate_motion(record, freq, max(sign_band, cutoff), pool, settle)
     v = velocity(SIGN_GRID)
@@ -264,15 +267,17 @@ def _motion_data(record, freq, cutoff, pool, settle, sign_band, law, law_orthogo
     K = data.harmonics
     V = data.accel / (1j * data.omega)  # the plate's velocity at the harmonics
     # each part: its deviations' basis, their prior sd's shares, whether they are the law's
-    parts = [(window_basis(windows, K), (SD, SD if reversal_scale == "total" else 0.0, 0.0), False)]
+    parts = []
+    if reversals:
+        parts.append((window_basis(windows, K), (SD, SD if reversal_scale == "total" else 0.0, 0.0), False))
     if law:
         U = friction_law.law_basis(v, switched, K)
         if law_orthogonal:
             U = friction_law.beyond(U, sign, V) if law_beyond_viscous else friction_law.beyond(U, sign)
         parts.append((U, (friction_law.SD, friction_law.SD, 0.0), True))
-    basis = np.hstack([U for U, _, _ in parts])
+    basis = np.hstack([U for U, _, _ in parts]) if parts else np.zeros((2 * K, 0))
     scale = np.array([c for U, c, _ in parts for _ in range(U.shape[1])], dtype=float).reshape(-1, 3)
-    law_columns = np.concatenate([np.full(U.shape[1], is_law) for U, _, is_law in parts])
+    law_columns = np.concatenate([np.full(U.shape[1], is_law) for U, _, is_law in parts] or [np.zeros(0, bool)])
     return MotionData(data, V, sign, data.omega, velocity(DRIVE_GRID),
                       basis, scale, windows, law_columns, fine_omega, fine_var)
 
