@@ -13,6 +13,7 @@ from bayes_inerter import paper_parameters
 from bayes_inerter.inference.posterior import friction_law
 from bayes_inerter.inference.posterior.motion import (bearing_force, motion_data, motion_loglik, motion_variance,
                                             plate_hump, predicted_force)
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings, generate_record
 from bayes_inerter.records.record import Record
 
@@ -657,6 +658,43 @@ def test_no_reversals_leaves_only_the_laws_deviations_and_neither_leaves_none():
     # with no deviation, the terms are the harmonics' Gaussians: the same as an all-zero prior sd
     zero = dataclasses.replace(full, scale=np.zeros_like(full.scale))
     assert values[2] == pytest.approx(motion_loglik(zero, x, 1.0, 0.0)[0], rel=1e-12)
+
+
+def test_the_whole_likelihood_is_the_dense_gaussian_it_states_away_from_the_truth():
+    """Under the full normaliser and the deviations' sd at each parameter vector's own
+    Coulomb forces (the density a likelihood-force calibration draws from), the model's
+    log-likelihood is the log-density of the stacked residual (Re, Im) under
+    diag(V/2, V/2) + U S^2 U', each of V, S and the prediction taken at that vector:
+    at the generating parameters and at vectors moved from them, where it falls by
+    thousands of nats."""
+    from bayes_inerter.inference.posterior.model import PosteriorModel
+    from bayes_inerter.inference.posterior.motion import deviation_sd, predicted_force
+
+    p = paper_parameters("A3")
+    rec = generate_record(p, 1.5, settings=GeneratorSettings(duration=6.0, ramp=1.0), rng=4, setting_name="A3")
+    model = PosteriorModel(rec, likelihood=LikelihoodSettings(normaliser="full", deviation_scale="parameters"))
+    data = model.motion
+    assert data.basis.shape[1] > 0  # the deviations are there: the dense covariance is not diagonal
+    start = model.to_theta(p, hyper={"tau": 1.0, "gain": 1.001, "delay": 2e-4})
+    rng = np.random.default_rng(3)
+    values = []
+    for j in range(5):
+        theta = np.array(start, dtype=float)
+        if j:  # the scales and stiffnesses moved by about 1 % (the shares and the damping ratio kept)
+            for name in ("b", "f_0", "c_f", "c_n", "k_n", "k_B"):
+                theta[model.names.index(name)] *= 1.0 + 0.01 * rng.standard_normal()
+        terms = model.motion_terms(theta)
+        assert terms is not None
+        x, h = model.field_vector(theta), model.hyper(theta)
+        F, _ = predicted_force(data, x, h["gain"], h["delay"], effects=model.effects(theta))
+        V, _ = motion_variance(data, x, h["tau"], h["alpha"], h["gain"], h["delay"])
+        s = deviation_sd(data, x)
+        r = data.harmonic.force - F
+        C = np.diag(np.concatenate([V, V]) / 2.0) + (data.basis * s**2) @ data.basis.T
+        dense = stats.multivariate_normal(np.zeros(2 * V.size), C).logpdf(np.concatenate([r.real, r.imag]))
+        assert terms[0].sum() == pytest.approx(dense, rel=1e-9, abs=1e-6)
+        values.append(dense)
+    assert max(values) - min(values) > 100.0  # the moved vectors are far in the likelihood
 
 
 def test_the_law_scale_is_sampled_last_with_its_prior():
