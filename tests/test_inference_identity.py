@@ -76,6 +76,19 @@ def test_numbers_compare_as_numbers():
     assert mismatch(stored, {"format": CHECKPOINT_FORMAT, "adaptation": {"dof": 10}, "nwalkers": 24}) is None
 
 
+def test_a_checkpoint_written_before_a_likelihood_setting_existed_holds_its_earlier_value(records):
+    """``LikelihoodSettings.reversals`` came after checkpoints were written: a stored
+    identity without it matches a run that keeps the reversals' deviations (the value in
+    effect before) and is refused by one that leaves them out."""
+    ident = _identity(PosteriorModel(records[0]))
+    older = _stored(ident)
+    del older["likelihood"]["reversals"]
+    assert mismatch(older, ident) is None
+    without = _identity(PosteriorModel(records[0], likelihood=LikelihoodSettings(reversals=False)))
+    found = mismatch(older, without)
+    assert found is not None and found.what == "with other likelihood settings (reversals: True then, False now)"
+
+
 def test_a_difference_is_named_by_its_field(records):
     model = PosteriorModel(records[0])
     stored = _stored(_identity(model))

@@ -89,6 +89,10 @@ def _prior(prior) -> dict:
 #: checkpoint written before the setting existed still matches.
 LATER_ADAPTATION = {"transport": False}
 LATER_COORDINATES = {"series": None, "compliance": None}
+#: Likelihood settings added after checkpoints were written, with the value in effect
+#: before: a stored identity without one is read as holding that value (the run's own
+#: identity keeps every setting, so checkpoints written since stay as they are).
+LATER_LIKELIHOOD = {"reversals": True}
 
 
 def _without_later(fields: dict, later: dict) -> dict:
@@ -149,6 +153,8 @@ def mismatch(stored: dict, current: dict) -> Mismatch | None:
         return Mismatch("format", f"by {age} version of bayes-inerter (checkpoint format "
                         f"{stored.get('format', 1)}; this one reads {current['format']})",
                         "run with --fresh to start over (or remove the folder)")
+    if isinstance(stored.get("likelihood"), dict):
+        stored = {**stored, "likelihood": {**LATER_LIKELIHOOD, **stored["likelihood"]}}
     keys = list(_NAMES) + [k for k in current if k not in _NAMES and k != "format"]
     for key in keys:
         found = _first_difference(stored.get(key), current.get(key), ())
