@@ -429,3 +429,7 @@ def test_a_joint_fit_of_another_likelihood_is_not_reused(tmp_path):
     assert finished_joint(tmp_path, recs, plan) is not None
     (tmp_path / "fit.json").write_text(json.dumps({**info, "likelihood": {"residual": "ar1"}}))
     assert finished_joint(tmp_path, recs, plan) is None
+    # a fit written before the reversals' switch existed kept their deviations: reused
+    older = {k: v for k, v in info["likelihood"].items() if k != "reversals"}
+    (tmp_path / "fit.json").write_text(json.dumps({**info, "likelihood": older}))
+    assert finished_joint(tmp_path, recs, plan) is not None
