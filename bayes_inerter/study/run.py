@@ -128,13 +128,11 @@ def finished_joint(folder: Path, records, plan: StudyPlan):
             draws = {k: npz[k] for k in npz.files}
     except (OSError, ValueError, KeyError):
         return None
-    from ..inference.sampling.identity import LATER_LIKELIHOOD
+    from ..inference.sampling.identity import stored_likelihood
 
     jm = JointModel(tuple(records))
-    stored = info.get("likelihood")
-    stored = {**LATER_LIKELIHOOD, **stored} if isinstance(stored, dict) else stored  # as a checkpoint's
     same = (info.get("records") == joint_records(jm) and info.get("seed") == plan.seed
-            and stored == dataclasses.asdict(jm.likelihood))
+            and stored_likelihood(info.get("likelihood")) == dataclasses.asdict(jm.likelihood))
     ended = info.get("converged") if plan.joint_steps is None else info.get("iterations") == plan.joint_steps
     if not (same and ended):
         return None

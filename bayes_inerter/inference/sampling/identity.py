@@ -95,6 +95,13 @@ LATER_COORDINATES = {"series": None, "compliance": None}
 LATER_LIKELIHOOD = {"reversals": True}
 
 
+def stored_likelihood(settings):
+    """Likelihood settings as a checkpoint or a fit's record stored them, with those of
+    :data:`LATER_LIKELIHOOD` they lack at the value in effect before (anything but a
+    dict, as it is)."""
+    return {**LATER_LIKELIHOOD, **settings} if isinstance(settings, dict) else settings
+
+
 def _without_later(fields: dict, later: dict) -> dict:
     """``fields`` less those of ``later`` that hold the value ``later`` gives them."""
     return {k: v for k, v in fields.items() if not (k in later and v == later[k])}
@@ -153,8 +160,8 @@ def mismatch(stored: dict, current: dict) -> Mismatch | None:
         return Mismatch("format", f"by {age} version of bayes-inerter (checkpoint format "
                         f"{stored.get('format', 1)}; this one reads {current['format']})",
                         "run with --fresh to start over (or remove the folder)")
-    if isinstance(stored.get("likelihood"), dict):
-        stored = {**stored, "likelihood": {**LATER_LIKELIHOOD, **stored["likelihood"]}}
+    if "likelihood" in stored:
+        stored = {**stored, "likelihood": stored_likelihood(stored["likelihood"])}
     keys = list(_NAMES) + [k for k in current if k not in _NAMES and k != "format"]
     for key in keys:
         found = _first_difference(stored.get(key), current.get(key), ())
