@@ -46,6 +46,34 @@ def test_ensemble_has_the_posterior_spread():
     assert np.all((walkers >= model.box[:, 0]) & (walkers <= model.box[:, 1]))
 
 
+class TemperedGaussian(GaussianModel):
+    """GaussianModel whose normal is its likelihood, under a normal prior on the first
+    coordinate (log_prior: what a tempered ensemble keeps at full power)."""
+
+    prior_sd = 0.05
+
+    def log_prior(self, theta):
+        return -0.5 * ((theta[0] - 0.5) / self.prior_sd) ** 2
+
+    def log_prob(self, theta):
+        lp, phi = super().log_prob(theta)
+        return lp + self.log_prior(theta), phi
+
+
+def test_a_hot_ensemble_has_its_own_temperatures_spread():
+    # tempered: log prior + beta x log-likelihood, so the likelihood's covariance
+    # widens by 1 / beta and the prior's precision stays as it is
+    model, start, beta = TemperedGaussian(), np.array([0.5, 0.2, 3.0]), 0.1
+    walkers, _ = laplace_ensemble(model, start, 600, np.random.default_rng(3), beta=beta)
+    prec = beta * model.prec + np.diag([model.prior_sd ** -2, 0.0])
+    want = np.sqrt(np.diag(np.linalg.inv(prec)))
+    assert np.allclose(np.std(walkers[:, :2], axis=0), want, rtol=0.15)
+    cold, _ = laplace_ensemble(model, start, 600, np.random.default_rng(3))
+    assert np.std(walkers[:, 1]) / np.std(cold[:, 1]) > 2.5  # about 1 / sqrt(0.1) = 3.2 on the free one
+    with pytest.raises(ValueError, match="beta"):
+        laplace_ensemble(model, start, 6, np.random.default_rng(3), beta=0.0)
+
+
 def test_same_generator_same_ensemble():
     model = GaussianModel()
     start = np.array([0.5, 0.2, 3.0])

@@ -136,3 +136,18 @@ def test_a_tempered_fit_given_no_rule_is_capped_at_its_own_steps():
     assert tempered == Convergence(max_steps=MAX_STEPS)  # the rule is otherwise the package's
     # in evaluations, twice the untempered cap with the default ladder
     assert MAX_STEPS * Tempering().temps == 2 * Convergence().max_steps
+
+
+def test_each_hot_ensemble_starts_at_its_own_temperatures_spread(tmp_path):
+    # drawn at the posterior's own spread, a hot ensemble starts far narrower than its
+    # equilibrium, and its swaps then pull the cold chain in towards the mode
+    pm = normal_posterior(duration=1.5, ramp=0.5)
+    normal = pm.log_prob
+    pm.log_prob = lambda theta: normal(theta) if np.isfinite(pm.log_prior(theta)) else (-np.inf, np.nan)
+    ladder = Tempering(temps=2, beta_min=0.25)
+    run = run_sampler(pm, tmp_path / "c.h5", steps=1, nwalkers=300, seed=3, start=pm.test_start, adaptation=None,
+                      coordinates="physical", tempering=ladder)
+    cold = run.chain()[0]
+    hot = np.asarray(run.sampler.backend.extra["hot_coords"][0])  # after one step: still about as drawn
+    ratio = np.median(np.std(hot, axis=0) / np.std(cold, axis=0))
+    assert 1.6 < ratio < 2.4  # 1 / sqrt(0.25) = 2

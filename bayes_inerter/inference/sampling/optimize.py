@@ -614,6 +614,18 @@ def _unit_objective(model, theta):
     return f, to_u(np.asarray(theta, dtype=float)), from_u, n_evals
 
 
+def _tempered(model, f, from_u, beta: float):
+    """``f`` (the log posterior on the unit box) with its log-likelihood raised to the
+    power ``beta``: log prior + beta x (f - log prior)."""
+    def f_beta(u):
+        lp = f(u)
+        if not math.isfinite(lp):
+            return lp
+        prior = model.log_prior(from_u(u))
+        return prior + beta * (lp - prior)
+    return f_beta
+
+
 def _hessian(f, u0: np.ndarray, f0: float) -> np.ndarray:
     """Central-difference Hessian of f at u0 with steps from :func:`_fd_steps`."""
     d = len(u0)
@@ -690,7 +702,7 @@ def laplace_covariance(model: PosteriorModel, theta: np.ndarray) -> np.ndarray:
 
 
 def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rng: np.random.Generator,
-                     accept=None):
+                     accept=None, beta: float = 1.0):
     """Initial walkers spread like the posterior near the optimum ``theta``.
 
     The Hessian of the log posterior at ``theta`` is taken by central differences in
@@ -707,9 +719,22 @@ def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rn
     walkers started like this begin near equilibrium. ``accept``: an optional test of a
     drawn theta (for example, that it lies in the sampler coordinates' domain); a draw
     it refuses is drawn again too.
+
+    ``beta`` < 1: the same for the tempered posterior, log prior + ``beta`` x
+    log-likelihood (a hot ensemble of parallel tempering, :mod:`.tempering`): its
+    Hessian and its floor are that density's, so the walkers spread about
+    1 / sqrt(beta) times wider where the data fix them, and as wide as the prior where
+    they do not. Hot ensembles drawn at the posterior's own spread start far narrower
+    than their equilibrium, and until they reach it their swaps carry the mode's draws
+    down into the posterior's ensemble and its tails up (measured: docs/inference.md,
+    "Tempering").
     Returns (nwalkers, ndim) and the number of log-posterior evaluations spent.
     """
+    if not 0.0 < beta <= 1.0:
+        raise ValueError(f"a tempered ensemble's beta must lie in (0, 1], got {beta}")
     f, u0, from_u, n_evals = _unit_objective(model, theta)
+    if beta != 1.0:
+        f = _tempered(model, f, from_u, beta)
     f0 = f(u0)
     if not math.isfinite(f0):
         raise ValueError("the start has zero posterior density (outside the prior, or the record cannot be "

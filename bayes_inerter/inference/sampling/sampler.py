@@ -274,12 +274,10 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     with make_executor(processes, state=target) as executor, interrupt_raised():
         try:
             if done == 0:
-                temps = 1 if tempering is None else tempering.temps
-                drawn, start_theta, first = _first_walkers(target, nwalkers * temps, seed, start, executor, searched)
+                betas = (1.0,) if tempering is None else tuple(float(b) for b in tempering.betas)
+                state, hot_starts, start_theta, first = _first_walkers(target, nwalkers, seed, start, executor,
+                                                                       searched, betas)
                 seconds = {k: seconds.get(k, 0.0) + first.get(k, 0.0) for k in START_PHASES}
-                # each temperature's first walkers: every temps-th drawn, so each has its share of each mode
-                state = emcee.State(drawn.coords[::temps], random_state=drawn.random_state)
-                hot_starts = [drawn.coords[k::temps] for k in range(1, temps)]
             else:
                 state, start_theta, hot_starts = backend.get_last_sample(), None, None
             iterations = max(0, (steps if steps is not None else conv.max_steps) - done)
@@ -435,14 +433,19 @@ def _reachable(model, coords: Coordinates, start, stored: dict | None) -> Coordi
     return coords
 
 
-def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Executor, searched: bool = False):
-    """The first state of a new chain and the point its walkers were drawn around: the
-    optimiser's start (its search on ``executor``), or ``start``. Where the start is the
-    search's (``searched``, or ``start`` None) and its mirror ends in a mode of its own
+def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Executor, searched: bool = False,
+                   betas: tuple = (1.0,)):
+    """The first state of a new chain, the first walkers of its hot ensembles (one
+    array each, for ``betas[1:]``; none untempered), the point the walkers were drawn
+    around, and the start's phases' seconds. The point: the optimiser's start (its
+    search on ``executor``), or ``start``. Where the start is the search's
+    (``searched``, or ``start`` None) and its mirror ends in a mode of its own
     (``optimize.mirrored_modes``), or a held parameter's polish ends in one
     (``optimize.held_modes``), the walkers are shared equally among the modes: a chain
     whose walkers all begin in one mode of the friction's split may never visit the
-    other, and neither tau nor R-hat can see a mode no walker visits."""
+    other, and neither tau nor R-hat can see a mode no walker visits. Each ensemble of a
+    tempered chain is drawn at its own temperature's spread
+    (``optimize.laplace_ensemble``'s ``beta``)."""
     model, coords = target.model, target.coords
     rng = np.random.default_rng(seed)
     seconds = dict.fromkeys(START_PHASES, 0.0)
@@ -477,11 +480,11 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
     seconds["modes"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     counts = [nwalkers // len(centres) + (k < nwalkers % len(centres)) for k in range(len(centres))]
-    walkers = np.vstack([laplace_ensemble(model, centre, n, rng, accept=inside)[0]
-                         for centre, n in zip(centres, counts)])
-    state = emcee.State(coords.to_u(walkers), random_state=np.random.RandomState(seed).get_state())
+    ensembles = [coords.to_u(np.vstack([laplace_ensemble(model, centre, n, rng, accept=inside, beta=beta)[0]
+                                        for centre, n in zip(centres, counts)])) for beta in betas]
+    state = emcee.State(ensembles[0], random_state=np.random.RandomState(seed).get_state())
     seconds["ensemble"] = time.perf_counter() - t0
-    return state, start_theta, seconds
+    return state, ensembles[1:], start_theta, seconds
 
 
 def _status(backend, check: Check, done: int, conv: Convergence) -> SamplerStatus:
