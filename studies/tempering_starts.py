@@ -60,7 +60,7 @@ from bayes_inerter.inference.sampling.coordinates import Coordinates
 from bayes_inerter.inference.sampling.optimize import laplace_ensemble
 from bayes_inerter.inference.sampling.sampler import default_moves, default_walkers, sample
 from bayes_inerter.inference.sampling.target import Target
-from bayes_inerter.inference.sampling.tempering import Tempering, sample_tempered
+from bayes_inerter.inference.sampling.tempering import Tempering, replica_trajectories, sample_tempered
 
 D = 12
 BOX = 60.0
@@ -156,12 +156,13 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
     state = emcee.State(ensembles[0], random_state=np.random.RandomState(seed).get_state())
     backend = new_checkpoint(work / f"{sampler}-{seed}.h5", write_seconds=60.0,
                              identity={"nwalkers": nw, "ndim": D, "model": {"parameters": [f"x{i}" for i in range(D)]}})
-    hot = []  # the hot ensembles' walkers after each step, as the checkpoint is handed them
+    hot, labels = [], []  # the hot ensembles' walkers and the replicas' labels after each step
     if ladder is not None:
         save = backend.save_step
 
         def save_step(state, accepted, extra=None):
             hot.append(np.array(extra["hot_coords"], dtype=np.float32))
+            labels.append(np.array(extra["replicas"]))
             save(state, accepted, extra=extra)
         backend.save_step = save_step
     schedule = Schedule(default_moves(model, coordinates=coords), Adaptation())
@@ -189,6 +190,10 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
         taus = [float(np.max(integrated_time(chains[:, k]))) for k in range(chains.shape[1])]
         row["hot_tau_max"] = round(max(taus), 1)
         row["hot_rule_holds"] = bool(len(chains) >= conv.n_tau * max(taus))
+        paths = replica_trajectories(backend.get_chain()[check.warmup:], np.stack(hot)[check.warmup:],
+                                     np.stack(labels)[check.warmup:])
+        row["replica_tau_max"] = round(float(np.max(integrated_time(paths))), 1)
+        row["replica_rule_holds"] = bool(len(paths) >= conv.n_tau * row["replica_tau_max"])
     for level in (0.94, 0.5):
         q = np.quantile(draws, [(1 - level) / 2, (1 + level) / 2], axis=0)
         row[f"mass{round(level * 100)}"] = round(float(np.mean(model.mass(q[0], q[1]))), 3)
@@ -224,6 +229,10 @@ def main(argv=None) -> int:
                             "converged": sum(r["converged"] for r in got),
                             "hot_rule_holds": sum(r.get("hot_rule_holds", False) for r in got) if got[0].get(
                                 "hot_tau_max") is not None else "",
+                            "replica_rule_holds": sum(r.get("replica_rule_holds", False) for r in got) if got[0].get(
+                                "replica_tau_max") is not None else "",
+                            "replica_tau_max": float(np.median([r["replica_tau_max"] for r in got]))
+                            if got[0].get("replica_tau_max") is not None else "",
                             **{k: float(np.median([r[k] for r in got])) for k in
                                ("steps", "sd_ratio", "mass94", "mass50")}})
     with open(args.out / "summary.csv", "w", newline="") as f:
@@ -232,7 +241,8 @@ def main(argv=None) -> int:
         w.writerows(summary)
     for s in summary:
         print(f"{s['target']:7s} {s['sampler']:33s} converged {s['converged']}/{s['chains']} (hot ensembles "
-              f"long enough: {s['hot_rule_holds']}), median steps "
+              f"long enough: {s['hot_rule_holds']}, replicas: {s['replica_rule_holds']}, replica tau "
+              f"{s['replica_tau_max']}), median steps "
               f"{s['steps']:.0f}, sd ratio {s['sd_ratio']:.3f}, mass {s['mass94']:.3f} / {s['mass50']:.3f}")
     return 0
 

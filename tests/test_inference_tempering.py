@@ -151,3 +151,25 @@ def test_each_hot_ensemble_starts_at_its_own_temperatures_spread(tmp_path):
     hot = np.asarray(run.sampler.backend.extra["hot_coords"][0])  # after one step: still about as drawn
     ratio = np.median(np.std(hot, axis=0) / np.std(cold, axis=0))
     assert 1.6 < ratio < 2.4  # 1 / sqrt(0.25) = 2
+
+
+def test_the_replicas_labels_follow_the_walkers_through_the_swaps(bimodal, tmp_path):
+    from bayes_inerter.inference.sampling.tempering import replica_trajectories
+
+    ladder = Tempering(temps=3, beta_min=0.01)
+    common = dict(nwalkers=24, seed=4, start=bimodal.test_start, adaptation=None, coordinates="unconstrained",
+                  tempering=ladder)
+    run = run_sampler(bimodal, tmp_path / "a.h5", steps=30, **common)
+    extra = run.sampler.backend.extra
+    labels = np.asarray(extra["replicas"])
+    assert sorted(labels.ravel()) == list(range(72))  # a permutation of the replicas
+    assert not np.array_equal(labels, np.arange(72).reshape(3, 24))  # swaps were accepted and relabelled
+    # a replica's position is its slot's: the last step's trajectories put each walker
+    # of each ensemble at its label's row
+    cold = run.sampler.backend.get_chain()[-1:]
+    hot = np.asarray(extra["hot_coords"])[None]
+    paths = replica_trajectories(cold, hot, labels[None])
+    slots = np.concatenate([cold[0][None], hot[0]])
+    for t in range(3):
+        for w in range(24):
+            assert np.array_equal(paths[0, labels[t, w]], slots[t, w])

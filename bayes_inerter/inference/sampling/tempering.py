@@ -39,7 +39,8 @@ from ...executor import Executor, interrupts_held
 from .checkpoint import CheckpointError
 from .target import Target
 
-__all__ = ["Tempering", "TemperedTarget", "sample_tempered", "swap_rates", "MAX_STEPS", "default_convergence"]
+__all__ = ["Tempering", "TemperedTarget", "sample_tempered", "swap_rates", "replica_trajectories", "MAX_STEPS",
+           "default_convergence"]
 
 #: A tempered fit's default cap, in the posterior's ensemble's steps: 10,000, each
 #: costing ``temps`` times the evaluations (40,000 steps' worth with 4 temperatures,
@@ -119,25 +120,44 @@ class TemperedTarget:
         return out
 
 
-def _extra(states: list, swap_rng: np.random.RandomState, swaps: np.ndarray) -> dict:
+def _extra(states: list, swap_rng: np.random.RandomState, swaps: np.ndarray, replicas: np.ndarray) -> dict:
     """What a continued run needs beyond the cold ensemble's stored step, as named arrays
     of fixed shapes (:meth:`.twin_backend.TwinBackend.save_step`'s ``extra``): the hot
     ensembles' walkers, tempered log probabilities and blobs, the cold ensemble's
-    log-likelihoods, the random states of the hot ensembles and of the swaps, and the
-    swaps accepted so far at each adjacent pair."""
+    log-likelihoods, the random states of the hot ensembles and of the swaps, the
+    swaps accepted so far at each adjacent pair, and which replica each walker of each
+    ensemble is (``replicas``, temperatures x walkers: a walker keeps its label through
+    the moves, and two walkers that swap swap labels; :func:`replica_trajectories`)."""
     hot = states[1:]
     rss = [h.random_state for h in hot] + [swap_rng.get_state()]
     return {"hot_coords": np.array([h.coords for h in hot]), "hot_log_prob": np.array([h.log_prob for h in hot]),
             "hot_blobs": np.array([h.blobs for h in hot]), "cold_loglik": np.array(states[0].blobs[:, 0]),
             "random_keys": np.array([rs[1] for rs in rss], dtype=np.uint32),
             "random_rest": np.array([[rs[2], rs[3], rs[4]] for rs in rss], dtype=float),
-            "swaps": np.array(swaps, dtype=np.int64)}
+            "swaps": np.array(swaps, dtype=np.int64), "replicas": np.array(replicas, dtype=np.int64)}
 
 
 def _random_state(extra: dict, k: int) -> tuple:
     rest = extra["random_rest"][k]
     return ("MT19937", np.array(extra["random_keys"][k], dtype=np.uint32), int(rest[0]), int(rest[1]),
             float(rest[2]))
+
+
+def replica_trajectories(cold: np.ndarray, hot: np.ndarray, replicas: np.ndarray) -> np.ndarray:
+    """Each replica's positions step by step, whatever temperature it was at: ``cold``
+    (steps, walkers, ndim), the posterior's ensemble; ``hot`` (steps, temperatures - 1,
+    walkers, ndim), the hot ensembles after each step; ``replicas`` (steps, temperatures,
+    walkers), each slot's label (``extra["replicas"]``). Returns (steps, replicas, ndim).
+    A swap relabels the slots of a temperature but moves no replica, so the
+    autocorrelation of these trajectories measures how fast the ladder as a whole
+    mixes, where the posterior's slots' own decorrelate at every accepted swap."""
+    slots = np.concatenate([np.asarray(cold)[:, None], np.asarray(hot)], axis=1)  # steps, temps, walkers, ndim
+    n, temps, walkers, ndim = slots.shape
+    out = np.empty((n, temps * walkers, ndim), dtype=slots.dtype)
+    rows = np.arange(n)[:, None]
+    labels = np.asarray(replicas).reshape(n, temps * walkers)
+    out[rows, labels] = slots.reshape(n, temps * walkers, ndim)
+    return out
 
 
 def swap_rates(extra: dict | None, steps: int) -> list[float]:
@@ -178,6 +198,9 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
         swap_rng = np.random.RandomState()
         swap_rng.set_state(_random_state(stored, len(hot)))
         swaps = np.array(stored["swaps"], dtype=np.int64)
+        # a checkpoint written before the labels were kept starts them here
+        replicas = (np.array(stored["replicas"], dtype=np.int64) if "replicas" in stored
+                    else np.arange(len(betas) * nwalkers).reshape(len(betas), nwalkers))
     else:
         if hot_starts is None or len(hot_starts) != len(betas) - 1:
             raise ValueError(f"a new tempered chain needs the first walkers of its {len(betas) - 1} hot ensembles")
@@ -186,6 +209,7 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
                for start, s in zip(hot_starts, seeds[1:])]
         swap_rng = np.random.RandomState(int(seeds[0]))
         swaps = np.zeros(len(betas) - 1, dtype=np.int64)
+        replicas = np.arange(len(betas) * nwalkers).reshape(len(betas), nwalkers)
     fns = [functools.partial(TemperedTarget(target, float(beta)).batch, executor=executor) for beta in betas]
     if stored is not None:  # the stored step holds phi alone; its log-likelihood is in the seal
         blobs = np.column_stack([stored["cold_loglik"], state.blobs])
@@ -209,9 +233,10 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
                           for s, st in zip(samplers, states)]
                 accepted = np.any(states[0].coords != before, axis=1).astype(int)
                 for k in range(len(betas) - 2, -1, -1):
-                    swaps[k] += _swap(states[k], states[k + 1], betas[k], betas[k + 1], swap_rng)
+                    swaps[k] += _swap(states[k], states[k + 1], betas[k], betas[k + 1], swap_rng,
+                                      (replicas[k], replicas[k + 1]))
                 cold = states[0]
-                extra = _extra(states, swap_rng, swaps)
+                extra = _extra(states, swap_rng, swaps, replicas)
                 saved = emcee.State(cold.coords.copy(), log_prob=cold.log_prob.copy(), blobs=cold.blobs[:, 1].copy(),
                                     random_state=cold.random_state)
                 backend.save_step(saved, accepted, extra=extra)
@@ -229,10 +254,12 @@ def _evaluated(state: emcee.State, fn) -> emcee.State:
                        blobs=np.array([g[1:] for g in got], dtype=float), random_state=state.random_state)
 
 
-def _swap(a: emcee.State, b: emcee.State, beta_a: float, beta_b: float, rng: np.random.RandomState) -> int:
+def _swap(a: emcee.State, b: emcee.State, beta_a: float, beta_b: float, rng: np.random.RandomState,
+          labels: tuple | None = None) -> int:
     """Offer each walker of ``a`` a swap with a walker of ``b`` (a random pairing); swap
-    the accepted in place (positions, log-likelihoods, phi, tempered log probabilities)
-    and return how many were."""
+    the accepted in place (positions, log-likelihoods, phi, tempered log probabilities,
+    and the replicas' ``labels`` of ``a`` and ``b`` where given) and return how many
+    were."""
     n = len(a.coords)
     pair = rng.permutation(n)
     la, lb = a.blobs[:, 0], b.blobs[pair, 0]
@@ -246,4 +273,6 @@ def _swap(a: emcee.State, b: emcee.State, beta_a: float, beta_b: float, rng: np.
         a.blobs[i], b.blobs[j] = b.blobs[j].copy(), a.blobs[i].copy()
         a.log_prob[i] = prior_j + beta_a * a.blobs[i, 0]
         b.log_prob[j] = prior_i + beta_b * b.blobs[j, 0]
+        if labels is not None:
+            labels[0][i], labels[1][j] = labels[1][j], labels[0][i]
     return int(take.sum())
