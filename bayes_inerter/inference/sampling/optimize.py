@@ -727,7 +727,7 @@ def laplace_ensemble(model: PosteriorModel, theta: np.ndarray, nwalkers: int, rn
     they do not. Hot ensembles drawn at the posterior's own spread start far narrower
     than their equilibrium, and until they reach it their swaps carry the mode's draws
     down into the posterior's ensemble and its tails up (measured: docs/inference.md,
-    "Tempering").
+    "Tempering on bent ridges").
     Returns (nwalkers, ndim) and the number of log-posterior evaluations spent.
     """
     if not 0.0 < beta <= 1.0:
