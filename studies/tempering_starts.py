@@ -18,7 +18,11 @@ Three samplers, each from walkers drawn as a fit draws them
 - ``tempered-posterior-spread``: 4 temperatures down to beta 0.1, every hot ensemble
   drawn at the posterior's own spread (the package's start before 634035c);
 - ``tempered-own-spread``: the same ladder, each hot ensemble drawn at its own
-  temperature's spread (``laplace_ensemble(beta=)``, the package's start now).
+  temperature's spread (``laplace_ensemble(beta=)``, the package's start now);
+- ``tempered-own-spread+replica-rule``: the same, stopped only where the chain after
+  its warm-up is also 50 times the replicas' largest tau (each walker followed through
+  the swaps, ``tempering.replica_trajectories``), its draws kept after 2 of those tau:
+  a rule the package does not have yet, tried here.
 
 Two more isolate the hot ensembles' part: the posterior's ensemble drawn from the target
 itself (``exact:``), the hot ensembles drawn from it too (``exact:tempered-posterior-spread``)
@@ -66,7 +70,7 @@ D = 12
 BOX = 60.0
 BEND, ACROSS = 1.0, 0.1
 SAMPLERS = ("untempered", "tempered-posterior-spread", "tempered-own-spread", "exact:tempered-posterior-spread",
-            "exact:tempered-own-spread")
+            "exact:tempered-own-spread", "tempered-own-spread+replica-rule")
 TARGETS = ("normal", "banana")
 REFERENCE_DRAWS = 400_000
 
@@ -172,14 +176,20 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
         stepping = sample_tempered(target, backend, state, tempering=ladder, schedule=schedule,
                                    iterations=conv.max_steps, seed=seed, hot_starts=ensembles[1:])
     monitor, ok, t0 = Monitor(conv), False, time.perf_counter()
+    replica_rule, replica_tau = sampler.endswith("+replica-rule"), 0.0
     for _ in stepping:
         n = backend.iteration
         if n % conv.check_every == 0:
             check, ok = monitor.check(backend.get_chain(), backend.get_log_prob())
+            if ok and replica_rule:  # the rule's tau part read on the replicas too
+                paths = replica_trajectories(backend.get_chain()[check.warmup:], np.stack(hot)[check.warmup:],
+                                             np.stack(labels)[check.warmup:])
+                replica_tau = float(np.max(integrated_time(paths)))
+                ok = bool(np.isfinite(replica_tau) and len(paths) >= conv.n_tau * replica_tau)
             if ok or n >= conv.max_steps:
                 break
     tau = check.tau
-    burn = check.warmup + int(2 * np.max(tau))
+    burn = check.warmup + int(2 * max(np.max(tau), replica_tau if np.isfinite(replica_tau) else 0.0))
     draws = backend.get_chain(discard=burn, thin=max(1, int(0.5 * np.min(tau)))).reshape(-1, D)
     row = {"target": model.kind, "sampler": sampler, "seed": seed, "steps": n, "converged": ok,
            "tau_max": round(float(np.max(tau)), 1), "kept": len(draws),
