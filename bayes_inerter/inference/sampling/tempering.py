@@ -185,6 +185,7 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
     betas = tempering.betas
     nwalkers, ndim = np.shape(state.coords)
     stored = backend.extra if backend.iteration > 0 else None
+    replicas = np.arange(len(betas) * nwalkers).reshape(len(betas), nwalkers)  # each walker its own label
     if backend.iteration > 0 and stored is None:
         raise CheckpointError("the checkpoint holds no tempering state to continue from (it was damaged or "
                               "written untempered); run with --fresh to start over, or use another --out")
@@ -198,9 +199,8 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
         swap_rng = np.random.RandomState()
         swap_rng.set_state(_random_state(stored, len(hot)))
         swaps = np.array(stored["swaps"], dtype=np.int64)
-        # a checkpoint written before the labels were kept starts them here
-        replicas = (np.array(stored["replicas"], dtype=np.int64) if "replicas" in stored
-                    else np.arange(len(betas) * nwalkers).reshape(len(betas), nwalkers))
+        if "replicas" in stored:  # one written before the labels were kept keeps the fresh ones above
+            replicas = np.array(stored["replicas"], dtype=np.int64)
     else:
         if hot_starts is None or len(hot_starts) != len(betas) - 1:
             raise ValueError(f"a new tempered chain needs the first walkers of its {len(betas) - 1} hot ensembles")
@@ -209,7 +209,6 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
                for start, s in zip(hot_starts, seeds[1:])]
         swap_rng = np.random.RandomState(int(seeds[0]))
         swaps = np.zeros(len(betas) - 1, dtype=np.int64)
-        replicas = np.arange(len(betas) * nwalkers).reshape(len(betas), nwalkers)
     fns = [functools.partial(TemperedTarget(target, float(beta)).batch, executor=executor) for beta in betas]
     if stored is not None:  # the stored step holds phi alone; its log-likelihood is in the seal
         blobs = np.column_stack([stored["cold_loglik"], state.blobs])
