@@ -81,15 +81,14 @@ class Known:
 
     def __init__(self, kind: str, rng: np.random.Generator):
         self.kind = kind
+        self.mode = np.zeros(D)
         if kind == "normal":
             q, _ = np.linalg.qr(rng.normal(size=(D, D)))
             c = q @ np.diag(np.geomspace(1e-4, 1.0, D)) @ q.T
             s = np.geomspace(1e-3, 10.0, D) / np.sqrt(np.diag(c))
             self.cov = c * np.outer(s, s)
             self.prec = np.linalg.inv(self.cov)
-            self.mode = np.zeros(D)
         else:
-            self.mode = np.zeros(D)
             self.mode[1::2] = -BEND
         self.scale = np.sqrt(np.diag(self.cov)) if kind == "normal" else np.ones(D)
 
@@ -175,6 +174,9 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
     else:
         stepping = sample_tempered(target, backend, state, tempering=ladder, schedule=schedule,
                                    iterations=conv.max_steps, seed=seed, hot_starts=ensembles[1:])
+    def replicas_after(warmup: int) -> np.ndarray:  # the replicas' trajectories after the warm-up
+        return replica_trajectories(backend.get_chain()[warmup:], np.stack(hot)[warmup:], np.stack(labels)[warmup:])
+
     monitor, ok, t0 = Monitor(conv), False, time.perf_counter()
     replica_rule, replica_tau = sampler.endswith("+replica-rule"), 0.0
     for _ in stepping:
@@ -182,8 +184,7 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
         if n % conv.check_every == 0:
             check, ok = monitor.check(backend.get_chain(), backend.get_log_prob())
             if ok and replica_rule:  # the rule's tau part read on the replicas too
-                paths = replica_trajectories(backend.get_chain()[check.warmup:], np.stack(hot)[check.warmup:],
-                                             np.stack(labels)[check.warmup:])
+                paths = replicas_after(check.warmup)
                 replica_tau = float(np.max(integrated_time(paths)))
                 ok = bool(np.isfinite(replica_tau) and len(paths) >= conv.n_tau * replica_tau)
             if ok or n >= conv.max_steps:
@@ -200,8 +201,7 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
         taus = [float(np.max(integrated_time(chains[:, k]))) for k in range(chains.shape[1])]
         row["hot_tau_max"] = round(max(taus), 1)
         row["hot_rule_holds"] = bool(len(chains) >= conv.n_tau * max(taus))
-        paths = replica_trajectories(backend.get_chain()[check.warmup:], np.stack(hot)[check.warmup:],
-                                     np.stack(labels)[check.warmup:])
+        paths = replicas_after(check.warmup)
         row["replica_tau_max"] = round(float(np.max(integrated_time(paths))), 1)
         row["replica_rule_holds"] = bool(len(paths) >= conv.n_tau * row["replica_tau_max"])
     for level in (0.94, 0.5):
