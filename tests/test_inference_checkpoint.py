@@ -129,3 +129,46 @@ def test_an_empty_checkpoints_identity_pins_nothing(tmp_path):
     assert stored_identity(empty) is None
     _with_steps(tmp_path / "held.h5")
     assert stored_identity(tmp_path / "held.h5") == IDENTITY
+
+
+def _with_rows(path, n=3, rows=True):
+    """A new checkpoint at ``path`` of ``n`` steps, each with per-step rows where ``rows``."""
+    backend = new_checkpoint(path, identity=IDENTITY, write_seconds=0.0)
+    rng = np.random.default_rng(2)
+    backend.grow(n, None)
+    for k in range(n):
+        state = emcee.State(rng.normal(size=(4, 2)), log_prob=rng.normal(size=4),
+                            random_state=np.random.RandomState(k).get_state())
+        step_rows = {"hot_chain": np.full((2, 4, 2), float(k)), "replicas": np.arange(12, dtype=np.int32) + k}
+        backend.save_step(state, np.ones(4, dtype=bool), rows=step_rows if rows else None)
+    backend.flush()
+    return backend
+
+
+def test_per_step_rows_are_kept_sealed_and_read_back(tmp_path):
+    from bayes_inerter.inference.sampling.twin_backend import GROUP
+
+    path = tmp_path / "chain.h5"
+    backend = _with_rows(path)
+    assert backend.has_rows("hot_chain")
+    assert np.array_equal(backend.get_rows("hot_chain")[:, 0, 0, 0], [0.0, 1.0, 2.0])
+    assert np.array_equal(backend.get_rows("replicas", 1)[:, 0], [1, 2])
+    assert open_checkpoint(path, identity=IDENTITY).steps == 3
+    with h5py.File(path, "a") as f:  # a row spoilt: the seal no longer vouches for the file
+        f[GROUP]["hot_chain"][1] = -1.0
+    opened = open_checkpoint(path, identity=IDENTITY)
+    assert opened.steps == 3 and "chain.h5" in opened.recovered  # continued from the intact twin
+    assert np.array_equal(opened.backend.get_rows("hot_chain")[:, 0, 0, 0], [0.0, 1.0, 2.0])
+
+
+def test_a_chain_that_kept_no_rows_from_its_first_step_never_does(tmp_path):
+    backend = _with_rows(tmp_path / "chain.h5", rows=False)
+    assert not backend.has_rows("hot_chain")
+    state = emcee.State(np.zeros((4, 2)), log_prob=np.zeros(4), random_state=np.random.RandomState(9).get_state())
+    backend.grow(1, None)
+    backend.save_step(state, np.ones(4, dtype=bool), rows={"hot_chain": np.zeros((2, 4, 2))})
+    backend.flush()
+    assert not backend.has_rows("hot_chain") and backend.iteration == 4
+    assert open_checkpoint(tmp_path / "chain.h5", identity=IDENTITY).steps == 4  # and the file stays sealed
+    with pytest.raises(ValueError, match="per-step rows must be among"):
+        backend.save_step(state, np.ones(4, dtype=bool), rows={"other": np.zeros(2)})

@@ -32,7 +32,7 @@ import emcee
 import numpy as np
 
 __all__ = ["TwinBackend", "twin_path", "TWIN_EVERY", "WRITE_SECONDS", "check_write_seconds", "write_empty",
-           "sealed_steps", "restore_seal", "read_extra", "GROUP", "SEAL", "EXTRA"]
+           "sealed_steps", "restore_seal", "read_extra", "GROUP", "SEAL", "EXTRA", "STEP_ROWS"]
 
 #: The HDF5 group that holds the chain (emcee's ``name``).
 GROUP = "mcmc"
@@ -43,6 +43,16 @@ SEAL = "bayes_inerter_seal"
 #: written in turn, each overwritten in place: the seal names the slot of its step and
 #: holds its sha256, so a kill while one slot is written leaves the sealed one whole.
 EXTRA = "sampler_state"
+
+#: The chain group's datasets that hold the sampler's own state at every step, beside
+#: emcee's chain, log probabilities and blobs (a tempered run's hot ensembles' walkers
+#: and every slot's replica label, :mod:`.tempering`; what the convergence rule reads to
+#: follow the replicas, :func:`.convergence.check_chain`). Written and sealed with the
+#: step, in this order; absent from a run that stores none.
+STEP_ROWS = ("hot_chain", "replicas")
+
+#: Every per-step dataset of the chain group in the order the seal hashes a step.
+_HASHED = ("chain", "log_prob", "blobs") + STEP_ROWS
 
 
 def twin_path(path) -> Path:
@@ -152,6 +162,23 @@ class TwinBackend(_Backend):
         with self.open() as f:
             return read_extra(f[GROUP])
 
+    def has_rows(self, name: str) -> bool:
+        """Whether the chain keeps the per-step dataset ``name`` (:data:`STEP_ROWS`) for
+        every step it holds: one that did not from its first step never does."""
+        if self.iteration == 0:
+            return True
+        self._write_held()
+        with self.open() as f:
+            return name in f[GROUP]
+
+    def get_rows(self, name: str, start: int = 0) -> np.ndarray:
+        """The per-step dataset ``name`` (:data:`STEP_ROWS`) from step ``start`` to the
+        last one taken; KeyError where the chain keeps none."""
+        self._write_held()
+        with self.open() as f:
+            g = f[GROUP]
+            return g[name][start:int(g.attrs["iteration"])]
+
     @property
     def shape(self):
         return self._fact("shape", lambda: tuple(int(v) for v in _Backend.shape.fget(self)))
@@ -170,14 +197,21 @@ class TwinBackend(_Backend):
         self._facts.pop("has_blobs", None)  # the first growth with blobs sets it (after asking)
         self.twin.grow(ngrow, blobs)
 
-    def save_step(self, state, accepted, extra: dict | None = None):
+    def save_step(self, state, accepted, extra: dict | None = None, rows: dict | None = None):
         """Hold the step ``state`` (emcee's); ``extra``: named arrays of the sampler's own
         state after it (same names and shapes at every step of a run), written and sealed
-        with it (:data:`EXTRA`; what a tempered run's hot ensembles need to go on)."""
+        with it (:data:`EXTRA`; what a tempered run's hot ensembles need to go on);
+        ``rows``: named arrays kept for every step (:data:`STEP_ROWS`, same shapes at
+        every step), stored only by a chain that has kept them from its first step
+        (:meth:`has_rows`)."""
         self._check(state, accepted)
-        row = (np.array(state.coords), np.array(state.log_prob),
-               None if state.blobs is None else np.array(state.blobs), np.asarray(accepted), state.random_state,
-               extra)
+        if rows is not None and set(rows) - set(STEP_ROWS):
+            raise ValueError(f"per-step rows must be among {STEP_ROWS}, got {sorted(rows)}")
+        values = {"chain": np.array(state.coords), "log_prob": np.array(state.log_prob)}
+        if state.blobs is not None:
+            values["blobs"] = np.array(state.blobs)
+        values.update({k: np.array(v) for k, v in (rows or {}).items()})
+        row = (values, np.asarray(accepted), state.random_state, extra)
         self._held.append(row)
         if time.monotonic() - self._last_write >= self.write_seconds:
             self._write_held()
@@ -217,23 +251,28 @@ class TwinBackend(_Backend):
                     self._sums[filename] = bytes.fromhex(seal["sha256"])
             h = self._sums[filename]
             need = it + len(rows)
-            sets = [(k, g[name]) for k, name in enumerate(("chain", "log_prob", "blobs")) if name in g]
-            dtypes = [ds.dtype for _, ds in sets]
-            for _, ds in sets:
-                if ds.shape[0] < need:
-                    ds.resize(need, axis=0)
-            stored = [[np.asarray(row[k], dtype=dt) for (k, _), dt in zip(sets, dtypes)] for row in rows]
-            for j, (_, ds) in enumerate(sets):  # one block a dataset: a row at a time cost a write per row
-                ds[it:need] = np.stack([values[j] for values in stored])
+            if it == 0:  # a chain keeps its per-step rows from its first step, or never
+                for name in STEP_ROWS:
+                    if name in rows[0][0] and name not in g:
+                        first = np.asarray(rows[0][0][name])
+                        g.create_dataset(name, (0,) + first.shape, first.dtype, maxshape=(None,) + first.shape,
+                                         chunks=(max(1, 4096 // max(first.size, 1)),) + first.shape)
+            names = [name for name in _HASHED if name in g]
+            for name in names:
+                if g[name].shape[0] < need:
+                    g[name].resize(need, axis=0)
+            stored = [[np.asarray(row[0][name], dtype=g[name].dtype) for name in names] for row in rows]
+            for j, name in enumerate(names):  # one block a dataset: a row at a time cost a write per row
+                g[name][it:need] = np.stack([values[j] for values in stored])
             for values in stored:
                 h = _step_hash(h, *values)
             acc = g["accepted"]
-            accepted = acc[:] + np.sum([r[3] for r in rows], axis=0).astype(acc.dtype)
+            accepted = acc[:] + np.sum([r[1] for r in rows], axis=0).astype(acc.dtype)
             acc[:] = accepted
-            random_state = rows[-1][4]
+            random_state = rows[-1][2]
             for i, v in enumerate(random_state):
                 g.attrs[f"random_state_{i}"] = v
-            extra = rows[-1][5]
+            extra = rows[-1][3]
             extra_seal = None
             if extra is not None:  # into the slot the seal does not vouch for: a kill here leaves the file intact
                 slot = str(1 - int(json.loads(g.attrs[SEAL]).get("extra_slot", 1)))
@@ -253,7 +292,7 @@ def _step_hash(h: bytes, *rows) -> bytes:
 
 
 def _rows_hash(g, start: int, stop: int, h: bytes) -> bytes:
-    names = [n for n in ("chain", "log_prob", "blobs") if n in g]
+    names = [n for n in _HASHED if n in g]
     if stop > start:
         blocks = [g[n][start:stop] for n in names]
         for i in range(stop - start):
