@@ -159,15 +159,6 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
     state = emcee.State(ensembles[0], random_state=np.random.RandomState(seed).get_state())
     backend = new_checkpoint(work / f"{sampler}-{seed}.h5", write_seconds=60.0,
                              identity={"nwalkers": nw, "ndim": D, "model": {"parameters": [f"x{i}" for i in range(D)]}})
-    hot, labels = [], []  # the hot ensembles' walkers and the replicas' labels after each step
-    if ladder is not None:
-        save = backend.save_step
-
-        def save_step(state, accepted, extra=None):
-            hot.append(np.array(extra["hot_coords"], dtype=np.float32))
-            labels.append(np.array(extra["replicas"]))
-            save(state, accepted, extra=extra)
-        backend.save_step = save_step
     schedule = Schedule(default_moves(model, coordinates=coords), Adaptation())
     if ladder is None:
         stepping = sample(target, backend, state, schedule=schedule, iterations=conv.max_steps)
@@ -175,7 +166,8 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
         stepping = sample_tempered(target, backend, state, tempering=ladder, schedule=schedule,
                                    iterations=conv.max_steps, seed=seed, hot_starts=ensembles[1:])
     def replicas_after(warmup: int) -> np.ndarray:  # the replicas' trajectories after the warm-up
-        return replica_trajectories(backend.get_chain()[warmup:], np.stack(hot)[warmup:], np.stack(labels)[warmup:])
+        return replica_trajectories(backend.get_chain()[warmup:], backend.get_rows("hot_chain", warmup),
+                                    backend.get_rows("replicas", warmup))
 
     monitor, ok, t0 = Monitor(conv), False, time.perf_counter()
     replica_rule, replica_tau = sampler.endswith("+replica-rule"), 0.0
@@ -196,8 +188,8 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
            "tau_max": round(float(np.max(tau)), 1), "kept": len(draws),
            "sd_ratio": round(float(np.median(draws.std(axis=0) / model.sd())), 3),
            "seconds": round(time.perf_counter() - t0, 1)}
-    if hot:  # the rule's tau part read on each hot ensemble's chain after the same warm-up
-        chains = np.stack(hot)[check.warmup:]  # steps, hot ensembles, walkers, ndim
+    if ladder is not None:  # the rule's tau part read on each hot ensemble's chain after the same warm-up
+        chains = backend.get_rows("hot_chain", check.warmup)  # steps, hot ensembles, walkers, ndim
         taus = [float(np.max(integrated_time(chains[:, k]))) for k in range(chains.shape[1])]
         row["hot_tau_max"] = round(max(taus), 1)
         row["hot_rule_holds"] = bool(len(chains) >= conv.n_tau * max(taus))

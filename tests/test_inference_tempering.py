@@ -81,6 +81,8 @@ def test_a_continued_tempered_run_is_the_uninterrupted_one(bimodal, tmp_path, da
     assert np.array_equal(again.sampler.get_chain(), whole.sampler.get_chain())
     assert np.array_equal(again.sampler.get_log_prob(), whole.sampler.get_log_prob())
     assert again.swap_rates == whole.swap_rates
+    for name in ("hot_chain", "replicas"):  # the replicas' history too, step by step
+        assert np.array_equal(again.sampler.backend.get_rows(name), whole.sampler.backend.get_rows(name))
 
 
 def test_a_write_of_the_hot_ensembles_cut_short_leaves_the_sealed_state_whole(bimodal, tmp_path):
@@ -173,3 +175,22 @@ def test_the_replicas_labels_follow_the_walkers_through_the_swaps(bimodal, tmp_p
     for t in range(3):
         for w in range(24):
             assert np.array_equal(paths[0, labels[t, w]], slots[t, w])
+
+
+def test_every_step_keeps_the_hot_walkers_and_labels_the_replica_rule_reads(bimodal, tmp_path):
+    from bayes_inerter.inference.sampling.sampler import Convergence
+
+    # the ladder from the light mode's centre, as the first test: swaps decorrelate the
+    # posterior's slots at once, while a replica crosses between the modes only through
+    # the hottest copies, so the replicas' tau is the larger
+    common = dict(nwalkers=24, seed=5, start=bimodal.test_start, adaptation=None, coordinates="unconstrained",
+                  tempering=Tempering(temps=3, beta_min=0.01), steps=300)
+    slots = run_sampler(bimodal, tmp_path / "a.h5", **common)
+    read = run_sampler(bimodal, tmp_path / "b.h5", convergence=Convergence(replicas=True), **common)
+    backend = read.sampler.backend
+    hot, labels = backend.get_rows("hot_chain"), backend.get_rows("replicas")
+    assert hot.shape == (300, 2, 24, bimodal.ndim) and labels.shape == (300, 3, 24)
+    assert np.array_equal(hot[-1], backend.extra["hot_coords"]) and np.array_equal(labels[-1], backend.extra["replicas"])
+    assert np.array_equal(read.chain(), slots.chain())  # the rule reads the chain; it changes no step
+    assert np.all(read.tau >= slots.tau)
+    assert read.tau[0] > 1.5 * slots.tau[0]

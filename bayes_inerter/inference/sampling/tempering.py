@@ -20,7 +20,10 @@ The cold ensemble's steps go to the checkpoint as every run's do; the hot ensemb
 states (walkers, their log-likelihoods and random states), the swaps' random state and
 the swap counts are written beside them with each write, and its seal vouches for them
 (:class:`.twin_backend.TwinBackend`'s ``extra``), so a continued tempered run is the
-chain the uninterrupted one gives. The ladder is part of the run's identity
+chain the uninterrupted one gives. The hot ensembles' walkers and every slot's replica
+label are also kept at every step (the back end's per-step ``rows``), for the
+convergence rule to follow each replica through the swaps
+(:func:`replica_trajectories`, :func:`.convergence.check_chain`). The ladder is part of the run's identity
 (:func:`.identity.run_identity`). The run's acceptance fraction counts the cold
 ensemble's moves, not its swaps.
 """
@@ -216,6 +219,7 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
     else:
         cold = emcee.State(state.coords, random_state=state.random_state)
     states = [_evaluated(s, fn) for s, fn in zip([cold] + hot, fns)]
+    keep_rows = backend.has_rows("hot_chain")  # a chain written before they were kept goes on without them
     until = backend.iteration + iterations
     while backend.iteration < until:
         step = backend.iteration
@@ -238,7 +242,8 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
                 extra = _extra(states, swap_rng, swaps, replicas)
                 saved = emcee.State(cold.coords.copy(), log_prob=cold.log_prob.copy(), blobs=cold.blobs[:, 1].copy(),
                                     random_state=cold.random_state)
-                backend.save_step(saved, accepted, extra=extra)
+                rows = {"hot_chain": extra["hot_coords"], "replicas": extra["replicas"].astype(np.int32)}
+                backend.save_step(saved, accepted, extra=extra, rows=rows if keep_rows else None)
             yield saved
         with interrupts_held():
             backend.flush()
