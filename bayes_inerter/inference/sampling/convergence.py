@@ -17,6 +17,13 @@ others, not a proof). Or stops at ``max_steps``. The draws kept for the posterio
 (:func:`..summaries.results.posterior_sample`) are the same: after the warm-up and 2 tau more.
 
 :class:`Monitor` applies the rule along one run: it remembers the last check's tau.
+
+A tempered run (:mod:`.tempering`) is judged on its posterior's ensemble; with
+``Convergence(replicas=True)`` tau is also read on its replicas, each walker followed
+through the swaps, and each parameter's larger tau is the rule's (and the kept draws'):
+the posterior's slots decorrelate at every accepted swap, so their tau alone called
+chains converged that had not crossed their posterior (docs/inference.md, "Tempering
+on bent ridges").
 """
 
 from __future__ import annotations
@@ -85,6 +92,13 @@ class Convergence:
     #: must exceed 50 times (a parameter whose tau is a fraction of the largest may
     #: wander by more than ``tau_rtol`` of itself without the chain being too short).
     growth: str = "each"
+    #: whether a tempered run's tau is also read on its replicas (each walker followed
+    #: through the swaps, :func:`.tempering.replica_trajectories`), the rule then taking
+    #: each parameter's larger tau: an accepted swap decorrelates the posterior's slots
+    #: without moving any replica, so their own tau measures the swaps, not the ladder's
+    #: mixing (docs/inference.md, "Tempering on bent ridges"). No effect on an untempered
+    #: run or one whose checkpoint keeps no replicas.
+    replicas: bool = False
 
     def __post_init__(self) -> None:
         if self.growth not in GROWTH:
@@ -128,6 +142,9 @@ class Check:
     ess: np.ndarray
     warmup: int
     transient: int
+    #: the replicas' own tau where it was read (``Convergence.replicas``); ``tau`` is then
+    #: each parameter's larger of it and the posterior's slots'
+    replica_tau: np.ndarray | None = None
 
 
 def integrated_time(chain: np.ndarray, c: float = 5.0) -> np.ndarray:
@@ -158,10 +175,16 @@ def integrated_time(chain: np.ndarray, c: float = 5.0) -> np.ndarray:
     return tau
 
 
-def check_chain(chain: np.ndarray, log_prob: np.ndarray, conv: Convergence, rhat_if=None) -> Check:
+def check_chain(chain: np.ndarray, log_prob: np.ndarray, conv: Convergence, rhat_if=None,
+                replicas: np.ndarray | None = None) -> Check:
     """tau, R-hat and bulk ESS of ``chain`` (steps, walkers, ndim) after its warm-up (its
     :func:`transient` from ``log_prob``, at most half the chain, or ``conv.warmup`` of
     it, whichever is longer).
+
+    ``replicas`` (steps, replicas, ndim; a tempered run's replicas' trajectories in the
+    same parameters, :func:`.tempering.replica_trajectories`), read where
+    ``conv.replicas`` says so: their tau after the same warm-up, and each parameter's
+    tau the larger of theirs and the chain's. R-hat and ESS stay the chain's.
 
     ``rhat_if(steps after the warm-up, tau)``: where it says no, R-hat (inf) and ESS
     (0) are not computed. arviz takes about half a second per thousand steps of a
@@ -172,13 +195,19 @@ def check_chain(chain: np.ndarray, log_prob: np.ndarray, conv: Convergence, rhat
     n = len(chain)
     skip = min(transient(log_prob), n // 2)
     warm = max(skip, int(conv.warmup * n))
+    replica_tau = None
     with np.errstate(invalid="ignore", divide="ignore"):  # a parameter that never moved: tau NaN, handled below
         tau = integrated_time(chain[warm:])
+        if replicas is not None and conv.replicas:
+            if len(replicas) != n:
+                raise ValueError(f"the replicas' trajectories hold {len(replicas)} steps, the chain {n}")
+            replica_tau = integrated_time(replicas[warm:])
+            tau = np.maximum(tau, replica_tau)  # NaN where either is
     if rhat_if is not None and not rhat_if(n - warm, tau):
-        return Check(tau, np.full(len(tau), np.inf), np.zeros(len(tau)), warm, skip)
+        return Check(tau, np.full(len(tau), np.inf), np.zeros(len(tau)), warm, skip, replica_tau)
     burn = warm + (int(2 * np.nanmax(tau)) if np.all(np.isfinite(tau)) else (n - warm) // 2)
     rhat, ess = rhat_ess(chain[min(burn, n - 2):])
-    return Check(tau, rhat, ess, warm, skip)
+    return Check(tau, rhat, ess, warm, skip, replica_tau)
 
 
 
@@ -219,7 +248,10 @@ def why_not(iteration, check: Check, conv: Convergence) -> str:
         need = conv.n_tau * np.max(tau)
         if iteration - skip < need:
             after = f" after a warm-up of {skip}" if skip else ""
-            parts.append(f"chain of {iteration - skip} steps{after} is shorter than {conv.n_tau:g} tau = {need:.0f}")
+            whose = ("the replicas' " if check.replica_tau is not None
+                     and np.max(check.replica_tau) >= np.max(tau) else "")
+            parts.append(f"chain of {iteration - skip} steps{after} is shorter than {conv.n_tau:g} {whose}tau = "
+                         f"{need:.0f}")
     else:
         parts.append("autocorrelation time not estimable")
     if not np.nanmax(rhat) < conv.max_rhat:
@@ -240,24 +272,29 @@ class Monitor:
         self.conv = conv
         self.previous: np.ndarray | None = None
 
-    def resume(self, chain: np.ndarray, log_prob: np.ndarray, done: int) -> None:
-        """Take ``previous`` from the first steps of a stored ``chain`` (in theta) up to the
-        last check before step ``done``."""
+    def resume(self, chain: np.ndarray, log_prob: np.ndarray, done: int, replicas: np.ndarray | None = None) -> None:
+        """Take ``previous`` from the first steps of a stored ``chain`` (in theta; and of
+        its ``replicas``' trajectories, :func:`check_chain`) up to the last check before
+        step ``done``."""
         last = ((done - 1) // self.conv.check_every) * self.conv.check_every if done else 0
         if last > 0:
-            self.previous = check_chain(chain[:last], log_prob[:last], self.conv, rhat_if=lambda *_: False).tau
+            self.previous = check_chain(chain[:last], log_prob[:last], self.conv, rhat_if=lambda *_: False,
+                                        replicas=None if replicas is None else replicas[:last]).tau
 
-    def check(self, chain: np.ndarray, log_prob: np.ndarray) -> tuple[Check, bool]:
-        """The check of ``chain`` (steps, walkers, ndim; theta) and whether it has
-        converged; its tau becomes the next check's ``previous``. R-hat and ESS are
-        computed only where tau says they could decide something, or at ``max_steps``."""
+    def check(self, chain: np.ndarray, log_prob: np.ndarray,
+              replicas: np.ndarray | None = None) -> tuple[Check, bool]:
+        """The check of ``chain`` (steps, walkers, ndim; theta; with its ``replicas``'
+        trajectories where tempered, :func:`check_chain`) and whether it has converged;
+        its tau becomes the next check's ``previous``. R-hat and ESS are computed only
+        where tau says they could decide something, or at ``max_steps``."""
         n, previous, conv = len(chain), self.previous, self.conv
         last = n >= conv.max_steps  # its message names R-hat and ESS too
         # the first check cannot stop the run: a tau from a chain of one check's length
         # (a tempered cold chain's was 3.2 steps at 250) has not been seen to settle
         compared = previous is not None
         check = check_chain(chain, log_prob, conv,
-                            rhat_if=lambda k, t: last or (compared and tau_settled(k, t, previous, conv)))
+                            rhat_if=lambda k, t: last or (compared and tau_settled(k, t, previous, conv)),
+                            replicas=replicas)
         ok = compared and is_converged(n - check.warmup, check.tau, previous, check.rhat, check.ess, conv)
         self.previous = check.tau
         return check, ok

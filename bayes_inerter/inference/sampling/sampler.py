@@ -46,7 +46,7 @@ from ..posterior.model import PosteriorModel
 from .moves import NutRidgeMove, ridge_indices
 from .optimize import find_start, held_modes, laplace_ensemble, mirrored_modes
 from .target import Target, objective_at, on_model
-from .tempering import Tempering, sample_tempered, swap_rates
+from .tempering import Tempering, replica_trajectories, sample_tempered, swap_rates
 
 __all__ = ["Convergence", "Adaptation", "Tempering", "CheckpointError", "SamplerRun", "SamplerStatus", "sample",
            "run_sampler", "check_run_options", "default_moves", "default_walkers", "transient", "WARMUP",
@@ -289,9 +289,10 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
                                            iterations=iterations, seed=seed, executor=executor,
                                            hot_starts=hot_starts)
             if steps is not None:
-                check, ok = _take_steps(stepping, backend, coords, conv, progress, steps)
+                check, ok = _take_steps(stepping, backend, coords, conv, progress, steps, tempering is not None)
             else:
-                check, ok = _until_converged(stepping, backend, coords, conv, done, progress, report)
+                check, ok = _until_converged(stepping, backend, coords, conv, done, progress, report,
+                                             tempering is not None)
             reason = "converged" if ok else why_not(backend.iteration, check, conv)
             sampler = emcee.EnsembleSampler(nwalkers, model.ndim, target.batch, vectorize=True, backend=backend,
                                             blobs_dtype=float)
@@ -330,28 +331,62 @@ class _ThetaSoFar:
         return self.theta
 
 
-def _take_steps(stepping, backend, coords, conv: Convergence, progress, steps: int) -> tuple[Check, bool]:
+class _ReplicasSoFar:
+    """A tempered chain's replicas' trajectories so far in theta
+    (:func:`.tempering.replica_trajectories`, from the cold chain and the hot ensembles'
+    walkers and labels the checkpoint keeps at every step), each step carried from the
+    sampler's coordinates once, as :class:`_ThetaSoFar` carries the chain. Called, None
+    where the chain keeps no replicas (untempered, or a checkpoint written before they
+    were kept)."""
+
+    def __init__(self, backend, coords, tempered: bool):
+        self.backend, self.coords = backend, coords
+        self.on = tempered and backend.has_rows("hot_chain")
+        self.theta = None
+
+    def __call__(self) -> np.ndarray | None:
+        if not self.on:
+            return None
+        have = 0 if self.theta is None else len(self.theta)
+        n = self.backend.iteration
+        if have > n:
+            self.theta, have = None, 0
+        if have < n:
+            b = self.backend
+            new = replica_trajectories(b.get_chain()[have:], b.get_rows("hot_chain", have),
+                                       b.get_rows("replicas", have))
+            new = new if self.coords is None else self.coords.to_theta(new)
+            self.theta = new if self.theta is None else np.concatenate([self.theta, new])
+        return self.theta
+
+
+def _take_steps(stepping, backend, coords, conv: Convergence, progress, steps: int,
+                tempered: bool = False) -> tuple[Check, bool]:
     """Take the steps asked for; then the whole rule's check (R-hat and ESS included)."""
     for _ in stepping:
         if progress:
             progress(backend.iteration, steps)
-    check = check_chain(_theta_chain(backend, coords), backend.get_log_prob(), conv)
+    replicas = _ReplicasSoFar(backend, coords, tempered and conv.replicas)()
+    check = check_chain(_theta_chain(backend, coords), backend.get_log_prob(), conv, replicas=replicas)
     return check, is_converged(backend.iteration - check.warmup, check.tau, None, check.rhat, check.ess, conv)
 
 
-def _until_converged(stepping, backend, coords, conv: Convergence, done: int, progress, report):
+def _until_converged(stepping, backend, coords, conv: Convergence, done: int, progress, report,
+                     tempered: bool = False):
     """Step until the chain converges or reaches ``conv.max_steps``, checking it at every
     multiple of ``conv.check_every``: a continued chain is checked (and stops) where an
     uninterrupted run would be, taking the tau of that run's previous check from the
     stored chain; one that stands on a check is checked before it samples more (a
-    converged chain comes back as it is)."""
+    converged chain comes back as it is). A ``tempered`` run's replicas are read too
+    where ``conv.replicas`` says so (:func:`.convergence.check_chain`)."""
     monitor = Monitor(conv)
     theta = _ThetaSoFar(backend, coords)
+    replicas = _ReplicasSoFar(backend, coords, tempered and conv.replicas)
     if done:
-        monitor.resume(theta(), backend.get_log_prob(), done)
+        monitor.resume(theta(), backend.get_log_prob(), done, replicas())
 
     def check() -> tuple[Check, bool]:
-        got = monitor.check(theta(), backend.get_log_prob())
+        got = monitor.check(theta(), backend.get_log_prob(), replicas())
         if report:
             report(_status(backend, got[0], done, conv))
         return got
