@@ -28,9 +28,10 @@ def recorded(row: dict) -> float:
     return float(row.get("tau_rtol", TAU_RTOL_BEFORE))
 
 
-def convergence(max_steps: int, tau_rtol: float | None) -> Convergence:
-    """The package's rule with the cap ``max_steps`` and the tolerance asked."""
-    return replace(Convergence(), max_steps=max_steps, tau_rtol=resolved(tau_rtol))
+def convergence(max_steps: int, tau_rtol: float | None, replicas: bool = False) -> Convergence:
+    """The package's rule with the cap ``max_steps``, the tolerance asked, and a tempered
+    chain's tau read on its replicas where ``replicas`` (``Convergence.replicas``)."""
+    return replace(Convergence(), max_steps=max_steps, tau_rtol=resolved(tau_rtol), replicas=replicas)
 
 
 def check_folder(rows, tau_rtol: float | None, folder) -> None:

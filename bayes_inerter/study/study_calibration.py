@@ -140,6 +140,9 @@ class StudyCalibration:
         (``Convergence.tau_rtol``; default: the 0.05 its committed folders were stopped
         with, ``stop_rule.TAU_RTOL_BEFORE``, so that a folder saved before this option
         existed is continued under its own rule).
+    replica_rule : a tempered chain's tau is also read on its replicas
+        (``Convergence.replicas``; default False, the rule the committed folders were
+        stopped with).
     draw_deviations : add to each record's force the deviations the motion-in likelihood
         marginalises and the generator's device lacks (the reversals' and the friction
         law's), drawn from their prior (:func:`drawn_deviations`): the likelihood's own
@@ -193,6 +196,7 @@ class StudyCalibration:
     tempering: Tempering | None = None
     tau_floor: float | None = None
     tau_rtol: float = stop_rule.TAU_RTOL_BEFORE
+    replica_rule: bool = False
     draw_deviations: bool = False
     likelihood_force: bool = False
     interval_draws: str = "simulated"
@@ -446,7 +450,7 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     rng = np.random.default_rng([cs.seed, k])
     device = _draw_device(cs, rng, k)
     truth, records, redraws = device.truth, device.records, device.redraws
-    convergence = stop_rule.convergence(cs.max_steps, cs.tau_rtol)
+    convergence = stop_rule.convergence(cs.max_steps, cs.tau_rtol, replicas=cs.replica_rule)
     if cs.single:
         kept_draws = cs.interval_draws == "kept"
         res = fit_record(records[0], out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=cs.priors(),
@@ -888,6 +892,8 @@ class Config:
     tau_floor : the floor of tau's prior, N (``StudyCalibration.tau_floor``; None: the package's).
     tau_rtol : the convergence rule's tolerance of tau's growth (``StudyCalibration.tau_rtol``;
         None: its default).
+    replica_rule : a tempered chain's tau read on its replicas too
+        (``StudyCalibration.replica_rule``).
     freqs : the drive frequencies, Hz (None: the study's).
     draw_deviations : the likelihood's marginalised deviations drawn into each record's
         force (``StudyCalibration.draw_deviations``; with ``residual`` "motion").
@@ -936,6 +942,8 @@ class Config:
     tau_rtol: float | None = field(default=None, metadata={
         "help": "the convergence rule's tolerance of tau's growth between checks (default: 0.05, the one "
                 "the committed folders were stopped with; the package's is Convergence.tau_rtol)"})
+    replica_rule: bool = field(default=False, metadata={
+        "help": "with --tempering, read each chain's tau on its replicas too (Convergence.replicas)"})
     freqs: tuple[float, ...] | None = field(default=None, metadata={"help": "drive frequencies, Hz"})
     draw_deviations: bool = field(default=False, metadata={
         "help": "draw the motion-in likelihood's marginalised deviations into each record's force"})
@@ -982,6 +990,8 @@ class Config:
             extra["tau_floor"] = self.tau_floor
         if self.tau_rtol is not None:
             extra["tau_rtol"] = self.tau_rtol
+        if self.replica_rule:
+            extra["replica_rule"] = True
         if self.draw_deviations:
             extra["draw_deviations"] = True
         if self.likelihood_force:
