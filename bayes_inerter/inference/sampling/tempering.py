@@ -242,7 +242,10 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
                 extra = _extra(states, swap_rng, swaps, replicas)
                 saved = emcee.State(cold.coords.copy(), log_prob=cold.log_prob.copy(), blobs=cold.blobs[:, 1].copy(),
                                     random_state=cold.random_state)
-                rows = {"hot_chain": extra["hot_coords"], "replicas": extra["replicas"].astype(np.int32)}
+                # single precision: what tau needs, half the checkpoint (the continued run
+                # takes the hot ensembles from ``extra``, in full)
+                rows = {"hot_chain": extra["hot_coords"].astype(np.float32),
+                        "replicas": extra["replicas"].astype(np.int32)}
                 backend.save_step(saved, accepted, extra=extra, rows=rows if keep_rows else None)
             yield saved
         with interrupts_held():
