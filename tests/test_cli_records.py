@@ -302,12 +302,13 @@ def test_a_tempered_fit_prints_its_ladder_and_swap_rates(tmp_path, capsys):
     text = capsys.readouterr().out
     info = json.loads((out / "fit.json").read_text())["tempering"]
     assert info["betas"] == pytest.approx([1.0, 0.5, 0.25])
+    assert info["replica_tau"] is None and "tau read on the replicas" not in text
     assert len(info["swap_rates"]) == 2 and all(0.0 <= r <= 1.0 for r in info["swap_rates"])
     rates = ", ".join(f"{r:.0%}" for r in info["swap_rates"])
     assert f"{info['ladder']}; swaps accepted between neighbours: {rates}" in text.splitlines()
 
 
-@pytest.mark.parametrize("ladder", [["--tempering", "3"], ["--hottest-beta", "0.2"]])
+@pytest.mark.parametrize("ladder", [["--tempering", "3"], ["--hottest-beta", "0.2"], ["--replica-rule"]])
 def test_no_tempering_with_a_ladder_is_refused_before_the_folder_is_touched(tmp_path, capsys, ladder):
     p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
     out = tmp_path / "fit"
@@ -337,3 +338,17 @@ def test_fit_is_tempered_unless_told_not_to(monkeypatch, tmp_path):
     assert caps == [10_000, 10_000, 10_000, 20_000]  # each sampler's own cap unless --max-steps
     assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--max-steps", "500", "--no-plots"]) == 1
     assert caps[-1] == 500
+
+
+def test_the_replica_rule_is_asked_on_the_command_line(monkeypatch, tmp_path):
+    rules = []
+
+    def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
+        rules.append(options["convergence"])
+        raise ValueError("stand-in fit")
+
+    monkeypatch.setattr("bayes_inerter.inference.fit_record", fake_fit)
+    p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
+    for extra in ([], ["--replica-rule"], ["--replica-rule", "--max-steps", "500"]):
+        assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--no-plots", *extra]) == 1
+    assert [(r.replicas, r.max_steps) for r in rules] == [(False, 10_000), (True, 10_000), (True, 500)]

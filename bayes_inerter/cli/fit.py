@@ -16,6 +16,7 @@ def _percent_interval(lo: float, hi: float) -> str:
 
 
 def cmd_fit(args) -> int:
+    import dataclasses
     import os
 
     from ..cli_progress import StepProgress
@@ -34,8 +35,13 @@ def cmd_fit(args) -> int:
     if args.no_tempering and (args.tempering is not None or args.hottest_beta is not None):
         raise CliError("--no-tempering fits without the tempering ladder that --tempering and --hottest-beta set: "
                        "give one or the other")
+    if args.no_tempering and args.replica_rule:
+        raise CliError("--replica-rule reads the tempering ladder's replicas, which --no-tempering has none of: "
+                       "give one or the other")
     tempering = None if args.no_tempering else Tempering.of(args.tempering or Tempering.temps, args.hottest_beta)
     convergence = default_convergence(tempering) if args.max_steps is None else Convergence(max_steps=args.max_steps)
+    if args.replica_rule:
+        convergence = dataclasses.replace(convergence, replicas=True)
     # refused here, before the output folder is touched
     rec, device, masses, drive = load_record(args, need_masses=True)
     print(f"masses: {masses.describe()}", flush=True)
@@ -72,6 +78,8 @@ def cmd_fit(args) -> int:
     if result.tempering is not None:
         rates = ", ".join(f"{r:.0%}" for r in result.tempering["swap_rates"])
         print(f"{result.tempering['ladder']}; swaps accepted between neighbours: {rates}")
+        if result.tempering.get("replica_tau"):
+            print(f"tau read on the replicas too: largest {max(result.tempering['replica_tau'].values()):.0f} steps")
     for w in result.warnings:  # fit.json keeps the same lines
         print(f"warning: {w.message}")
     if result.converged:

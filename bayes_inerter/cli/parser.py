@@ -165,6 +165,9 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--no-tempering", action="store_true",
                    help="the posterior's ensemble alone, without tempering (the default before; faster per step, "
                         "slower to converge on records the model does not fit)")
+    p.add_argument("--replica-rule", action="store_true",
+                   help="judge a tempered chain's convergence on its replicas too, each walker followed through "
+                        "the swaps (slower to stop, and stops only chains whose ladder has mixed; docs/inference.md)")
     p.add_argument("--no-plots", action="store_true", help="write no figures (they take several seconds)")
     p.add_argument("--checkpoint-seconds", type=_non_negative_float, default=CHECKPOINT_SECONDS,
                    help="write the chain's steps at most this many seconds apart (%(default)s; 0: every step): "

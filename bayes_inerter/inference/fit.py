@@ -433,7 +433,8 @@ def _run_info(name: str, model, got: _Sampled, seed: int, extra: dict) -> dict:
         "coordinates": run.coordinates.describe(),
         "tempering": None if run.tempering is None else {
             "ladder": run.tempering.describe(), "betas": run.tempering.betas.tolist(),
-            "swap_rates": list(run.swap_rates)},
+            "swap_rates": list(run.swap_rates),
+            "replica_tau": None if run.replica_tau is None else dict(zip(model.names, map(float, run.replica_tau)))},
         "coordinates_domain_edge": got.edge,
         "contraction": got.shrink,
         "versions": versions(),

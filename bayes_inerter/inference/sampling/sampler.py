@@ -143,6 +143,9 @@ class SamplerRun:
     #: seconds of a new chain's start, by phase (:data:`START_PHASES`); empty where the
     #: run continued a checkpoint
     start_seconds: dict = field(default_factory=dict)
+    #: the replicas' own tau (theta) where the rule read it (``Convergence.replicas``;
+    #: ``tau`` is then each parameter's larger of it and the posterior's slots'), else None
+    replica_tau: np.ndarray | None = None
 
     @property
     def iteration(self) -> int:
@@ -299,7 +302,7 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
             rates = tuple(swap_rates(backend.extra, backend.iteration)) if tempering is not None else ()
             return SamplerRun(sampler, ok, check.tau, reason, start_theta, recovered, schedule.used(), coords,
                               check.transient, done, check.warmup, model, tempering, rates,
-                              seconds if done == 0 else {})
+                              seconds if done == 0 else {}, check.replica_tau)
         finally:
             try:  # a run stopped by Ctrl-C or an error: bring the twin up to date if possible
                 with interrupts_held():
