@@ -64,12 +64,14 @@ def test_the_cold_chain_finds_the_weight_of_a_mode_no_walker_started_in(bimodal,
     assert len(tempered.swap_rates) == 2 and all(0.0 < r <= 1.0 for r in tempered.swap_rates)
 
 
-@pytest.mark.parametrize("damage", [False, True])
-def test_a_continued_tempered_run_is_the_uninterrupted_one(bimodal, tmp_path, damage):
+@pytest.mark.parametrize("damage, adapt_hot", [(False, False), (True, False), (False, True)])
+def test_a_continued_tempered_run_is_the_uninterrupted_one(bimodal, tmp_path, damage, adapt_hot):
     # refits every 10 steps (the cut falls between two, the continuation crosses three),
     # every step written; with ``damage`` the stopped run's chain.h5 is spoilt, so the
-    # run goes on from its twin
-    common = dict(nwalkers=24, seed=7, start=bimodal.test_start, tempering=Tempering(temps=3, beta_min=0.2),
+    # run goes on from its twin; with ``adapt_hot`` the hot ensembles' moves are refitted
+    # too, from their stored walkers
+    common = dict(nwalkers=24, seed=7, start=bimodal.test_start,
+                  tempering=Tempering(temps=3, beta_min=0.2, adapt_hot=adapt_hot),
                   coordinates="unconstrained", adaptation=Adaptation(every=10), checkpoint_seconds=0)
     whole = run_sampler(bimodal, tmp_path / "whole.h5", steps=45, **common)
     run_sampler(bimodal, tmp_path / "cut.h5", steps=17, **common)
@@ -195,3 +197,27 @@ def test_every_step_keeps_the_hot_walkers_and_labels_the_replica_rule_reads(bimo
     assert np.array_equal(read.chain(), slots.chain())  # the rule reads the chain; it changes no step
     assert np.all(read.tau >= slots.tau)
     assert read.tau[0] > 1.5 * slots.tau[0]
+
+
+def test_a_hot_ensemble_proposes_from_moves_fitted_to_its_own_walkers():
+    from bayes_inerter.inference.sampling.adaptation import Adaptation, Schedule
+    from bayes_inerter.inference.sampling.moves import IndependenceMove
+
+    rng = np.random.default_rng(3)
+    hot = rng.normal(0.0, 1.0, size=(40, 2, 16, 3))  # steps, hot ensembles, walkers, ndim
+    hot[:, 1] *= 10.0  # the hotter ensemble ten times wider
+
+    class Stored:
+        def get_rows(self, name):
+            assert name == "hot_chain"
+            return hot
+
+    base = [(object(), 1.0)]
+    schedule = Schedule(base, Adaptation(every=20, knots=None, blocks=0.0))
+    assert schedule.hot_moves_at(5, Stored(), 0) == base  # nothing fitted before the first period
+    for k, spread in ((0, 1.0), (1, 10.0)):  # each ensemble's proposal at its own walkers' spread
+        fitted = [m for m, _ in schedule.hot_moves_at(25, Stored(), k) if isinstance(m, IndependenceMove)]
+        assert len(fitted) == 1
+        sd = np.sqrt(np.diag(fitted[0].chol @ fitted[0].chol.T)) / fitted[0].scale
+        assert np.all((0.8 * spread < sd) & (sd < 1.25 * spread))
+    assert Schedule(base, None).hot_moves_at(25, Stored(), 0) == base  # no adaptation: the ensemble moves

@@ -175,6 +175,7 @@ class Schedule:
         self.base = list(base)
         self.adaptation = adaptation
         self._fitted: dict[int, tuple[IndependenceMove | None, BlockMove | None]] = {}
+        self._hot: dict[tuple[int, int], tuple[IndependenceMove | None, BlockMove | None]] = {}
 
     @property
     def period(self) -> int:
@@ -193,6 +194,21 @@ class Schedule:
         if at > 0 and at not in self._fitted:
             self._fitted[at] = self.adaptation.fit(backend.get_chain()[:at], backend.get_log_prob()[:at])
         return self.adaptation.moves(self.base, *self._fitted.get(at, (None, None)))
+
+    def hot_moves_at(self, step: int, backend, k: int) -> list:
+        """A tempered run's ``k``-th hot ensemble's moves from ``step`` to
+        :meth:`end_of_stretch`: fitted as :meth:`moves_at` fits the posterior's, to that
+        ensemble's own walkers so far (the per-step ``hot_chain`` the back end keeps,
+        :mod:`.tempering`), where a proposal fitted to the posterior would be too narrow.
+        The hot ensembles' log probabilities are not kept per step, so no transient is
+        left out: their walkers start drawn at their own spread."""
+        if self.adaptation is None:
+            return self.base
+        at = (step // self.period) * self.period
+        if at > 0 and (at, k) not in self._hot:
+            hot = np.asarray(backend.get_rows("hot_chain")[:at, k], dtype=float)
+            self._hot[at, k] = self.adaptation.fit(hot, np.zeros(hot.shape[:2]))
+        return self.adaptation.moves(self.base, *self._hot.get((at, k), (None, None)))
 
     def used(self) -> tuple:
         """The moves the run used and their weights ("DEMove 0.48", ...): the fitted t's

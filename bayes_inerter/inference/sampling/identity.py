@@ -52,7 +52,7 @@ def run_identity(model, coordinates, adaptation, moves, nwalkers: int, tempering
         "deviations": [_deviations(p) for p in parts],
     }
     if tempering is not None:
-        identity["tempering"] = _plain(dataclasses.asdict(tempering))
+        identity["tempering"] = _plain(_without_later(dataclasses.asdict(tempering), LATER_TEMPERING))
     return identity
 
 
@@ -89,6 +89,7 @@ def _prior(prior) -> dict:
 #: checkpoint written before the setting existed still matches.
 LATER_ADAPTATION = {"transport": False}
 LATER_COORDINATES = {"series": None, "compliance": None}
+LATER_TEMPERING = {"adapt_hot": False}
 #: Likelihood settings added after checkpoints were written, with the value in effect
 #: before: a stored identity without one is read as holding that value (the run's own
 #: identity keeps every setting, so checkpoints written since stay as they are).

@@ -72,6 +72,12 @@ class Tempering:
 
     temps: int = 4
     beta_min: float = 0.1
+    #: whether each hot ensemble also proposes from moves fitted to its own walkers so far
+    #: (``adaptation.Schedule.hot_moves_at``; the run's adaptation's settings), where
+    #: False (the default) gives them the ensemble moves alone. Measured: on a
+    #: calibration record the hottest ensemble's own tau was the ladder's largest, 180
+    #: steps against the posterior's ensemble's 8 (docs/inference.md).
+    adapt_hot: bool = False
 
     def __post_init__(self) -> None:
         if not (isinstance(self.temps, (int, np.integer)) and self.temps >= 2):
@@ -94,7 +100,8 @@ class Tempering:
         return np.geomspace(1.0, self.beta_min, self.temps)
 
     def describe(self) -> str:
-        return f"parallel tempering, {self.temps} temperatures, beta " + ", ".join(f"{b:.3g}" for b in self.betas)
+        return (f"parallel tempering, {self.temps} temperatures, beta " + ", ".join(f"{b:.3g}" for b in self.betas)
+                + ("; hot ensembles with moves fitted to their own walkers" if self.adapt_hot else ""))
 
 
 @dataclass(frozen=True)
@@ -225,7 +232,7 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
         step = backend.iteration
         end = min(until, schedule.end_of_stretch(step))
         samplers = [emcee.EnsembleSampler(nwalkers, ndim, fn, vectorize=True, blobs_dtype=float,
-                                          moves=schedule.moves_at(step, backend) if k == 0 else schedule.base)
+                                          moves=_moves(schedule, step, backend, k, tempering.adapt_hot and keep_rows))
                     for k, fn in enumerate(fns)]
         with interrupts_held():
             backend.grow(end - step, states[0].blobs[:, 1])
@@ -250,6 +257,15 @@ def sample_tempered(target: Target, backend, state: emcee.State, *, tempering: T
             yield saved
         with interrupts_held():
             backend.flush()
+
+
+def _moves(schedule, step: int, backend, k: int, adapt_hot: bool) -> list:
+    """The moves of the ``k``-th ensemble (0: the posterior's) from ``step``: the run's
+    schedule for the posterior's, and for a hot one the ensemble moves alone, or with
+    ``adapt_hot`` moves fitted to its own walkers (:meth:`.adaptation.Schedule.hot_moves_at`)."""
+    if k == 0:
+        return schedule.moves_at(step, backend)
+    return schedule.hot_moves_at(step, backend, k - 1) if adapt_hot else schedule.base
 
 
 def _evaluated(state: emcee.State, fn) -> emcee.State:
