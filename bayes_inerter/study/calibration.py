@@ -189,8 +189,14 @@ def _worker(args):
 
 
 def _with_defaults(saved: dict, defaults: dict) -> dict:
-    """Settings saved before a field existed hold no value for it: it had its default."""
+    """Settings saved before a field existed hold no value for it: it had its default
+    (a tempering ladder's too, :data:`..inference.sampling.identity.LATER_TEMPERING`,
+    where the study's own default is no ladder)."""
+    from ..inference.sampling.identity import LATER_TEMPERING
+
     out = dict(saved)
+    if isinstance(out.get("tempering"), dict):
+        out["tempering"] = {**LATER_TEMPERING, **out["tempering"]}
     for k, v in defaults.items():
         if k not in out:
             out[k] = v

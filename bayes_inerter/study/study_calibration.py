@@ -894,6 +894,8 @@ class Config:
         None: its default).
     replica_rule : a tempered chain's tau read on its replicas too
         (``StudyCalibration.replica_rule``).
+    adapt_hot : each hot ensemble's moves fitted to its own walkers
+        (``Tempering.adapt_hot``; with ``tempering``).
     freqs : the drive frequencies, Hz (None: the study's).
     draw_deviations : the likelihood's marginalised deviations drawn into each record's
         force (``StudyCalibration.draw_deviations``; with ``residual`` "motion").
@@ -944,6 +946,8 @@ class Config:
                 "the committed folders were stopped with; the package's is Convergence.tau_rtol)"})
     replica_rule: bool = field(default=False, metadata={
         "help": "with --tempering, read each chain's tau on its replicas too (Convergence.replicas)"})
+    adapt_hot: bool = field(default=False, metadata={
+        "help": "with --tempering, fit each hot ensemble's moves to its own walkers (Tempering.adapt_hot)"})
     freqs: tuple[float, ...] | None = field(default=None, metadata={"help": "drive frequencies, Hz"})
     draw_deviations: bool = field(default=False, metadata={
         "help": "draw the motion-in likelihood's marginalised deviations into each record's force"})
@@ -985,7 +989,7 @@ class Config:
         if self.freqs:
             extra["frequencies"] = tuple(self.freqs)
         if self.tempering is not None:
-            extra["tempering"] = Tempering(self.tempering)
+            extra["tempering"] = Tempering(self.tempering, adapt_hot=self.adapt_hot)
         if self.tau_floor is not None:
             extra["tau_floor"] = self.tau_floor
         if self.tau_rtol is not None:
