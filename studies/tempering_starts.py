@@ -21,8 +21,12 @@ Three samplers, each from walkers drawn as a fit draws them
   temperature's spread (``laplace_ensemble(beta=)``, the package's start now);
 - ``tempered-own-spread+replica-rule``: the same, stopped only where the chain after
   its warm-up is also 50 times the replicas' largest tau (each walker followed through
-  the swaps, ``tempering.replica_trajectories``), its draws kept after 2 of those tau:
-  a rule the package does not have yet, tried here.
+  the swaps, ``tempering.replica_trajectories``), its draws kept after 2 of those tau
+  (tried here first; the package's ``Convergence(replicas=True)`` since);
+- ``tempered-own-spread+adapt-hot+replica-rule``: the same, each hot ensemble also
+  proposing from moves fitted to its own walkers (``Tempering(adapt_hot=True)``).
+
+``--samplers`` runs some of them alone (their rows to ``--out``).
 
 Two more isolate the hot ensembles' part: the posterior's ensemble drawn from the target
 itself (``exact:``), the hot ensembles drawn from it too (``exact:tempered-posterior-spread``)
@@ -70,7 +74,8 @@ D = 12
 BOX = 60.0
 BEND, ACROSS = 1.0, 0.1
 SAMPLERS = ("untempered", "tempered-posterior-spread", "tempered-own-spread", "exact:tempered-posterior-spread",
-            "exact:tempered-own-spread", "tempered-own-spread+replica-rule")
+            "exact:tempered-own-spread", "tempered-own-spread+replica-rule",
+            "tempered-own-spread+adapt-hot+replica-rule")
 TARGETS = ("normal", "banana")
 REFERENCE_DRAWS = 400_000
 
@@ -148,10 +153,11 @@ def run_chain(model: Known, sampler: str, seed: int, conv: Convergence, work: Pa
     lo, hi = model.bounds().T
     coords = Coordinates("unconstrained", lo, hi, np.zeros(D, dtype=bool))
     target = Target(model, coords)
-    ladder = None if sampler == "untempered" else Tempering()  # the package's ladder: 4 down to beta 0.1
+    # the package's ladder: 4 down to beta 0.1; "+adapt-hot": its hot ensembles' own fitted moves
+    ladder = None if sampler == "untempered" else Tempering(adapt_hot="+adapt-hot" in sampler)
     betas = (1.0,) if ladder is None else tuple(ladder.betas)
     rng = np.random.default_rng(seed)
-    own = sampler.endswith("own-spread")
+    own = "own-spread" in sampler
     if sampler.startswith("exact:"):
         ensembles = [model.exact(nw, rng, beta if own else 1.0) for beta in betas]
     else:
@@ -206,6 +212,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seeds", type=int, default=8)
     p.add_argument("--out", type=Path, default=Path("results/tempering-starts"))
+    p.add_argument("--samplers", nargs="+", choices=SAMPLERS, default=list(SAMPLERS), metavar="SAMPLER",
+                   help="the samplers to run (default: all): " + ", ".join(SAMPLERS))
     args = p.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     conv = Convergence(max_steps=10_000, tau_rtol=0.2)
@@ -214,7 +222,7 @@ def main(argv=None) -> int:
         for kind in TARGETS:
             for seed in range(args.seeds):
                 model = Known(kind, np.random.default_rng([99, seed]))
-                for sampler in SAMPLERS:
+                for sampler in args.samplers:
                     rows.append(run_chain(model, sampler, seed, conv, Path(tmp)))
                     r = rows[-1]
                     print(f"{kind} {sampler} seed {seed}: {r['steps']} steps, sd ratio {r['sd_ratio']}, "
@@ -225,7 +233,7 @@ def main(argv=None) -> int:
         w.writerows(rows)
     summary = []
     for kind in TARGETS:
-        for sampler in SAMPLERS:
+        for sampler in args.samplers:
             got = [r for r in rows if r["target"] == kind and r["sampler"] == sampler]
             summary.append({"target": kind, "sampler": sampler, "chains": len(got),
                             "converged": sum(r["converged"] for r in got),
