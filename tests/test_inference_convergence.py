@@ -147,7 +147,7 @@ def test_the_rule_never_stops_at_its_first_check_but_can_at_the_next():
 
 def test_the_replicas_tau_counts_where_the_rule_reads_them():
     # the posterior's slots nearly independent (as swaps make them), the replicas an AR(1)
-    # with tau about 40: read on the replicas, the rule takes their tau
+    # with tau about 40: read on the replicas (the default), the rule takes their tau
     rng = np.random.default_rng(11)
     steps = 2000
     chain = rng.normal(size=(steps, 8, 2))
@@ -157,8 +157,8 @@ def test_the_replicas_tau_counts_where_the_rule_reads_them():
     for i in range(1, steps):
         paths[i] = a * paths[i - 1] + np.sqrt(1 - a * a) * rng.normal(size=(24, 2))
     lp = rng.normal(size=(steps, 8))
-    off = check_chain(chain, lp, Convergence(), rhat_if=lambda *_: False, replicas=paths)
-    on = check_chain(chain, lp, Convergence(replicas=True), rhat_if=lambda *_: False, replicas=paths)
+    off = check_chain(chain, lp, Convergence(replicas=False), rhat_if=lambda *_: False, replicas=paths)
+    on = check_chain(chain, lp, Convergence(), rhat_if=lambda *_: False, replicas=paths)  # the default reads them
     assert off.replica_tau is None and np.all(off.tau < 2)
     assert np.all((on.replica_tau > 25) & (on.replica_tau < 60))
     assert np.array_equal(on.tau, np.maximum(off.tau, on.replica_tau))

@@ -187,8 +187,8 @@ def test_every_step_keeps_the_hot_walkers_and_labels_the_replica_rule_reads(bimo
     # the hottest copies, so the replicas' tau is the larger
     common = dict(nwalkers=24, seed=5, start=bimodal.test_start, adaptation=None, coordinates="unconstrained",
                   tempering=Tempering(temps=3, beta_min=0.01), steps=300)
-    slots = run_sampler(bimodal, tmp_path / "a.h5", **common)
-    read = run_sampler(bimodal, tmp_path / "b.h5", convergence=Convergence(replicas=True), **common)
+    slots = run_sampler(bimodal, tmp_path / "a.h5", convergence=Convergence(replicas=False), **common)
+    read = run_sampler(bimodal, tmp_path / "b.h5", **common)  # the default rule reads the replicas
     backend = read.sampler.backend
     hot, labels = backend.get_rows("hot_chain"), backend.get_rows("replicas")
     assert hot.shape == (300, 2, 24, bimodal.ndim) and labels.shape == (300, 3, 24)

@@ -18,9 +18,9 @@ others, not a proof). Or stops at ``max_steps``. The draws kept for the posterio
 
 :class:`Monitor` applies the rule along one run: it remembers the last check's tau.
 
-A tempered run (:mod:`.tempering`) is judged on its posterior's ensemble; with
-``Convergence(replicas=True)`` tau is also read on its replicas, each walker followed
-through the swaps, and each parameter's larger tau is the rule's (and the kept draws'):
+A tempered run (:mod:`.tempering`) is judged on its posterior's ensemble and, by
+default (``Convergence.replicas``), on its replicas, each walker followed through the
+swaps: each parameter's larger tau is the rule's (and the kept draws'):
 the posterior's slots decorrelate at every accepted swap, so their tau alone called
 chains converged that had not crossed their posterior (docs/inference.md, "Tempering
 on bent ridges").
@@ -97,8 +97,9 @@ class Convergence:
     #: each parameter's larger tau: an accepted swap decorrelates the posterior's slots
     #: without moving any replica, so their own tau measures the swaps, not the ladder's
     #: mixing (docs/inference.md, "Tempering on bent ridges"). No effect on an untempered
-    #: run or one whose checkpoint keeps no replicas.
-    replicas: bool = False
+    #: run or one whose checkpoint keeps no replicas. False: the posterior's slots alone,
+    #: the rule before (CHANGELOG.md).
+    replicas: bool = True
 
     def __post_init__(self) -> None:
         if self.growth not in GROWTH:
