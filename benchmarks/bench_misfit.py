@@ -9,8 +9,9 @@ For each frequency, two 10 s records of the setting: the model's own (today's de
 ``records.generator.paper_record``, grid seed ``--seed``) and a paper-like one
 (``records.paper_like.paper_like_record``: full network, Stribeck friction, nut
 backlash, calibration errors and coloured noise; laboratory seed ``--seed``). Each is
-fitted by ``fit_record`` with the package's defaults (parallel tempering, 4
-temperatures, since it became ``fit``'s default), one process, until the convergence
+fitted by ``fit_record`` with the package's defaults (the posterior's ensemble alone;
+rows whose sampler is "default" and dated 2026-12-03 or later were tempered, 4
+temperatures, while that was ``fit``'s default), one process, until the convergence
 rule holds (``steps=None``), without plots, into a temporary folder.
 
 A run still going after ``--cap-seconds`` of wall time is stopped by its ``progress``
@@ -146,7 +147,7 @@ def main():
         ap.error("--models and --tempering each compare fits side by side; give one of them")
     models = args.models or ["two-port"]
     conv = Convergence(max_steps=args.max_steps) if args.max_steps else None
-    samplers = [("default", Tempering(), conv)]
+    samplers = [("ensemble", None, conv)]  # the package's default sampler
     if args.tempering or args.models:
         samplers = [("ensemble", None, conv)]
         ladder = Tempering(args.tempering, args.hottest_beta)

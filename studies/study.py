@@ -6,7 +6,7 @@ Running it again reuses finished fits and the paper-like records (delete
 results/full/paper-like/records to draw another laboratory with --seed).
 
     python studies/study.py [--processes 2] [--scheduler tcp://host:port] [--seed 0]
-                            [--paper-like-steps N] [--tempering T (default 4; 1: none)] [--report-only]
+                            [--paper-like-steps N] [--tempering T (default: none)] [--report-only]
 """
 
 import sys

@@ -308,7 +308,7 @@ def test_a_tempered_fit_prints_its_ladder_and_swap_rates(tmp_path, capsys):
     assert f"{info['ladder']}; swaps accepted between neighbours: {rates}" in text.splitlines()
 
 
-@pytest.mark.parametrize("ladder", [["--tempering", "3"], ["--hottest-beta", "0.2"], ["--replica-rule"]])
+@pytest.mark.parametrize("ladder", [["--tempering", "3"], ["--hottest-beta", "0.2"]])
 def test_no_tempering_with_a_ladder_is_refused_before_the_folder_is_touched(tmp_path, capsys, ladder):
     p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
     out = tmp_path / "fit"
@@ -318,37 +318,25 @@ def test_no_tempering_with_a_ladder_is_refused_before_the_folder_is_touched(tmp_
     assert not out.exists()
 
 
-def test_fit_is_tempered_unless_told_not_to(monkeypatch, tmp_path):
-    """The command line's sampler: the default ladder, the one asked, or none, and each
-    one's cap."""
+def test_fit_is_tempered_only_when_asked(monkeypatch, tmp_path):
+    """The command line's sampler: none by default, the ladder asked, and each one's
+    cap; a tempered chain's rule reads its replicas."""
     from bayes_inerter.inference.sampling.tempering import Tempering
 
-    seen, caps = [], []
+    seen, caps, replicas = [], [], []
 
     def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
         seen.append(options["tempering"])
         caps.append(options["convergence"].max_steps)
+        replicas.append(options["convergence"].replicas)
         raise ValueError("stand-in fit")
 
     monkeypatch.setattr("bayes_inerter.inference.fit_record", fake_fit)
     p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
     for extra in ([], ["--tempering", "3"], ["--hottest-beta", "0.2"], ["--no-tempering"]):
         assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--steps", "4", "--no-plots", *extra]) == 1
-    assert seen == [Tempering(), Tempering(3), Tempering(4, 0.2), None]
-    assert caps == [10_000, 10_000, 10_000, 20_000]  # each sampler's own cap unless --max-steps
+    assert seen == [None, Tempering(3), Tempering(4, 0.2), None]
+    assert caps == [20_000, 10_000, 10_000, 20_000]  # each sampler's own cap unless --max-steps
+    assert all(replicas)
     assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--max-steps", "500", "--no-plots"]) == 1
     assert caps[-1] == 500
-
-
-def test_the_replica_rule_is_asked_on_the_command_line(monkeypatch, tmp_path):
-    rules = []
-
-    def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
-        rules.append(options["convergence"])
-        raise ValueError("stand-in fit")
-
-    monkeypatch.setattr("bayes_inerter.inference.fit_record", fake_fit)
-    p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
-    for extra in ([], ["--replica-rule"], ["--replica-rule", "--max-steps", "500"]):
-        assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--no-plots", *extra]) == 1
-    assert [(r.replicas, r.max_steps) for r in rules] == [(False, 10_000), (True, 10_000), (True, 500)]

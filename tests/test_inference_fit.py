@@ -126,8 +126,8 @@ def test_the_default_likelihoods_fit_writes_every_output(tmp_path, record_file, 
     assert "loops.png, fit.json" in text
     info = json.loads((out / "fit.json").read_text())
     assert info["likelihood"]["residual"] == "motion"
-    assert info["tempering"]["betas"] == pytest.approx([1.0, 0.1 ** (1 / 3), 0.1 ** (2 / 3), 0.1])  # the default ladder
-    assert "parallel tempering, 4 temperatures" in text
+    assert info["tempering"] is None  # the posterior's ensemble alone by default
+    assert "parallel tempering" not in text
     rows = {r["name"]: r for r in csv.DictReader(open(out / "summary.csv"))}
     assert all(rows[n]["kind"] == "sampled" for n in ("zeta_B", "tau", "gain"))
     assert "alpha" not in rows  # the motion-in discrepancy is white by default

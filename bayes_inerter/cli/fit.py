@@ -16,7 +16,6 @@ def _percent_interval(lo: float, hi: float) -> str:
 
 
 def cmd_fit(args) -> int:
-    import dataclasses
     import os
 
     from ..cli_progress import StepProgress
@@ -35,13 +34,10 @@ def cmd_fit(args) -> int:
     if args.no_tempering and (args.tempering is not None or args.hottest_beta is not None):
         raise CliError("--no-tempering fits without the tempering ladder that --tempering and --hottest-beta set: "
                        "give one or the other")
-    if args.no_tempering and args.replica_rule:
-        raise CliError("--replica-rule reads the tempering ladder's replicas, which --no-tempering has none of: "
-                       "give one or the other")
-    tempering = None if args.no_tempering else Tempering.of(args.tempering or Tempering.temps, args.hottest_beta)
+    # --hottest-beta alone asks for the measured ladder's 4 temperatures down to it
+    temps = args.tempering or (Tempering.temps if args.hottest_beta is not None else None)
+    tempering = None if args.no_tempering else Tempering.of(temps, args.hottest_beta)
     convergence = default_convergence(tempering) if args.max_steps is None else Convergence(max_steps=args.max_steps)
-    if args.replica_rule:
-        convergence = dataclasses.replace(convergence, replicas=True)
     # refused here, before the output folder is touched
     rec, device, masses, drive = load_record(args, need_masses=True)
     print(f"masses: {masses.describe()}", flush=True)

@@ -138,8 +138,8 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--walkers", type=_positive_int, help="walkers (default 2 x parameters + 2)")
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
     p.add_argument("--max-steps", type=_positive_int,
-                   help="until converged, but at most this many steps in all (default 10000 tempered, 20000 with "
-                        "--no-tempering; a checkpoint is continued)")
+                   help="until converged, but at most this many steps in all (default 20000, 10000 with "
+                        "--tempering; a checkpoint is continued)")
     p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")
     p.add_argument("--residual", choices=FIT_RESIDUALS, default=DEFAULT_RESIDUAL,
                    help="likelihood (%(default)s): ar1 or iid, the low-passed acceleration sample by sample; "
@@ -157,17 +157,16 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--no-adaptation", action="store_true",
                    help="emcee's ensemble moves alone, without the independence move fitted to the chain")
     p.add_argument("--tempering", type=_at_least_two, metavar="TEMPS",
-                   help="parallel tempering with this many temperatures (default 4); each step costs TEMPS times "
-                        "the evaluations, and hot copies of the posterior carry the walkers between its humps "
+                   help="parallel tempering with this many temperatures (default: none; 4 is the ladder "
+                        "measured); each step costs TEMPS times the evaluations, hot copies of the posterior carry "
+                        "the walkers between its humps, and the chain converges only once its replicas have mixed "
                         "(docs/inference.md)")
     p.add_argument("--hottest-beta", type=_open_unit, metavar="BETA",
-                   help="the tempering ladder's hottest copy's power of the likelihood, in (0, 1) (default 0.1)")
+                   help="the tempering ladder's hottest copy's power of the likelihood, in (0, 1) (default 0.1; "
+                        "alone, it asks for 4 temperatures)")
     p.add_argument("--no-tempering", action="store_true",
-                   help="the posterior's ensemble alone, without tempering (the default before; faster per step, "
-                        "slower to converge on records the model does not fit)")
-    p.add_argument("--replica-rule", action="store_true",
-                   help="judge a tempered chain's convergence on its replicas too, each walker followed through "
-                        "the swaps (slower to stop, and stops only chains whose ladder has mixed; docs/inference.md)")
+                   help="the posterior's ensemble alone, without tempering (the default; kept for scripts "
+                        "that ask for it)")
     p.add_argument("--no-plots", action="store_true", help="write no figures (they take several seconds)")
     p.add_argument("--checkpoint-seconds", type=_non_negative_float, default=CHECKPOINT_SECONDS,
                    help="write the chain's steps at most this many seconds apart (%(default)s; 0: every step): "

@@ -151,7 +151,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                checkpoint_seconds: float = WRITE_SECONDS,
                interval: str | IntervalSettings | None = None, freq: float | None = None,
                name: str | None = None, modal: bool | None = None, masses: Masses | None = None,
-               tempering: Tempering | None = Tempering(), all_draws: bool = False) -> FitResult:
+               tempering: Tempering | None = None, all_draws: bool = False) -> FitResult:
     """Sample the posterior of one record and write every output into ``out``.
 
     ``all_draws``: also write every sampled parameter's kept draws, by name, to
@@ -175,10 +175,9 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
     in the model's parameters whichever is used). ``adaptation``: the fitted independence
     move (``sampler.Adaptation``; None: the ensemble moves alone). ``checkpoint_seconds``:
     the steps reach chain.h5 at most this far apart (0: every step; ``run_sampler``).
-    ``tempering``: parallel tempering's ladder (``sampler.Tempering``; the default, 4
-    temperatures down to beta 0.1; None: the ensemble alone, the default before, see
-    docs/inference.md for the measurements that chose it); fit.json gives it and its swap
-    rates. ``convergence`` None: the package's rule, capped at ``tempering.MAX_STEPS``
+    ``tempering``: parallel tempering's ladder (``sampler.Tempering``; None, the
+    default: the ensemble alone, see docs/inference.md for the measurements that chose
+    it); fit.json gives it, its swap rates and the replicas' tau the rule read. ``convergence`` None: the package's rule, capped at ``tempering.MAX_STEPS``
     (10,000) steps where tempered (``tempering.default_convergence``). ``progress``, ``report``:
     ``run_sampler``'s callbacks. The folder is locked for the run (``lock.folder_lock``):
     a second run into it is refused at once.

@@ -57,8 +57,9 @@ class Config:
     paper_like_steps : steps of each paper-like chain (None: until converged).
     report_only : only write REPORT.md again from the results there.
     tempering : parallel tempering's temperatures for every single-record fit of both
-        studies (``StudyPlan.tempering``; default 4, as ``fit`` and the committed
-        results; 1 or None: the ensemble alone). The joint model is not tempered.
+        studies (``StudyPlan.tempering``; default None, the ensemble alone, as ``fit``;
+        the committed results/full was sampled with 4, under the rule before it read the
+        replicas, CHANGELOG.md). The joint model is not tempered.
     """
 
     seed: int = field(default=0, metadata={"help": "the paper-like laboratory's seed"})
@@ -66,8 +67,8 @@ class Config:
         "help": "steps of each paper-like chain (default: until converged)"})
     report_only: bool = field(default=False, metadata={
         "help": "only write REPORT.md again from the results there (the other studies' SECTION.md included)"})
-    tempering: int | None = field(default=4, metadata={
-        "help": "parallel tempering's temperatures for every single-record fit (default 4, as fit; 1: the ensemble alone)"})
+    tempering: int | None = field(default=None, metadata={
+        "help": "parallel tempering's temperatures for every single-record fit (default: none, as fit; 1: none)"})
 
     def __post_init__(self) -> None:
         if self.paper_like_steps is not None and not (isinstance(self.paper_like_steps, int)
