@@ -30,7 +30,10 @@ def recorded(row: dict) -> float:
 
 def convergence(max_steps: int, tau_rtol: float | None, replicas: bool = False) -> Convergence:
     """The package's rule with the cap ``max_steps``, the tolerance asked, and a tempered
-    chain's tau read on its replicas where ``replicas`` (``Convergence.replicas``)."""
+    chain's tau read on its replicas where ``replicas`` (``Convergence.replicas``; False
+    by default here, unlike the package's rule: the studies' committed tempered folders
+    were stopped on the posterior's ensemble alone, and a folder continues under its
+    own rule)."""
     return replace(Convergence(), max_steps=max_steps, tau_rtol=resolved(tau_rtol), replicas=replicas)
 
 
