@@ -166,9 +166,11 @@ def test_a_chain_that_kept_no_rows_from_its_first_step_never_does(tmp_path):
     assert not backend.has_rows("hot_chain")
     state = emcee.State(np.zeros((4, 2)), log_prob=np.zeros(4), random_state=np.random.RandomState(9).get_state())
     backend.grow(1, None)
-    backend.save_step(state, np.ones(4, dtype=bool), rows={"hot_chain": np.zeros((2, 4, 2))})
+    backend.save_step(state, np.ones(4, dtype=bool),
+                      rows={"hot_chain": np.zeros((2, 4, 2)), "replicas": np.arange(12, dtype=np.int32)})
     backend.flush()
     assert not backend.has_rows("hot_chain") and backend.iteration == 4
     assert open_checkpoint(tmp_path / "chain.h5", identity=IDENTITY).steps == 4  # and the file stays sealed
-    with pytest.raises(ValueError, match="per-step rows must be among"):
-        backend.save_step(state, np.ones(4, dtype=bool), rows={"other": np.zeros(2)})
+    for partial in ({"other": np.zeros(2)}, {"hot_chain": np.zeros((2, 4, 2))}):
+        with pytest.raises(ValueError, match="per-step rows must be all of"):
+            backend.save_step(state, np.ones(4, dtype=bool), rows=partial)

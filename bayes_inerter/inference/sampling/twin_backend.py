@@ -205,8 +205,8 @@ class TwinBackend(_Backend):
         every step), stored only by a chain that has kept them from its first step
         (:meth:`has_rows`)."""
         self._check(state, accepted)
-        if rows is not None and set(rows) - set(STEP_ROWS):
-            raise ValueError(f"per-step rows must be among {STEP_ROWS}, got {sorted(rows)}")
+        if rows is not None and set(rows) != set(STEP_ROWS):  # all or none: a dataset left out would be lost
+            raise ValueError(f"per-step rows must be all of {STEP_ROWS}, got {sorted(rows)}")
         values = {"chain": np.array(state.coords), "log_prob": np.array(state.log_prob)}
         if state.blobs is not None:
             values["blobs"] = np.array(state.blobs)
