@@ -321,15 +321,14 @@ def test_no_tempering_with_a_ladder_is_refused_before_the_folder_is_touched(tmp_
 
 def test_fit_is_tempered_only_when_asked(monkeypatch, tmp_path):
     """The command line's sampler: none by default, the ladder asked, and each one's
-    cap; a tempered chain's rule reads its replicas."""
+    cap."""
     from bayes_inerter.inference.sampling.tempering import Tempering
 
-    seen, caps, replicas = [], [], []
+    seen, caps = [], []
 
     def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
         seen.append(options["tempering"])
         caps.append(options["convergence"].max_steps)
-        replicas.append(options["convergence"].replicas)
         raise ValueError("stand-in fit")
 
     monkeypatch.setattr("bayes_inerter.inference.fit_record", fake_fit)
@@ -338,6 +337,5 @@ def test_fit_is_tempered_only_when_asked(monkeypatch, tmp_path):
         assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--steps", "4", "--no-plots", *extra]) == 1
     assert seen == [None, Tempering(3), Tempering(4, 0.2), None]
     assert caps == [20_000, 10_000, 10_000, 20_000]  # each sampler's own cap unless --max-steps
-    assert all(replicas)
     assert main(["fit", str(p), *MAP, "--out", str(tmp_path / "fit"), "--max-steps", "500", "--no-plots"]) == 1
     assert caps[-1] == 500

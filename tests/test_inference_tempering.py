@@ -85,6 +85,10 @@ def test_a_continued_tempered_run_is_the_uninterrupted_one(bimodal, tmp_path, da
     assert again.swap_rates == whole.swap_rates
     for name in ("hot_chain", "replicas"):  # the replicas' history too, step by step
         assert np.array_equal(again.sampler.backend.get_rows(name), whole.sampler.backend.get_rows(name))
+    if adapt_hot:  # the hot ensembles' own fitted moves changed the chain
+        plain = run_sampler(bimodal, tmp_path / "plain.h5", steps=45,
+                            **{**common, "tempering": Tempering(temps=3, beta_min=0.2)})
+        assert not np.array_equal(plain.sampler.get_chain(), whole.sampler.get_chain())
 
 
 def test_a_write_of_the_hot_ensembles_cut_short_leaves_the_sealed_state_whole(bimodal, tmp_path):
@@ -221,3 +225,22 @@ def test_a_hot_ensemble_proposes_from_moves_fitted_to_its_own_walkers():
         sd = np.sqrt(np.diag(fitted[0].chol @ fitted[0].chol.T)) / fitted[0].scale
         assert np.all((0.8 * spread < sd) & (sd < 1.25 * spread))
     assert Schedule(base, None).hot_moves_at(25, Stored(), 0) == base  # no adaptation: the ensemble moves
+
+
+def test_a_continued_tempered_run_stops_where_the_uninterrupted_one_does(bimodal, tmp_path):
+    from bayes_inerter.inference.sampling.sampler import Convergence
+
+    # the rule read on the replicas, checked every 10 steps: the continued run takes the
+    # previous check's tau from the stored chain and replicas, as the uninterrupted run
+    # carried it, and stops at the same step with the same tau
+    conv = Convergence(n_tau=3.0, check_every=10, max_steps=300, min_ess=10.0)
+    common = dict(nwalkers=24, seed=9, start=bimodal.test_start, coordinates="unconstrained",
+                  tempering=Tempering(temps=3, beta_min=0.2, adapt_hot=True), adaptation=Adaptation(every=10),
+                  convergence=conv)
+    whole = run_sampler(bimodal, tmp_path / "whole.h5", **common)
+    assert whole.converged and 20 <= whole.iteration < 300 and whole.replica_tau is not None
+    run_sampler(bimodal, tmp_path / "cut.h5", steps=whole.iteration - 13, **common)
+    again = run_sampler(bimodal, tmp_path / "cut.h5", **common)
+    assert again.resumed_at == whole.iteration - 13
+    assert again.iteration == whole.iteration and again.converged
+    assert np.array_equal(again.tau, whole.tau) and np.array_equal(again.replica_tau, whole.replica_tau)

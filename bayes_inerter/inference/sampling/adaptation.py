@@ -176,6 +176,7 @@ class Schedule:
         self.adaptation = adaptation
         self._fitted: dict[int, tuple[IndependenceMove | None, BlockMove | None]] = {}
         self._hot: dict[tuple[int, int], tuple[IndependenceMove | None, BlockMove | None]] = {}
+        self._hot_rows: tuple = (None, None)  # the step the hot ensembles' walkers were read to, and them
 
     @property
     def period(self) -> int:
@@ -206,7 +207,9 @@ class Schedule:
             return self.base
         at = (step // self.period) * self.period
         if at > 0 and (at, k) not in self._hot:
-            hot = np.asarray(backend.get_rows("hot_chain")[:at, k], dtype=float)
+            if self._hot_rows[0] != at:  # read once per refit for all the hot ensembles
+                self._hot_rows = (at, backend.get_rows("hot_chain")[:at])
+            hot = np.asarray(self._hot_rows[1][:, k], dtype=float)
             self._hot[at, k] = self.adaptation.fit(hot, np.zeros(hot.shape[:2]))
         return self.adaptation.moves(self.base, *self._hot.get((at, k), (None, None)))
 
