@@ -37,6 +37,16 @@ def test_settings_are_checked():
         StudyCalibration(interval_draws="all")
 
 
+@pytest.mark.parametrize("option", ["replica_rule", "adapt_hot"])
+def test_a_ladder_option_without_a_ladder_is_refused(option):
+    from bayes_inerter.study.study_calibration import Config
+
+    with pytest.raises(ValueError, match="act on a tempering ladder: give --tempering TEMPS too"):
+        Config(**{option: True})
+    got = Config(tempering=4, **{option: True}).settings()
+    assert got.replica_rule == (option == "replica_rule") and got.tempering.adapt_hot == (option == "adapt_hot")
+
+
 def _fake(k, held: bool, rank=5, tau=10.0):
     inside = {n: held for n in NAMES}
     return {"replicate": k, "redraws": 0, "iterations": 600, "tau_max": tau, "L": 9, "kept": 100,

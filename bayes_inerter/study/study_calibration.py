@@ -972,6 +972,8 @@ class Config:
     def __post_init__(self) -> None:
         if not (isinstance(self.replicates, int) and self.replicates >= 1):
             raise ValueError(f"replicates must be a whole number of at least 1, got {self.replicates!r}")
+        if (self.replica_rule or self.adapt_hot) and self.tempering is None:
+            raise ValueError("--replica-rule and --adapt-hot act on a tempering ladder: give --tempering TEMPS too")
         self.settings()  # a bad likelihood or frequency fails here, before anything runs
 
     def settings(self) -> StudyCalibration:
