@@ -148,8 +148,7 @@ def main():
     models = args.models or ["two-port"]
     conv = Convergence(max_steps=args.max_steps) if args.max_steps else None
     samplers = [("ensemble", None, conv)]  # the package's default sampler
-    if args.tempering or args.models:
-        samplers = [("ensemble", None, conv)]
+    if args.tempering:
         ladder = Tempering(args.tempering, args.hottest_beta)
         hot_conv = conv
         if args.growth is not None:

@@ -3,7 +3,8 @@ led by records of a device richer than the fitted model (``bayes_inerter.study.f
 whose docstring says what runs): the control and one paper-like laboratory fitted
 with the same models, then results/full/REPORT.md led by the paper-like records.
 Running it again reuses finished fits and the paper-like records (delete
-results/full/paper-like/records to draw another laboratory with --seed).
+results/full/paper-like/records to draw another laboratory with --seed); results/full's
+fits were sampled with --tempering 4, and only that reuses them.
 
     python studies/study.py [--processes 2] [--scheduler tcp://host:port] [--seed 0]
                             [--paper-like-steps N] [--tempering T (default: none)] [--report-only]

@@ -138,8 +138,8 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--walkers", type=_positive_int, help="walkers (default 2 x parameters + 2)")
     p.add_argument("--steps", type=_positive_int, help="total steps (default: until converged)")
     p.add_argument("--max-steps", type=_positive_int,
-                   help="until converged, but at most this many steps in all (default 20000, 10000 with "
-                        "--tempering; a checkpoint is continued)")
+                   help="until converged, but at most this many steps in all (default 20000, 10000 tempered; "
+                        "a checkpoint is continued)")
     p.add_argument("--seed", type=int, default=0, help="seed (%(default)s)")
     p.add_argument("--residual", choices=FIT_RESIDUALS, default=DEFAULT_RESIDUAL,
                    help="likelihood (%(default)s): ar1 or iid, the low-passed acceleration sample by sample; "
@@ -205,8 +205,8 @@ def _add_study(sub) -> argparse.ArgumentParser:
                    help="steps of the joint model's chain (full study; default: until converged)")
     p.add_argument("--no-joint", action="store_true", help="skip the joint model of all records")
     p.add_argument("--tempering", type=_at_least_two, metavar="TEMPS",
-                   help="fit each record with parallel tempering of this many temperatures (default: none, as the "
-                        "committed studies were run; the joint model is not tempered)")
+                   help="fit each record with parallel tempering of this many temperatures (default: none, as "
+                        "fit; results/full was sampled with 4; the joint model is not tempered)")
     p.add_argument("--identify", action=argparse.BooleanOptionalAction, default=None,
                    help="also fit every record by the paper's least squares (eq. 4; about 20 s a 10 s record on one core) and set it "
                         "beside the posterior in least_squares.csv (default: full study yes, quick no)")

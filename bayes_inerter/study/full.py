@@ -17,7 +17,8 @@ Two studies, then one report:
    these results (:data:`MORE`, folders beside ``out``).
 
 Running it again reuses finished fits and the paper-like records (delete
-``out``/paper-like/records to draw another laboratory). ``studies/study.py`` runs it
+``out``/paper-like/records to draw another laboratory); a fit is reused only under the
+same tempering, so results/full's, sampled with 4 temperatures, with ``--tempering 4``. ``studies/study.py`` runs it
 through ``cli.study_script``.
 """
 

@@ -29,7 +29,7 @@ fits with those of ``LikelihoodSettings`` changed (``input_noise=16``,
 folder keeps one likelihood, its every setting recorded in each replicate (a change of
 the library's default starts a new folder). ``tempering`` T fits with parallel tempering
 (``sampler.Tempering``, T temperatures down to ``hottest_beta``), None with the ensemble
-alone (the folders' default, ``fit``'s before it tempered); a folder keeps one sampler.
+alone (the folders' default, and ``fit``'s); a folder keeps one sampler.
 ``tau_rtol`` stops the chains with that tolerance of the convergence rule
 (``Convergence.tau_rtol``; a folder keeps one, each replicate names it, ``stop_rule``).
 ``freq`` F runs only the replicates driven at F Hz. ``duration`` D makes every record D s

@@ -90,8 +90,8 @@ class StudyPlan:
         record; ``study.least_squares``) and set it beside the posterior in
         ``least_squares.csv``.
     tempering : the single-record fits' parallel tempering, temperatures (None, the
-        default: the ensemble alone, as the committed studies were run; ``fit``'s own
-        default is 4). The joint model is not tempered.
+        default: the ensemble alone, as ``fit``'s; results/full was sampled with 4).
+        The joint model is not tempered.
     """
 
     name: str

@@ -3,7 +3,8 @@
 Beside the posterior (beta = 1), ``temps - 1`` ensembles sample prior x
 likelihood^beta, beta geometric from 1 down to ``beta_min``. Each takes one step of its
 moves (the cold ensemble the run's moves, fitted ones included; the hot ones the
-ensemble moves alone, since a proposal fitted to the posterior is too narrow for them),
+ensemble moves alone, since a proposal fitted to the posterior is too narrow for them,
+or with ``Tempering.adapt_hot`` moves fitted to their own walkers),
 and then each walker of one temperature is offered a swap with a walker of the next
 hotter one (a random pairing, hottest pair first), accepted with probability
 min(1, exp((beta_k - beta_k+1) (log L_j - log L_i))). Every move and swap leaves the
