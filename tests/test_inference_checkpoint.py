@@ -19,15 +19,18 @@ IDENTITY = {"format": CHECKPOINT_FORMAT, "model": {"name": "two-port", "paramete
             "adaptation": None, "nwalkers": 4, "ndim": 2}
 
 
-def _with_steps(path, n=3, identity=IDENTITY):
-    """A new checkpoint at ``path`` holding ``n`` steps, both files up to date."""
+def _with_steps(path, n=3, identity=IDENTITY, rows=False):
+    """A new checkpoint at ``path`` holding ``n`` steps, both files up to date; with
+    ``rows``, each step's per-step rows too (step k's hot walkers all k, its labels
+    0..11 + k)."""
     backend = new_checkpoint(path, identity=identity, write_seconds=0.0)
     rng = np.random.default_rng(0)
     backend.grow(n, None)
     for k in range(n):
         state = emcee.State(rng.normal(size=(4, 2)), log_prob=rng.normal(size=4),
                             random_state=np.random.RandomState(k).get_state())
-        backend.save_step(state, np.ones(4, dtype=bool))
+        step_rows = {"hot_chain": np.full((2, 4, 2), float(k)), "replicas": np.arange(12, dtype=np.int32) + k}
+        backend.save_step(state, np.ones(4, dtype=bool), rows=step_rows if rows else None)
     backend.flush()
     return backend
 
@@ -131,25 +134,11 @@ def test_an_empty_checkpoints_identity_pins_nothing(tmp_path):
     assert stored_identity(tmp_path / "held.h5") == IDENTITY
 
 
-def _with_rows(path, n=3, rows=True):
-    """A new checkpoint at ``path`` of ``n`` steps, each with per-step rows where ``rows``."""
-    backend = new_checkpoint(path, identity=IDENTITY, write_seconds=0.0)
-    rng = np.random.default_rng(2)
-    backend.grow(n, None)
-    for k in range(n):
-        state = emcee.State(rng.normal(size=(4, 2)), log_prob=rng.normal(size=4),
-                            random_state=np.random.RandomState(k).get_state())
-        step_rows = {"hot_chain": np.full((2, 4, 2), float(k)), "replicas": np.arange(12, dtype=np.int32) + k}
-        backend.save_step(state, np.ones(4, dtype=bool), rows=step_rows if rows else None)
-    backend.flush()
-    return backend
-
-
 def test_per_step_rows_are_kept_sealed_and_read_back(tmp_path):
     from bayes_inerter.inference.sampling.twin_backend import GROUP
 
     path = tmp_path / "chain.h5"
-    backend = _with_rows(path)
+    backend = _with_steps(path, rows=True)
     assert backend.has_rows("hot_chain")
     assert np.array_equal(backend.get_rows("hot_chain")[:, 0, 0, 0], [0.0, 1.0, 2.0])
     assert np.array_equal(backend.get_rows("replicas", 1)[:, 0], [1, 2])
@@ -162,7 +151,7 @@ def test_per_step_rows_are_kept_sealed_and_read_back(tmp_path):
 
 
 def test_a_chain_that_kept_no_rows_from_its_first_step_never_does(tmp_path):
-    backend = _with_rows(tmp_path / "chain.h5", rows=False)
+    backend = _with_steps(tmp_path / "chain.h5")
     assert not backend.has_rows("hot_chain")
     state = emcee.State(np.zeros((4, 2)), log_prob=np.zeros(4), random_state=np.random.RandomState(9).get_state())
     backend.grow(1, None)
