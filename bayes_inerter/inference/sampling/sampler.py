@@ -315,52 +315,38 @@ class _ThetaSoFar:
     """The chain so far in theta for the convergence checks, each step carried from the
     sampler's coordinates once: a check at step n transforms only the steps since the
     last one (the whole chain at every check cost, measured on a paper-like record of
-    20,000 steps, about an eighth of the run, growing with the square of its length)."""
+    20,000 steps, about an eighth of the run, growing with the square of its length).
+    ``read(start)``: the steps from ``start`` on, in the sampler's coordinates (default:
+    the chain's; :func:`_replicas_so_far` reads the replicas' trajectories)."""
 
-    def __init__(self, backend, coords):
+    def __init__(self, backend, coords, read=None):
         self.backend, self.coords = backend, coords
+        self.read = read or (lambda start: backend.get_chain()[start:])
         self.theta = None
 
     def __call__(self) -> np.ndarray:
-        chain = self.backend.get_chain()
         if self.coords is None:
-            return chain
-        have = 0 if self.theta is None else len(self.theta)
-        if have > len(chain):  # not this chain's (never within one run): start again
-            self.theta, have = None, 0
-        if have < len(chain):
-            new = self.coords.to_theta(chain[have:])
-            self.theta = new if self.theta is None else np.concatenate([self.theta, new])
-        return self.theta
-
-
-class _ReplicasSoFar:
-    """A tempered chain's replicas' trajectories so far in theta
-    (:func:`.tempering.replica_trajectories`, from the cold chain and the hot ensembles'
-    walkers and labels the checkpoint keeps at every step), each step carried from the
-    sampler's coordinates once, as :class:`_ThetaSoFar` carries the chain. Called, None
-    where the chain keeps no replicas (untempered, or a checkpoint written before they
-    were kept)."""
-
-    def __init__(self, backend, coords, tempered: bool):
-        self.backend, self.coords = backend, coords
-        self.on = tempered and backend.has_rows("hot_chain")
-        self.theta = None
-
-    def __call__(self) -> np.ndarray | None:
-        if not self.on:
-            return None
+            return self.read(0)
         have = 0 if self.theta is None else len(self.theta)
         n = self.backend.iteration
-        if have > n:
+        if have > n:  # not this chain's (never within one run): start again
             self.theta, have = None, 0
         if have < n:
-            b = self.backend
-            new = replica_trajectories(b.get_chain()[have:], b.get_rows("hot_chain", have),
-                                       b.get_rows("replicas", have))
-            new = new if self.coords is None else self.coords.to_theta(new)
+            new = self.coords.to_theta(self.read(have))
             self.theta = new if self.theta is None else np.concatenate([self.theta, new])
         return self.theta
+
+
+def _replicas_so_far(backend, coords, on: bool):
+    """A tempered chain's replicas' trajectories so far in theta
+    (:func:`.tempering.replica_trajectories`, from the cold chain and the hot ensembles'
+    walkers and labels the checkpoint keeps at every step), carried as
+    :class:`_ThetaSoFar` carries the chain; called, None where ``on`` is False or the
+    chain keeps no replicas (a checkpoint written before they were kept)."""
+    if not (on and backend.has_rows("hot_chain")):
+        return lambda: None
+    return _ThetaSoFar(backend, coords, lambda start: replica_trajectories(
+        backend.get_chain()[start:], backend.get_rows("hot_chain", start), backend.get_rows("replicas", start)))
 
 
 def _take_steps(stepping, backend, coords, conv: Convergence, progress, steps: int,
@@ -369,7 +355,7 @@ def _take_steps(stepping, backend, coords, conv: Convergence, progress, steps: i
     for _ in stepping:
         if progress:
             progress(backend.iteration, steps)
-    replicas = _ReplicasSoFar(backend, coords, tempered and conv.replicas)()
+    replicas = _replicas_so_far(backend, coords, tempered and conv.replicas)()
     check = check_chain(_theta_chain(backend, coords), backend.get_log_prob(), conv, replicas=replicas)
     return check, is_converged(backend.iteration - check.warmup, check.tau, None, check.rhat, check.ess, conv)
 
@@ -384,7 +370,7 @@ def _until_converged(stepping, backend, coords, conv: Convergence, done: int, pr
     where ``conv.replicas`` says so (:func:`.convergence.check_chain`)."""
     monitor = Monitor(conv)
     theta = _ThetaSoFar(backend, coords)
-    replicas = _ReplicasSoFar(backend, coords, tempered and conv.replicas)
+    replicas = _replicas_so_far(backend, coords, tempered and conv.replicas)
     if done:
         monitor.resume(theta(), backend.get_log_prob(), done, replicas())
 
