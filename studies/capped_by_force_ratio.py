@@ -9,6 +9,10 @@ table of the share of chains that met the convergence rule, by bins of that rati
 
     python studies/capped_by_force_ratio.py results/coverage-sbc-lf-exact-s23-untempered \
         results/coverage-sbc-v6 --out results/capped-by-force-ratio
+
+``--misfit CSV`` also reads benchmarks/bench_misfit.py's rows of paper-like records (the
+"ensemble" sampler's) and writes each record's ratio, from the truth its record carries,
+beside whether its chain converged (paper_like.csv).
 """
 from __future__ import annotations
 
@@ -66,6 +70,29 @@ def binned(rows: list[dict]) -> list[dict]:
     return out
 
 
+def paper_like_rows(misfit: Path) -> list[dict]:
+    """The ratio of each paper-like record fitted in ``misfit`` (bench_misfit's CSV) by the
+    untempered sampler, with its chain's outcome."""
+    from bayes_inerter.records.generator import GeneratorSettings
+    from bayes_inerter.records.paper_like import PaperLike, paper_like_record
+
+    device = PaperLike(base=GeneratorSettings(duration=10.0))  # bench_misfit's records
+    out = []
+    with open(misfit) as f:
+        for r in csv.DictReader(f):
+            if r["sampler"] != "ensemble" or r["truth"] != "paper-like":
+                continue
+            freq = float(r["freq_hz"])
+            rec = paper_like_record(r["setting"], freq, seed=int(r["seed"]), device=device)
+            t = rec.metadata["true_parameters"]
+            truth = {"b": t["b"], "f_0": t["f1_0"] + t["f2_0"], "c_f": t["c_f1"] + t["c_f2"]}
+            out.append({"setting": r["setting"], "freq_hz": freq, "laboratory": r["seed"],
+                        "ratio": round(force_ratio(truth, freq, device.base.amplitude), 3),
+                        "converged": r["converged"], "steps": r["steps"], "max_tau": r["max_tau"],
+                        "wall_s": r["wall_s"]})
+    return sorted(out, key=lambda r: r["ratio"])
+
+
 def _write(path: Path, rows: list[dict]) -> None:
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -77,6 +104,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("folders", nargs="+", type=Path)
     p.add_argument("--out", type=Path, default=None, help="write replicates.csv and by_ratio.csv here")
+    p.add_argument("--misfit", type=Path, default=None, help="bench_misfit's CSV: also the paper-like records' ratios")
     a = p.parse_args(argv)
     rows = [row for folder in a.folders for row in replicate_rows(folder)]
     table = binned(rows)
@@ -88,6 +116,13 @@ def main(argv=None) -> int:
         _write(a.out / "replicates.csv", [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()}
                                           for r in rows])
         _write(a.out / "by_ratio.csv", table)
+    if a.misfit is not None:
+        paper = paper_like_rows(a.misfit)
+        for r in paper:
+            print(f"paper-like {r['setting']} at {r['freq_hz']:g} Hz, laboratory {r['laboratory']}: ratio {r['ratio']}, "
+                  f"converged {r['converged']}, largest tau {float(r['max_tau']):.0f}")
+        if a.out is not None:
+            _write(a.out / "paper_like.csv", paper)
     return 0
 
 
