@@ -614,3 +614,28 @@ def test_no_reversals_leaves_the_reversals_deviations_out_of_the_fits():
     assert Config(single=True, residual="motion").settings().likelihood.reversals
     settings = Config(single=True, residual="motion", reversals=False).settings().likelihood
     assert not settings.reversals and settings.law
+
+
+def test_min_ratio_draws_again_only_the_records_below_it():
+    """``min_ratio``: a record whose own force ratio (records.reactance) lies below it is
+    drawn again, device and record; one above is the same device, records and all."""
+    from bayes_inerter.records.reactance import drive_impedance
+
+    box = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), single=True, frequencies=(1.5,),
+                           steps=None, seed=0, generator=GeneratorSettings(duration=4.0, ramp=0.8))
+    plain = [replicate_device(box, k) for k in range(4)]
+    ratios = [drive_impedance(d.records[0]).ratio for d in plain]
+    level = float(np.median(ratios))  # some of these records lie below it, some above
+    held = dataclasses.replace(box, min_ratio=level)
+    for k, (device, ratio) in enumerate(zip(plain, ratios)):
+        got = replicate_device(held, k)
+        assert drive_impedance(got.records[0]).ratio >= level
+        if ratio >= level:
+            assert got.theta == device.theta and np.array_equal(got.records[0].force, device.records[0].force)
+        else:
+            assert got.theta != device.theta and got.redraws > device.redraws
+    for bad in (0.0, -1.0, float("nan"), True):
+        with pytest.raises(ValueError, match="min_ratio"):
+            dataclasses.replace(box, min_ratio=bad)
+    with pytest.raises(ValueError, match="single"):
+        StudyCalibration(min_ratio=1.0)

@@ -33,7 +33,7 @@ import numpy as np
 from .record import Record
 
 __all__ = ["DriveFrequency", "estimate_drive_frequency", "resolve_drive", "with_drive", "spectral_peak", "HARMONICS",
-           "STEADY_SHARE", "SOURCE_KEY", "steady_periods"]
+           "STEADY_SHARE", "SOURCE_KEY", "steady_periods", "harmonic_basis"]
 
 #: Harmonics of the drive in the refining least squares (each channel of a device with
 #: friction carries odd harmonics; the fit must not take them for a shifted fundamental).
@@ -73,7 +73,9 @@ def spectral_peak(time, x) -> tuple[float, float]:
     return k * fs / len(x), (spec[max(k - 1, 0): k + 2].sum() / total if total > 0 else 0.0)
 
 
-def _basis(t: np.ndarray, freq: float, harmonics: int) -> np.ndarray:
+def harmonic_basis(t: np.ndarray, freq: float, harmonics: int) -> np.ndarray:
+    """The least-squares basis of a drive at ``freq`` Hz over times ``t``: an offset, a
+    drift, then the cosine and sine of each of the first ``harmonics`` harmonics."""
     w = 2.0 * math.pi * freq * t
     cols = [np.ones_like(t), t]
     for k in range(1, harmonics + 1):
@@ -82,9 +84,9 @@ def _basis(t: np.ndarray, freq: float, harmonics: int) -> np.ndarray:
 
 
 def _explained(t: np.ndarray, x: np.ndarray, freq: float, harmonics: int) -> float:
-    """The squared norm of ``x``'s least-squares fit by ``_basis``."""
-    coef, *_ = np.linalg.lstsq(_basis(t, freq, harmonics), x, rcond=None)
-    return float(np.sum((_basis(t, freq, harmonics) @ coef) ** 2))
+    """The squared norm of ``x``'s least-squares fit by ``harmonic_basis``."""
+    coef, *_ = np.linalg.lstsq(harmonic_basis(t, freq, harmonics), x, rcond=None)
+    return float(np.sum((harmonic_basis(t, freq, harmonics) @ coef) ** 2))
 
 
 def _steady(time: np.ndarray, x: np.ndarray, freq: float) -> slice:

@@ -73,6 +73,7 @@ from ..inference.posterior.motion import deviation_sd, motion_variance, predicte
 from ..inference.posterior.priors import LogUniform, Uniform, tau_floor_prior
 from ..inference.summaries.results import hdi
 from ..records.generator import GeneratorSettings, generate_record
+from ..records.reactance import drive_impedance
 from ..records.record import Record
 from ..simulate import SimulationError
 from . import stop_rule
@@ -182,6 +183,13 @@ class StudyCalibration:
         is the exact one, and its coverage nominal if the sampler, its rule and the
         intervals are right. ``ReplicateDevice.redraws`` counts the truth's redraws
         only.
+    min_ratio : a single record whose own inertial-to-dissipative force ratio at the drive
+        (``records.reactance.drive_impedance``, read from the record the fit sees) falls
+        below this is drawn again, device and record (default None: every record). The
+        selection reads the record alone, and each replicate's ranks are uniform given its
+        record, so they stay uniform: the calibration then speaks for records at or above
+        that ratio. Where the ratio is small the chains stop at their cap
+        (results/capped-by-force-ratio). Single-record calibrations only.
     """
 
     setting: str = "A3"
@@ -202,6 +210,7 @@ class StudyCalibration:
     interval_draws: str = "simulated"
     domain: bool = False
     motion_device: str = "truth"
+    min_ratio: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
@@ -212,6 +221,12 @@ class StudyCalibration:
                              "use motion_device with likelihood_force")
         if self.domain and not self.single:
             raise ValueError("domain checks a single record's impedance coordinates: use it with single")
+        if self.min_ratio is not None:
+            if not self.single:
+                raise ValueError("min_ratio selects single records by their own force ratio: use it with single")
+            if isinstance(self.min_ratio, bool) or not isinstance(self.min_ratio, (int, float)) \
+                    or not math.isfinite(self.min_ratio) or self.min_ratio <= 0:
+                raise ValueError(f"min_ratio must be a positive number, got {self.min_ratio!r}")
         if self.interval_draws not in INTERVAL_DRAWS:
             raise ValueError(f"interval_draws must be one of {', '.join(INTERVAL_DRAWS)}, got {self.interval_draws!r}")
         if self.draw_deviations and self.likelihood.residual != "motion":
@@ -305,6 +320,8 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
             records = [drawn_deviations(r, params, cs.likelihood, rng) for r in records]
         if cs.likelihood_force:
             records = [likelihood_force(r, theta, cs.likelihood, rng) for r in records]
+        if cs.min_ratio is not None and not drive_impedance(records[0]).ratio >= cs.min_ratio:
+            continue
         return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws,
                                tuple(float(v) for v in theta))
     raise RuntimeError("100 prior draws in a row could not be simulated")
@@ -959,6 +976,9 @@ class Config:
     interval_draws: str | None = field(default=None, metadata={
         "help": "a single record's intervals from the fit's 600 'simulated' draws (the default) or its 'kept' "
                 "draws (up to 4,000)"})
+    min_ratio: float | None = field(default=None, metadata={
+        "help": "draw a single record again while its own inertial-to-dissipative force ratio at the drive "
+                "(records.reactance) is below this (default: every record)"})
     motion_device: str | None = field(default=None, metadata={
         "help": "which device makes the records' motion: the 'truth' (default) or an 'independent' draw "
                 "(with --likelihood-force)"})
@@ -1008,6 +1028,8 @@ class Config:
             extra["domain"] = True
         if self.motion_device:
             extra["motion_device"] = self.motion_device
+        if self.min_ratio is not None:
+            extra["min_ratio"] = self.min_ratio
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 
