@@ -6,8 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from bayes_inerter.inference.summaries.end_state import (FEW_PERIODS, HONEST_PERIODS, PHI_WARNING, end_state_warnings,
-                                                       few_periods_warning)
+from bayes_inerter.inference.summaries.end_state import (FEW_PERIODS, FRICTION_DOMINATED, FRICTION_RATIO, HONEST_PERIODS,
+                                                       PHI_WARNING, end_state_warnings, few_periods_warning,
+                                                       friction_dominated_warning)
 from bayes_inerter.inference.sampling.optimize import laplace_ensemble
 from bayes_inerter.inference.posterior.priors import LogUniform, Uniform
 from bayes_inerter.inference.summaries.results import PosteriorSample
@@ -70,3 +71,11 @@ def test_a_record_of_three_periods_is_warned_and_b_flagged_and_four_are_not():
     assert "3 steady drive periods" in w.message and "results/record-length" in w.message
     assert few_periods_warning(HONEST_PERIODS) is None
     assert few_periods_warning(None) is None  # a time-domain likelihood takes no periods' means
+
+
+def test_a_friction_dominated_record_is_warned_and_b_flagged_and_an_inertial_one_is_not():
+    w = friction_dominated_warning(0.3)
+    assert w is not None and w.flag == FRICTION_DOMINATED and w.names == ("b",)
+    assert "0.30 times" in w.message and "results/capped-by-force-ratio" in w.message
+    assert friction_dominated_warning(FRICTION_RATIO) is None
+    assert friction_dominated_warning(None) is None and friction_dominated_warning(float("inf")) is None

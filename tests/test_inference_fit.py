@@ -93,6 +93,11 @@ def test_fit_writes_every_output(tmp_path, ar1_record_file, capsys):
     assert 0.0 < info["coordinates_domain_edge"] < 0.5  # how near the domain's edge its draws came
     # the start's phases each on their own line of the timings (sampler.START_PHASES)
     assert {"start_search", "start_modes", "start_ensemble"} <= set(info["timings_s"])
+    # the record's own force ratio at the drive, as records.reactance reads it
+    from bayes_inerter.records import read_record
+    from bayes_inerter.records.reactance import drive_impedance
+    assert info["drive_impedance"]["ratio"] == pytest.approx(drive_impedance(read_record(ar1_record_file), 1.5).ratio,
+                                                           rel=1e-9)
     # b's reported interval is the honest one, wider than the posterior's own, and printed
     iv = info["b_interval"]
     assert iv["method"] == "honest" and iv["sd_log_sensors"] > 0 and iv["sd_log_discrepancy"] >= 0

@@ -21,13 +21,15 @@ import numpy as np
 
 from .. import arviz_import
 from ..records.drive import resolve_drive, with_drive
+from ..records.reactance import drive_impedance
 from ..records.record import Record
 from .sampling.checkpoint import WRITE_SECONDS
 from ..lock import folder_lock
 from ..masses import Masses, resolve_masses
 from .sampling.coordinates import default_coordinates
 from .sampling.coordinates import EDGE_WARNING, MAX_SENSITIVITY_CHANGE
-from .summaries.end_state import EndWarning, convergence_warning, end_state_warnings, few_periods_warning
+from .summaries.end_state import (EndWarning, convergence_warning, end_state_warnings, few_periods_warning,
+                                  friction_dominated_warning)
 from .summaries.interval import DEFAULT_INTERVAL, INTERVALS, IntervalSettings, inertance_interval
 from .posterior.model import LikelihoodSettings, PosteriorModel
 from .sampling.optimize import laplace_covariance
@@ -234,7 +236,9 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                                         cov=laplace_covariance(pm, best) if interval_settings.others == "free"
                                         else None, phi=float(np.median(sample.phi)),
                                         settings=interval_settings, rng=np.random.default_rng(seed + 2))
-        got = _finish(out, pm, got, steps, convergence, b_identified=b_interval.identified)
+        impedance = _drive_impedance(record, drive.hz)
+        got = _finish(out, pm, got, steps, convergence, b_identified=b_interval.identified,
+                      ratio=None if impedance is None else impedance.ratio)
         if all_draws:
             kept = thinned_draws(sample.values)
             np.savez_compressed(out / ALL_DRAWS_FILE, **{n: kept[:, :, i] for i, n in enumerate(pm.names)})
@@ -243,6 +247,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
         info = _run_info(model, pm, got, seed, {
             "m_s": pm.m_s, "m_B": pm.m_B, "masses": masses.as_dict(), "b_theory_device_file": b_theory,
             "drive_frequency": drive.as_dict(),
+            "drive_impedance": None if impedance is None else impedance.as_dict(),
             "stride": pm.stride, "record_metadata": record.metadata, "b_interval": b_interval.as_dict(),
             "interval_settings": dataclasses.asdict(interval_settings)})
         info["timings_s"] = {"sampling": got.seconds, "posterior_draws": t_post, "total": time.perf_counter() - t0,
@@ -254,6 +259,15 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                          b_theory=b_theory, b_interval=b_interval, drive=drive, burn_in=sample.burn,
                          warmup=int(run.warmup), thin=sample.thin, loo=loo, tau_by_parameter=info["tau"],
                          coordinates=info["coordinates"], figures=figures, tempering=info["tempering"])
+
+
+def _drive_impedance(record: Record, hz: float):
+    """The record's ``records.reactance.DriveImpedance`` at ``hz``, or None where it holds
+    too few steady periods to read one."""
+    try:
+        return drive_impedance(record, hz)
+    except ValueError:
+        return None
 
 
 def thinned_draws(values: np.ndarray, most: int | None = None) -> np.ndarray:
@@ -389,7 +403,8 @@ def _kinds(model, sample) -> dict:
     return kinds
 
 
-def _finish(out: Path, model, got: _Sampled, steps, convergence, b_identified: bool = True) -> _Sampled:
+def _finish(out: Path, model, got: _Sampled, steps, convergence, b_identified: bool = True,
+            ratio: float | None = None) -> _Sampled:
     """Every warning of the run (its end state, the coordinates' edge, convergence, in
     the order ``fit`` prints them), flagged in its rows, and summary.csv written."""
     run, sample = got.run, got.sample
@@ -408,6 +423,9 @@ def _finish(out: Path, model, got: _Sampled, steps, convergence, b_identified: b
     few = few_periods_warning(model.harmonic.periods if getattr(model, "harmonic", None) is not None else None)
     if few is not None:
         ended.append(few)
+    friction = friction_dominated_warning(ratio)
+    if friction is not None:
+        ended.append(friction)
     _flag(got.rows, ended)
     write_summary(out / "summary.csv", got.rows)
     return dataclasses.replace(got, ended=ended, edge=edge)

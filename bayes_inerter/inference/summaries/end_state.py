@@ -30,6 +30,12 @@ trusting an interval.
   inside the issue's ranges there and b still biased low: more periods help, and are
   not shown to be enough).
 
+- **friction-dominated** (:func:`friction_dominated_warning`): the record's own ratio
+  of its inertial to its dissipative force at the drive (``records.reactance``) below
+  :data:`FRICTION_RATIO`. On such records the chains have stopped at their cap, and the
+  calibration on seed 23 held every chain of a record reading at least 1 to the rule
+  (results/capped-by-force-ratio).
+
 The thresholds are assumptions of this package, module constants. Each warning is one
 line: ``fit`` prints it as it is and fit.json keeps it, with the rows it flags.
 """
@@ -45,7 +51,7 @@ from ..sampling.convergence import steps_for
 from .results import hdi
 
 __all__ = ["EndWarning", "end_state_warnings", "prior_limited_warning", "convergence_warning", "few_periods_warning",
-           "HONEST_PERIODS", "FEW_PERIODS", "BOUND_LOG_TOL",
+           "friction_dominated_warning", "FRICTION_RATIO", "FRICTION_DOMINATED", "HONEST_PERIODS", "FEW_PERIODS", "BOUND_LOG_TOL",
            "BOUND_SHARE", "PHI_WARNING", "NOT_CONVERGED", "PRIOR_LIMITED", "CAP_FACTOR"]
 
 BOUND_LOG_TOL = 0.01
@@ -62,6 +68,12 @@ UNWARNED = ("sigma", "rho", "tau")
 HONEST_PERIODS = 4
 #: The flag of :func:`few_periods_warning`.
 FEW_PERIODS = "few periods"
+#: **Assumption**: the record's inertial-to-dissipative force ratio at the drive below
+#: which :func:`friction_dominated_warning` warns (chosen on seed 23's calibration,
+#: results/capped-by-force-ratio).
+FRICTION_RATIO = 1.0
+#: The flag of :func:`friction_dominated_warning`.
+FRICTION_DOMINATED = "friction-dominated"
 #: A higher step cap is advised only where the chain's own tau says it would converge
 #: within this many times the current cap; beyond, the advice is about the record.
 CAP_FACTOR = 4.0
@@ -204,3 +216,15 @@ def few_periods_warning(periods: int | None) -> EndWarning | None:
                       f"the record holds {periods} steady drive periods after its start-up: on paper-like records "
                       "with 3, b's intervals came out too narrow (results/record-length); record more periods if "
                       "you can, and read b's interval as a lower bound on its uncertainty")
+
+
+def friction_dominated_warning(ratio: float | None) -> EndWarning | None:
+    """The warning of a record whose inertial force at the drive is less than
+    :data:`FRICTION_RATIO` times its dissipative one (``ratio``, from
+    ``records.reactance.drive_impedance``; None: not read), flagging b's row."""
+    if ratio is None or not ratio < FRICTION_RATIO:
+        return None
+    return EndWarning("b", FRICTION_DOMINATED,
+                      f"the record's inertial force at the drive is {ratio:.2f} times its dissipative one: on such "
+                      "records chains have stopped at their cap, and the calibration speaks for records at 1 or "
+                      "more (results/capped-by-force-ratio); a faster drive or a longer stroke raises it")
