@@ -12,6 +12,10 @@ the replicates at or above it: how many converged, and how many of their 94 % an
 intervals held (by_level.csv).
 
     python studies/measured_ratio.py --out results/capped-by-force-ratio
+
+``--paper-grid`` also reads the ratio of each of the 27 paper-like records of laboratory
+0 (``records.paper_like.paper_like_grid``, the full study's headline records), and so how
+many of them ``fit`` warns "friction-dominated" (paper_grid.csv).
 """
 from __future__ import annotations
 
@@ -35,6 +39,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--folder", type=Path, default=FOLDER, help="seed 23's untempered calibration folder")
     ap.add_argument("--out", type=Path, default=None, help="write measured.csv and by_level.csv here")
+    ap.add_argument("--paper-grid", action="store_true", help="also the paper-like laboratory 0's 27 records")
     a = ap.parse_args(argv)
     cs = Config(**SEED23).settings()
     rows = []
@@ -60,8 +65,23 @@ def main(argv=None) -> int:
         print(f"measured ratio >= {t['ratio_at_least']}: {t['converged']} of {t['replicates']} converged; "
               f"94 % held {t['held_94']} of {t['intervals']} (expected {t['expected_94']}, se {t['se_94']}), "
               f"50 % {t['held_50']} (expected {t['expected_50']}, se {t['se_50']})")
+    grid = []
+    if a.paper_grid:
+        from bayes_inerter.inference.summaries.end_state import FRICTION_RATIO
+        from bayes_inerter.records.paper_like import paper_like_grid
+
+        for name, freq, record in paper_like_grid(seed=0):
+            d = drive_impedance(record)
+            grid.append({"setting": name, "freq_hz": freq, "mass": round(d.mass, 1), "damping": round(d.damping, 1),
+                         "measured_ratio": round(d.ratio, 3), "warned": d.ratio < FRICTION_RATIO})
+        for freq in sorted({g["freq_hz"] for g in grid}):
+            sel = [g for g in grid if g["freq_hz"] == freq]
+            print(f"paper-like laboratory 0 at {freq:g} Hz: {sum(g['warned'] for g in sel)} of {len(sel)} records "
+                  f"below {FRICTION_RATIO:g} (" + ", ".join(f"{g['setting']} {g['measured_ratio']}" for g in sel) + ")")
     if a.out is not None:
-        for name, data in (("measured.csv", rows), ("by_level.csv", table)):
+        for name, data in (("measured.csv", rows), ("by_level.csv", table), ("paper_grid.csv", grid)):
+            if not data:
+                continue
             with open(a.out / name, "w", newline="") as f:
                 w = csv.DictWriter(f, fieldnames=list(data[0]))
                 w.writeheader()
