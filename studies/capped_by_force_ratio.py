@@ -22,6 +22,8 @@ import json
 import math
 from pathlib import Path
 
+from _table import write_table
+
 #: Bin edges of the ratio (inertial over dissipative force amplitude), chosen as round
 #: decades and halves before the table was read.
 EDGES = (0.0, 0.1, 0.3, 1.0, 3.0, 10.0, math.inf)
@@ -93,13 +95,6 @@ def paper_like_rows(misfit: Path) -> list[dict]:
     return sorted(out, key=lambda r: r["ratio"])
 
 
-def _write(path: Path, rows: list[dict]) -> None:
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-
-
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("folders", nargs="+", type=Path)
@@ -112,17 +107,16 @@ def main(argv=None) -> int:
         print(f"{t['folder']:45s} ratio {t['ratio_from']:>4} to {t['ratio_to']:>4}: "
               f"{t['converged']:3d} of {t['replicates']:3d} converged, median largest tau {t['median_tau_max']}")
     if a.out is not None:
-        a.out.mkdir(parents=True, exist_ok=True)
-        _write(a.out / "replicates.csv", [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()}
+        write_table(a.out / "replicates.csv", [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()}
                                           for r in rows])
-        _write(a.out / "by_ratio.csv", table)
+        write_table(a.out / "by_ratio.csv", table)
     if a.misfit is not None:
         paper = paper_like_rows(a.misfit)
         for r in paper:
-            print(f"paper-like {r['setting']} at {r['freq_hz']:g} Hz, laboratory {r['laboratory']}: ratio {r['ratio']}, "
-                  f"converged {r['converged']}, largest tau {float(r['max_tau']):.0f}")
+            print(f"paper-like {r['setting']} at {r['freq_hz']:g} Hz, laboratory {r['laboratory']}: "
+                  f"ratio {r['ratio']}, converged {r['converged']}, largest tau {float(r['max_tau']):.0f}")
         if a.out is not None:
-            _write(a.out / "paper_like.csv", paper)
+            write_table(a.out / "paper_like.csv", paper)
     return 0
 
 

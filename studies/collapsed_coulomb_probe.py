@@ -14,11 +14,11 @@ with f1_0* and kappa from an exact quadratic in f1_0 (three evaluations, one New
 refinement), J the Jacobian from (log f2_0, f1_0) to (log f_0, f_share). The prior and J
 are not quadratic in f1_0, but over its conditional width they change by parts in 1e8.
 
-Both targets are sampled by plain emcee (the package's ensemble moves without its
-fitted ones, in theta, not the impedance coordinates), 26 walkers from the last walkers
-of the users'-likelihood chain of ``studies/deviation_scale_probe.py``, a fixed number of
-steps, the same seed; tau is read on the last two thirds. Also printed: the local
-Hessian's largest eigenvalues, in coordinates whitened by each chain's covariance, at
+Both targets are sampled by plain emcee with the package's ensemble moves
+(``sampler.default_moves`` without the nut's ridge move; not its fitted ones), in theta,
+not the impedance coordinates, 26 walkers from the last walkers of the users'-likelihood
+chain of ``studies/deviation_scale_probe.py``, a fixed number of steps, the same seed;
+tau is read on the last two thirds. Also printed: the local Hessian's largest eigenvalues, in coordinates whitened by each chain's covariance, at
 three draws (a normal's would be 1).
 
     python studies/deviation_scale_probe.py --replicate 10 --steps 3000
@@ -26,26 +26,22 @@ three draws (a normal's would be 1).
 """
 from __future__ import annotations
 
-import argparse
-import csv
 import dataclasses
 import math
-import subprocess
 import time
 from pathlib import Path
 
 import emcee
 import numpy as np
 
-from _table import sampled_model
-from deviation_scale_probe import SEED23
+from _table import append_row, git_commit, sampled_model
+from deviation_scale_probe import probe_arguments, seed23_replicate
 from bayes_inerter.inference import PosteriorModel
 from bayes_inerter.inference.sampling.checkpoint import read_chain
 from bayes_inerter.inference.sampling.convergence import integrated_time
-from bayes_inerter.study.study_calibration import Config, replicate_device
+from bayes_inerter.inference.sampling.sampler import default_moves
 
 ROOT = Path(__file__).resolve().parents[1]
-MOVES = ((emcee.moves.DEMove, 0.6), (emcee.moves.DESnookerMove, 0.1), (emcee.moves.StretchMove, 0.3))
 FIELDS = ("replicate", "target", "steps", "walkers", "evaluations", "seconds", "acceptance", "tau_max",
           "tau_median", "evaluations_per_tau", "hessian_top", "commit")
 
@@ -114,30 +110,23 @@ def hessian_top(fn, draws: np.ndarray, rng: np.random.Generator, count: int = 3,
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--replicate", type=int, required=True)
-    ap.add_argument("--steps", type=int, default=3000)
-    ap.add_argument("--fits", type=Path, default=ROOT / "runs" / "deviation-scale-probe")
-    ap.add_argument("--out", type=Path, default=None, help="append rows to OUT/collapsed_coulomb.csv")
-    a = ap.parse_args(argv)
+    a = probe_arguments(__doc__, "collapsed_coulomb.csv").parse_args(argv)
     start = a.fits / f"s23_{a.replicate}_reference_3000" / "chain.h5"
     if a.steps < 300 or not start.exists():
         print(f"error: --steps must be at least 300, and {start} must exist: run "
               f"python studies/deviation_scale_probe.py --replicate {a.replicate} --steps 3000 first")
         return 2
-    cs = Config(**SEED23).settings()
-    device = replicate_device(cs, a.replicate)
+    cs, device = seed23_replicate(a.replicate)
     likelihood = dataclasses.replace(cs.likelihood, normaliser="reference", deviation_scale="reference")
     model, coords = sampled_model(PosteriorModel(device.records[0], priors=cs.priors(), likelihood=likelihood), start)
     theta0 = np.asarray(coords.transform(read_chain(start)[-1])[0])
     t = Targets(model)
-    commit = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True,
-                            text=True).stdout.strip()
+    commit = git_commit(ROOT)
     rows = []
     for name, fn, p0 in (("full (theta)", t.full, theta0),
                          ("f1_0 integrated out (psi)", t.collapsed, np.array([t.psi_of(x) for x in theta0]))):
         t.evaluations = 0
-        sampler = emcee.EnsembleSampler(len(p0), p0.shape[1], fn, moves=[(m(), w) for m, w in MOVES])
+        sampler = emcee.EnsembleSampler(len(p0), p0.shape[1], fn, moves=default_moves(model, ridge_weight=0.0))
         state = emcee.State(p0, random_state=np.random.RandomState(a.replicate).get_state())
         t0 = time.perf_counter()
         sampler.run_mcmc(state, a.steps, progress=False)
@@ -157,13 +146,8 @@ def main(argv=None) -> int:
               f"{row['evaluations_per_tau']} evaluations per tau, {row['seconds']} s; "
               f"whitened Hessian's top eigenvalue {row['hessian_top']}", flush=True)
     if a.out is not None:
-        path = a.out / "collapsed_coulomb.csv"
-        new = not path.exists()
-        with open(path, "a", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=FIELDS)
-            if new:
-                w.writeheader()
-            w.writerows(rows)
+        for row in rows:
+            append_row(a.out / "collapsed_coulomb.csv", row, FIELDS)
     return 0
 
 

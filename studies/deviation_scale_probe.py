@@ -15,13 +15,13 @@ record's or the exact density's? Fixed-length chains' taus are estimates from be
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import time
 from pathlib import Path
 
 import numpy as np
 
+from _table import append_row, git_commit
 from bayes_inerter.inference.fit import fit_record
 from bayes_inerter.study.study_calibration import Config, replicate_device
 
@@ -39,18 +39,29 @@ VARIANTS = {"exact (full, parameters)": {"normaliser": "full", "deviation_scale"
 FIELDS = ("replicate", "variant", "steps", "seconds", "tau_max", "slowest", "b_3", "b_97", "b_truth", "commit")
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def probe_arguments(doc: str, table: str) -> argparse.ArgumentParser:
+    """The probes' command line: one seed-23 replicate, a fixed number of steps, where its
+    fits go, and the folder whose ``table`` the rows are appended to."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--replicate", type=int, required=True)
     ap.add_argument("--steps", type=int, default=3000)
     ap.add_argument("--fits", type=Path, default=ROOT / "runs" / "deviation-scale-probe")
-    ap.add_argument("--out", type=Path, default=None, help="append rows to OUT/deviation_scale.csv")
-    a = ap.parse_args(argv)
+    ap.add_argument("--out", type=Path, default=None, help=f"append rows to OUT/{table}")
+    return ap
+
+
+def seed23_replicate(k: int):
+    """(the calibration's settings, replicate ``k``'s device and records) of :data:`SEED23`."""
+    cs = Config(**SEED23).settings()
+    return cs, replicate_device(cs, k)
+
+
+def main(argv=None) -> int:
+    a = probe_arguments(__doc__, "deviation_scale.csv").parse_args(argv)
     if a.steps < 300 or a.replicate < 0:
         print("error: --steps must be at least 300 and --replicate at least 0")
         return 2
-    cs = Config(**SEED23).settings()
-    device = replicate_device(cs, a.replicate)
+    cs, device = seed23_replicate(a.replicate)
     seed = int(np.random.default_rng([cs.seed, a.replicate, 7]).integers(2**31))
     rows = []
     for name, change in VARIANTS.items():
@@ -71,17 +82,9 @@ def main(argv=None) -> int:
         print(f"replicate {a.replicate}, {name}: largest tau {row['tau_max']} steps ({order[0]}), "
               f"{row['seconds']} s; b {row['b_3']} to {row['b_97']} kg against {row['b_truth']}", flush=True)
     if a.out is not None:
-        import subprocess
-        commit = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True,
-                                text=True).stdout.strip()
-        path = a.out / "deviation_scale.csv"
-        new = not path.exists()
-        a.out.mkdir(parents=True, exist_ok=True)
-        with open(path, "a", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=FIELDS)
-            if new:
-                w.writeheader()
-            w.writerows({k: ({**r, "commit": commit})[k] for k in FIELDS} for r in rows)
+        commit = git_commit(ROOT)
+        for r in rows:
+            append_row(a.out / "deviation_scale.csv", {k: ({**r, "commit": commit})[k] for k in FIELDS}, FIELDS)
     return 0
 
 

@@ -20,11 +20,11 @@ many of them ``fit`` warns "friction-dominated" (paper_grid.csv).
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 from pathlib import Path
 
+from _table import write_table
 from deviation_scale_probe import SEED23
 from bayes_inerter.records.reactance import drive_impedance
 from bayes_inerter.study.study_calibration import Config, replicate_device
@@ -80,12 +80,8 @@ def main(argv=None) -> int:
                   f"below {FRICTION_RATIO:g} (" + ", ".join(f"{g['setting']} {g['measured_ratio']}" for g in sel) + ")")
     if a.out is not None:
         for name, data in (("measured.csv", rows), ("by_level.csv", table), ("paper_grid.csv", grid)):
-            if not data:
-                continue
-            with open(a.out / name, "w", newline="") as f:
-                w = csv.DictWriter(f, fieldnames=list(data[0]))
-                w.writeheader()
-                w.writerows(data)
+            if data:
+                write_table(a.out / name, data)
     return 0
 
 

@@ -62,8 +62,8 @@ def drive_impedance(record: Record, freq: float | None = None) -> DriveImpedance
     part = slice(start, start + count * n)
     t = np.asarray(record.time[part], dtype=float)
     basis = harmonic_basis(t - t[0], hz, HARMONICS)
-    (a_cos, a_sin), (f_cos, f_sin) = (np.linalg.lstsq(basis, np.asarray(x, dtype=float)[part], rcond=None)[0][2:4]
-                                      for x in (record.accel, record.force))
+    channels = np.column_stack([np.asarray(x, dtype=float)[part] for x in (record.accel, record.force)])
+    (a_cos, f_cos), (a_sin, f_sin) = np.linalg.lstsq(basis, channels, rcond=None)[0][2:4]
     w = 2.0 * math.pi * hz
     z = (f_cos - 1j * f_sin) / ((a_cos - 1j * a_sin) / (1j * w))  # x = Re(X exp(i w t)), X = cos - i sin
     return DriveImpedance(hz, float(z.imag / w), float(z.real))
