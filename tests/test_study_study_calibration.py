@@ -435,8 +435,29 @@ def test_domain_draws_again_only_the_devices_outside_the_impedance_domain():
     assert same[1].theta[PosteriorModel(same[1].records[0], priors=box.priors(),
                                         likelihood=box.likelihood).names.index("tau")] < np.log(5e4)
     assert replicate_device(floored, 0).theta == same[1].theta
-    with pytest.raises(ValueError, match="single"):
-        StudyCalibration(domain=True)
+
+
+def test_domain_reads_the_joint_fits_own_coordinates():
+    """``domain`` in a joint calibration: a device outside the joint model's impedance
+    coordinates is drawn again; one inside is the same device."""
+    from bayes_inerter.inference.posterior.joint import JointModel
+    from bayes_inerter.inference.sampling.coordinates import default_coordinates
+
+    box = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), frequencies=(1.0, 1.5), steps=None,
+                           seed=0, generator=GeneratorSettings(duration=6.0, ramp=0.8))
+    held = dataclasses.replace(box, domain=True)
+
+    def inside(device):
+        jm = JointModel(tuple(device.records), priors=box.priors(), likelihood=box.likelihood)
+        values = PosteriorModel(device.records[0], priors=box.priors(), likelihood=box.likelihood).values(
+            np.array(device.theta))
+        return bool(np.all(np.isfinite(default_coordinates(jm, "impedance").to_u(jm.start([values, values])))))
+
+    # replicates 0 and 44 of this box: the first inside the joint domain, the second
+    # outside (few are: 2 of its first 60)
+    same, redrawn = [replicate_device(c, 0) for c in (box, held)], [replicate_device(c, 44) for c in (box, held)]
+    assert inside(same[0]) and same[0].theta == same[1].theta
+    assert not inside(redrawn[0]) and inside(redrawn[1]) and redrawn[1].redraws > redrawn[0].redraws
 
 
 def test_the_report_lists_the_priors_the_fits_sample():
@@ -618,7 +639,8 @@ def test_no_reversals_leaves_the_reversals_deviations_out_of_the_fits():
 
 def test_min_ratio_draws_again_only_the_records_below_it():
     """``min_ratio``: a record whose own force ratio (records.reactance) lies below it is
-    drawn again, device and record; one above is the same device, records and all."""
+    drawn again, device and record; one above is the same device, records and all; a
+    joint replicate is drawn again while any of its records lies below it."""
     from bayes_inerter.records.reactance import drive_impedance
 
     box = StudyCalibration(likelihood=LikelihoodSettings(residual="motion"), single=True, frequencies=(1.5,),
@@ -637,5 +659,12 @@ def test_min_ratio_draws_again_only_the_records_below_it():
     for bad in (0.0, -1.0, float("nan"), True):
         with pytest.raises(ValueError, match="min_ratio"):
             dataclasses.replace(box, min_ratio=bad)
-    with pytest.raises(ValueError, match="single"):
-        StudyCalibration(min_ratio=1.0)
+    # a joint replicate is kept only where every one of its records reads at least the level
+    joint = dataclasses.replace(box, single=False, frequencies=(1.0, 1.5),
+                                generator=GeneratorSettings(duration=6.0, ramp=0.8))
+    first = replicate_device(joint, 0)
+    slowest = min(drive_impedance(r).ratio for r in first.records)
+    assert slowest > 0
+    got = replicate_device(dataclasses.replace(joint, min_ratio=slowest * 1.5), 0)
+    assert got.theta != first.theta
+    assert len(got.records) == 2 and min(drive_impedance(r).ratio for r in got.records) >= slowest * 1.5

@@ -168,7 +168,8 @@ class StudyCalibration:
         a device outside is drawn again (default False: the whole prior box, as the
         folders saved before this option were made; a fit can then never cover a truth
         outside the domain unless its start lies outside too and it walks the
-        unconstrained coordinates). Single-record calibrations only.
+        unconstrained coordinates). A joint calibration reads the joint fit's own
+        coordinates.
     motion_device : which device makes the records' motion (:data:`MOTION_DEVICES`):
         "truth", the default, the drawn device itself; or "independent", a second device
         drawn from the same prior, independently of the truth, whose records' motion (and
@@ -183,13 +184,14 @@ class StudyCalibration:
         is the exact one, and its coverage nominal if the sampler, its rule and the
         intervals are right. ``ReplicateDevice.redraws`` counts the truth's redraws
         only.
-    min_ratio : a single record whose own inertial-to-dissipative force ratio at the drive
-        (``records.reactance.drive_impedance``, read from the record the fit sees) falls
-        below this is drawn again, device and record (default None: every record). The
-        selection reads the record alone, and each replicate's ranks are uniform given its
-        record, so they stay uniform: the calibration then speaks for records at or above
-        that ratio. Where the ratio is small the chains stop at their cap
-        (results/capped-by-force-ratio). Single-record calibrations only.
+    min_ratio : a replicate any of whose records reads an inertial-to-dissipative force
+        ratio at its drive (``records.reactance.drive_impedance``, read from the record
+        the fit sees) below this is drawn again, device and records (default None: every
+        record). A joint replicate is kept only where every one of its records reads at
+        least this. The selection reads the records alone, and each replicate's ranks
+        are uniform given its records, so they stay uniform: the calibration then speaks
+        for records at or above that ratio. Where the ratio is small the chains stop at
+        their cap (results/capped-by-force-ratio).
     """
 
     setting: str = "A3"
@@ -219,11 +221,7 @@ class StudyCalibration:
         if self.motion_device != "truth" and not self.likelihood_force:
             raise ValueError("an independent motion device needs the force drawn from the likelihood: "
                              "use motion_device with likelihood_force")
-        if self.domain and not self.single:
-            raise ValueError("domain checks a single record's impedance coordinates: use it with single")
         if self.min_ratio is not None:
-            if not self.single:
-                raise ValueError("min_ratio selects single records by their own force ratio: use it with single")
             if isinstance(self.min_ratio, bool) or not isinstance(self.min_ratio, (int, float)) \
                     or not math.isfinite(self.min_ratio) or self.min_ratio <= 0:
                 raise ValueError(f"min_ratio must be a positive number, got {self.min_ratio!r}")
@@ -311,7 +309,7 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
         theta, params, records = drawn
         if cs.motion_device == "independent":
             records = _independent_motion(cs, base, freqs, rng)
-        if cs.domain and not in_domain(cs, records[0], theta):
+        if cs.domain and not (in_domain(cs, records[0], theta) if cs.single else _in_joint_domain(cs, records, theta)):
             continue
         truth = base.values(theta)
         gain = truth.get("gain", 1.0)
@@ -320,7 +318,7 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
             records = [drawn_deviations(r, params, cs.likelihood, rng) for r in records]
         if cs.likelihood_force:
             records = [likelihood_force(r, theta, cs.likelihood, rng) for r in records]
-        if cs.min_ratio is not None and not drive_impedance(records[0]).ratio >= cs.min_ratio:
+        if cs.min_ratio is not None and not all(drive_impedance(r).ratio >= cs.min_ratio for r in records):
             continue
         return ReplicateDevice(params, {n: float(truth[n]) for n in ranked}, records, redraws,
                                tuple(float(v) for v in theta))
@@ -374,6 +372,19 @@ def in_domain(cs: StudyCalibration, record: Record, theta) -> bool:
     prior (``cs.tau_floor``) says nothing of the impedance map's domain."""
     model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
     return bool(np.all(np.isfinite(default_coordinates(model, "impedance").to_u(np.asarray(theta, dtype=float)))))
+
+
+def _in_joint_domain(cs: StudyCalibration, records, theta) -> bool:
+    """Whether ``theta`` (a single record's, every record's own part of the truth) lies in
+    the domain of the impedance coordinates the joint fit of ``records`` walks, read as
+    :func:`in_domain` reads a single record's."""
+    from ..inference.posterior.joint import JointModel
+
+    jm = JointModel(tuple(records), priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
+    values = PosteriorModel(records[0], priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood).values(
+        np.asarray(theta, dtype=float))
+    joint = jm.start([values] * len(records))
+    return bool(np.all(np.isfinite(default_coordinates(jm, "impedance").to_u(joint))))
 
 
 #: Which of the motion-in likelihood's deviations :func:`drawn_deviations` draws.
@@ -919,7 +930,7 @@ class Config:
     likelihood_force : each record's force harmonics drawn from the likelihood itself
         (``StudyCalibration.likelihood_force``; with ``residual`` "motion").
     domain : devices from the prior restricted to the impedance coordinates' domain
-        (``StudyCalibration.domain``; with ``single``).
+        (``StudyCalibration.domain``).
     interval_draws : where a single record's intervals come from
         (``StudyCalibration.interval_draws``; None: its default).
     motion_device : which device makes the records' motion
@@ -972,13 +983,13 @@ class Config:
         "help": "draw each record's force harmonics from the motion-in likelihood itself (calibrates the "
                 "posterior's computation alone)"})
     domain: bool = field(default=False, metadata={
-        "help": "draw the devices from the prior restricted to the impedance coordinates' domain (with --single)"})
+        "help": "draw the devices from the prior restricted to the impedance coordinates' domain"})
     interval_draws: str | None = field(default=None, metadata={
         "help": "a single record's intervals from the fit's 600 'simulated' draws (the default) or its 'kept' "
                 "draws (up to 4,000)"})
     min_ratio: float | None = field(default=None, metadata={
-        "help": "draw a single record again while its own inertial-to-dissipative force ratio at the drive "
-                "(records.reactance) is below this (default: every record)"})
+        "help": "draw a replicate again while any of its records' own inertial-to-dissipative force ratio "
+                "at its drive (records.reactance) is below this (default: every record)"})
     motion_device: str | None = field(default=None, metadata={
         "help": "which device makes the records' motion: the 'truth' (default) or an 'independent' draw "
                 "(with --likelihood-force)"})
