@@ -79,3 +79,6 @@ def test_a_friction_dominated_record_is_warned_and_b_flagged_and_an_inertial_one
     assert "0.30 times" in w.message and "results/capped-by-force-ratio" in w.message
     assert friction_dominated_warning(FRICTION_RATIO) is None
     assert friction_dominated_warning(None) is None and friction_dominated_warning(float("inf")) is None
+    # a joint fit's record: its setting's b flagged, the record named
+    named = friction_dominated_warning(0.3, "b_A3", "A3 0.5 Hz")
+    assert named.names == ("b_A3",) and named.message.startswith("record A3 0.5 Hz: its inertial force")

@@ -131,6 +131,15 @@ def test_fit_joint_writes_its_files_and_continues(records, tmp_path, monkeypatch
     assert info["coordinates"].startswith("impedance (M x2 at "), info["coordinates"]
     names = [r["name"] for r in res.summary]
     assert names[:2] == ["b_A0", "b_A2"] and "phi" in names
+    # each record's own force ratio, and a friction-dominated one warned on its setting's b
+    from bayes_inerter.inference.summaries.end_state import FRICTION_DOMINATED, FRICTION_RATIO
+    from bayes_inerter.records.reactance import drive_impedance
+    jm = JointModel(records, likelihood=AR1)
+    ratios = {f"{s} {f:g} Hz": drive_impedance(r, f).ratio for s, f, r in zip(jm.setting_of, jm.freq_of, records)}
+    assert info["records"] == list(ratios)
+    assert {k: v["ratio"] for k, v in info["drive_impedance"].items()} == pytest.approx(ratios)
+    warned = {w.name for w in res.warnings if w.flag == FRICTION_DOMINATED}
+    assert warned == {f"b_{label.split()[0]}" for label, ratio in ratios.items() if ratio < FRICTION_RATIO}
     assert {"b_app_A0", "b_app_A2"} <= set(names)  # the inertance each setting shows through the nut
     walkers = res.draws["b_A0"].shape[0]
     monkeypatch.setattr(fit_module, "JOINT_DRAWS_KEPT", walkers)  # one draw a walker: the 9-step chain keeps more

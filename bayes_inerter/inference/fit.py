@@ -238,7 +238,7 @@ def fit_record(record: Record, out, *, model: str = "two-port", m_s: float | Non
                                         settings=interval_settings, rng=np.random.default_rng(seed + 2))
         impedance = _drive_impedance(record, drive.hz)
         got = _finish(out, pm, got, steps, convergence, b_identified=b_interval.identified,
-                      ratio=None if impedance is None else impedance.ratio)
+                      ratios=(("b", None, None if impedance is None else impedance.ratio),))
         if all_draws:
             kept = thinned_draws(sample.values)
             np.savez_compressed(out / ALL_DRAWS_FILE, **{n: kept[:, :, i] for i, n in enumerate(pm.names)})
@@ -345,7 +345,11 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
                            convergence=convergence, progress=progress, report=report, start=start,
                            coordinates=coords, adaptation=adaptation, tempering=tempering)
         jm = got.model if got.model is not None else jm  # with its reference point, if it took one
-        got = _finish(out, jm, got, steps, convergence)
+        labels = joint_records(jm)
+        impedances = [_drive_impedance(r, f) for r, f in zip(jm.records, jm.freq_of)]
+        got = _finish(out, jm, got, steps, convergence,
+                      ratios=tuple((f"b_{s}", label, None if z is None else z.ratio)
+                                   for s, label, z in zip(jm.setting_of, labels, impedances)))
         run, sample = got.run, got.sample
         nb = len(jm.settings)
         kept = thinned_draws(sample.values)
@@ -355,7 +359,9 @@ def fit_joint(records, out, *, model: str = "two-port", centres: list[dict] | No
             np.savez_compressed(out / ALL_DRAWS_FILE, **{n: kept[:, :, i] for i, n in enumerate(jm.names)})
         if plots:
             _write_joint_plots(out, jm, sample, warmup=int(run.warmup))
-        info = _run_info("joint", jm, got, seed, {"records": joint_records(jm), "record_model": model})
+        info = _run_info("joint", jm, got, seed, {
+            "records": labels, "record_model": model,
+            "drive_impedance": {label: None if z is None else z.as_dict() for label, z in zip(labels, impedances)}})
         info["timings_s"] = {"sampling": got.seconds, "total": time.perf_counter() - t0, **_start_seconds(run),
                              **_sampling_all_runs(out, got.seconds, run, run.start_theta is not None)}
         (out / "fit.json").write_text(json.dumps(info, indent=2, default=str) + "\n")
@@ -404,9 +410,11 @@ def _kinds(model, sample) -> dict:
 
 
 def _finish(out: Path, model, got: _Sampled, steps, convergence, b_identified: bool = True,
-            ratio: float | None = None) -> _Sampled:
+            ratios: tuple = ()) -> _Sampled:
     """Every warning of the run (its end state, the coordinates' edge, convergence, in
-    the order ``fit`` prints them), flagged in its rows, and summary.csv written."""
+    the order ``fit`` prints them), flagged in its rows, and summary.csv written.
+    ``ratios``: (b's row, the record's name or None, its force ratio or None) of each
+    record (``friction_dominated_warning``)."""
     run, sample = got.run, got.sample
     ended = list(got.ended)
     edge = run.coordinates.domain_edge(sample.theta) if run.coordinates is not None else None
@@ -423,9 +431,10 @@ def _finish(out: Path, model, got: _Sampled, steps, convergence, b_identified: b
     few = few_periods_warning(model.harmonic.periods if getattr(model, "harmonic", None) is not None else None)
     if few is not None:
         ended.append(few)
-    friction = friction_dominated_warning(ratio)
-    if friction is not None:
-        ended.append(friction)
+    for name, record, ratio in ratios:
+        friction = friction_dominated_warning(ratio, name, record)
+        if friction is not None:
+            ended.append(friction)
     _flag(got.rows, ended)
     write_summary(out / "summary.csv", got.rows)
     return dataclasses.replace(got, ended=ended, edge=edge)

@@ -218,14 +218,18 @@ def few_periods_warning(periods: int | None) -> EndWarning | None:
                       "you can, and read b's interval as a lower bound on its uncertainty")
 
 
-def friction_dominated_warning(ratio: float | None) -> EndWarning | None:
+def friction_dominated_warning(ratio: float | None, name: str = "b", record: str | None = None
+                               ) -> EndWarning | None:
     """The warning of a record whose inertial force at the drive is less than
     :data:`FRICTION_RATIO` times its dissipative one (``ratio``, from
-    ``records.reactance.drive_impedance``; None: not read), flagging b's row."""
+    ``records.reactance.drive_impedance``; None: not read), flagging the row ``name``
+    (a joint fit's ``b_<setting>``); ``record`` names the record in the message (a joint
+    fit's "A3 0.5 Hz"; None: the fit's one record)."""
     if ratio is None or not ratio < FRICTION_RATIO:
         return None
-    return EndWarning("b", FRICTION_DOMINATED,
-                      f"the record's inertial force at the drive is {ratio:.2f} times its dissipative one: on the "
+    which = "the record's" if record is None else f"record {record}: its"
+    return EndWarning(name, FRICTION_DOMINATED,
+                      f"{which} inertial force at the drive is {ratio:.2f} times its dissipative one: on the "
                       "calibration's records below 1, 17 of 27 chains stopped at their cap "
                       "(results/capped-by-force-ratio), so an unconverged chain here is not yet the posterior; a "
                       "faster drive or a longer stroke raises the ratio")
