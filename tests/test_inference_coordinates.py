@@ -377,3 +377,13 @@ def test_a_start_outside_the_impedance_domain_falls_back_without_a_reference(mon
     monkeypatch.setattr(sampler, "find_start", lambda *a, **k: (outside, model.log_prob(outside)[0]))
     run = run_sampler(model, tmp_path / "chain.h5", nwalkers=2 * model.ndim, steps=20, seed=1)
     assert run.coordinates.kind == "unconstrained"
+    # a caller's start function (the joint fit's search) falls back the same way, where it
+    # had stopped the chain ("the start lies outside the impedance coordinates' domain")
+    calls = []
+
+    def start():
+        calls.append(1)
+        return outside, model.log_prob(outside)[0]
+
+    run = run_sampler(model, tmp_path / "given.h5", nwalkers=2 * model.ndim, steps=20, seed=1, start=start)
+    assert run.coordinates.kind == "unconstrained" and np.array_equal(run.start_theta, outside) and calls == [1]

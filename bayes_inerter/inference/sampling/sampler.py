@@ -256,12 +256,15 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
     # the motion-in likelihood without a reference point (normaliser "full" and the
     # deviations' sd at each walker's own) searches its start here too, as the reference
     # point's is, so that the coordinates can fall back where it lies outside their domain
-    search_first = (not needs_reference and coords.kind == "impedance" and start is None and not stored
-                    and getattr(model, "motion", None) is not None)
+    # a caller's start function (the joint fit's search) likewise: its optimum may lie outside
+    search_first = (not needs_reference and coords.kind == "impedance" and not stored
+                    and ((start is None and getattr(model, "motion", None) is not None) or callable(start)))
     if needs_reference or search_first:
         t0 = time.perf_counter()
         if needs_reference:
             model, start = _with_reference(model, stored, start, seed, processes, coords)
+        elif callable(start):
+            start = start()
         else:
             start = _searched_start(model, seed, processes, coords)
         seconds["search"] = time.perf_counter() - t0  # kept only where the chain is new
