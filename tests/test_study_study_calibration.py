@@ -177,6 +177,12 @@ def test_reports_say_what_failed_and_what_missed(tmp_path):
     assert "0.762 of the replicates at 94 %" in text  # 16 of 21 held b
     assert "b (low, 0.76)" in text
     assert got["section"].read_text().startswith("## Calibration in the study's configuration")
+    assert "prior draws were drawn again (refused by the simulator)" in text
+    # a selection of the draws is named as a reason they were drawn again
+    selected = write_study_calibration(tmp_path, StudyCalibration(single=True, domain=True, min_ratio=1.0),
+                                       results, {"numpy": np.__version__})["report"].read_text()
+    assert ("drawn again (refused by the simulator, outside the impedance coordinates' domain or a record's "
+            "force ratio below 1)") in selected
 
 
 @pytest.mark.slow

@@ -80,6 +80,17 @@ def _off(row: dict, key: str, q: int) -> str:
     return "" if abs(got - q / 100) <= 2 * se else ("low" if got < q / 100 else "high")
 
 
+def _redrawn_because(cs) -> str:
+    """Why a calibration's prior draws are drawn again: the simulator's refusals, and the
+    selections ``cs`` asks (``StudyCalibration.domain``, ``min_ratio``)."""
+    why = ["refused by the simulator"]
+    if getattr(cs, "domain", False):
+        why.append("outside the impedance coordinates' domain")
+    if getattr(cs, "min_ratio", None) is not None:
+        why.append(f"a record's force ratio below {cs.min_ratio:g}")
+    return ", ".join(why[:-1]) + (" or " if len(why) > 1 else "") + why[-1]
+
+
 def study_calibration_report(out: Path, cs, rows: list[dict], results: list[dict], versions: dict, *,
                              long_enough: int, levels, priors: dict) -> tuple[Path, Path]:
     """``out``/REPORT.md and ``out``/SECTION.md of a calibration in the study's
@@ -99,7 +110,7 @@ def study_calibration_report(out: Path, cs, rows: list[dict], results: list[dict
             + "; a failed replicate counts as a miss at every level. "
             + f"{long_enough} of {len(ok)} chains ran at least 50 times their longest autocorrelation time"
             + (f" (median longest tau {np.median(taus):.0f} steps, largest {max(taus):.0f})" if taus else "")
-            + f"; {sum(r['redraws'] for r in ok)} prior draws were refused by the simulator and drawn again.")
+            + f"; {sum(r['redraws'] for r in ok)} prior draws were drawn again ({_redrawn_because(cs)}).")
     verdict = []
     if rows:
         by = {r["parameter"]: r for r in rows}
