@@ -142,7 +142,8 @@ def _fake_fit(calls):
         calls.append(options)
         b = np.random.default_rng(0).normal(753.34, 5.0, size=(2, 200))
         return SimpleNamespace(idata=SimpleNamespace(posterior={"b": b}), converged=True, iterations=750,
-                               tau=np.array([4.0, 6.0]), b_interval=SimpleNamespace(identified=True, phi=0.9),
+                               tau=np.array([4.0, 6.0]), tau_by_parameter={"b": 4.0, "f_0": 6.04},
+                               b_interval=SimpleNamespace(identified=True, phi=0.9),
                                tempering=None if options.get("tempering") is None else {"swap_rates": [0.3, 0.2]})
     return fit
 
@@ -157,6 +158,7 @@ def test_a_tempered_replicate_is_fitted_tempered_and_says_so(tmp_path, monkeypat
     assert got["tempering"] == [3, 0.2] and got["swap_rates"] == [0.3, 0.2]
     assert calls[0]["convergence"].tau_rtol == got["tau_rtol"] == Convergence().tau_rtol
     assert calls[0]["convergence"].max_steps == 500
+    assert got["tau_by_parameter"] == {"b": 4.0, "f_0": 6.0}  # which parameters are slow
     untempered = plc.replicate(0, 6000, 500, tau_rtol=0.05)
     assert calls[1]["convergence"].tau_rtol == untempered["tau_rtol"] == 0.05
     assert calls[1]["tempering"] is None and "tempering" not in untempered and "swap_rates" not in untempered

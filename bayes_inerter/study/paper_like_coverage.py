@@ -102,6 +102,9 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
            "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
            "likelihood_settings": likelihood_settings(likelihood), "tau_rtol": stop_rule.resolved(tau_rtol)}
+    by_parameter = getattr(res, "tau_by_parameter", None)
+    if by_parameter:  # which parameters are slow, readable without fitting again (absent before)
+        out["tau_by_parameter"] = {n: round(float(t), 1) for n, t in by_parameter.items()}
     if tempering is not None:  # absent for the ensemble alone, as in the replicates written before the option
         out.update(tempering=_ladder_entry(tempering), swap_rates=res.tempering["swap_rates"])
     if duration is not None:  # absent for the paper's 10 s, as in the replicates written before the option
