@@ -261,12 +261,13 @@ def run_sampler(model: PosteriorModel, checkpoint, *, nwalkers: int | None = Non
                     and ((start is None and getattr(model, "motion", None) is not None) or callable(start)))
     if needs_reference or search_first:
         t0 = time.perf_counter()
-        if needs_reference:
-            model, start = _with_reference(model, stored, start, seed, processes, coords)
-        elif callable(start):
-            start = start()
-        else:
-            start = _searched_start(model, seed, processes, coords)
+        with interrupt_raised():  # Ctrl-C in a search's compiled code: a KeyboardInterrupt
+            if needs_reference:
+                model, start = _with_reference(model, stored, start, seed, processes, coords)
+            elif callable(start):
+                start = start()
+            else:
+                start = _searched_start(model, seed, processes, coords)
         seconds["search"] = time.perf_counter() - t0  # kept only where the chain is new
         if coords.kind == "impedance":
             coords = _reachable(model, coords, start, stored)
