@@ -15,7 +15,6 @@ ratio, how many 94 % and 50 % intervals held (bins.csv). It fits nothing.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -23,6 +22,7 @@ from _table import write_table
 from bayes_inerter.records.paper_like import paper_like_record
 from bayes_inerter.records.reactance import drive_impedance
 from bayes_inerter.study.paper_like_coverage import FAMILIES
+from bayes_inerter.study.replicate_store import finished
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The folders read by default: the paper-like coverage of the tempered default and its
@@ -33,15 +33,6 @@ FOLDERS = ("coverage-paper-like-v6", "coverage-breakaway-v3", "coverage-backlash
 BANDS = ((-math.inf, 0.5), (0.5, 1.0), (1.0, 2.0), (2.0, math.inf))
 
 
-def _replicates(folder: Path) -> list[dict]:
-    rows = []
-    packed = folder / "replicates.jsonl"
-    if packed.is_file():
-        rows += [json.loads(line) for line in packed.read_text().splitlines() if line.strip()]
-    rows += [json.loads(f.read_text()) for f in sorted((folder / "replicates").glob("[0-9]*.json"))]
-    return [r for r in rows if "error" not in r]
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folders", nargs="*", default=FOLDERS, help="paper-like coverage folders under results/")
@@ -50,7 +41,7 @@ def main(argv=None) -> int:
     rows = []
     for name in a.folders:
         folder = Path(name) if Path(name).is_dir() else ROOT / "results" / name
-        for r in _replicates(folder):
+        for r in (r for r in finished(folder) if "error" not in r):  # packed and loose alike
             family = r.get("family", "default")
             record = paper_like_record(r["setting"], r["freq_hz"], seed=r["seed"], device=FAMILIES[family],
                                        duration=r.get("duration_s"))
