@@ -158,6 +158,18 @@ def test_the_papers_devices_lie_deep_inside_the_domain(records):
     assert imp.b_index == (0, 1)
 
 
+def test_contains_is_a_finite_u_for_every_point(records, two_port):
+    coords = default_coordinates(two_port)
+    theta = two_port.to_theta(paper_parameters("A1"), 1.0, 0.3)
+    assert coords.contains(theta) and coords.contains(np.vstack([theta, theta]))
+    rng = np.random.default_rng(11)
+    draws = np.array([[two_port.all_priors[n].sample(rng) for n in two_port.names] for _ in range(300)])
+    finite = np.all(np.isfinite(coords.to_u(draws)), axis=-1)
+    assert finite.any() and not finite.all()  # the prior reaches past the impedance domain
+    assert [coords.contains(t) for t in draws] == list(finite)
+    assert not coords.contains(np.vstack([draws[finite][0], draws[~finite][0]]))  # one point out: all out
+
+
 @pytest.mark.parametrize("name", ["two-port", "linear", "joint"])
 def test_log_jacobian_is_the_finite_difference_determinant(records, name):
     model = JointModel(records, likelihood=AR1) if name == "joint" else PosteriorModel(records[0], name, likelihood=AR1)
@@ -370,7 +382,7 @@ def test_a_start_outside_the_impedance_domain_falls_back_without_a_reference(mon
     outside = None
     for _ in range(400):  # a prior draw the model can simulate but the impedance map cannot reach
         theta = np.array([model.all_priors[n].sample(rng) for n in model.names])
-        if not np.all(np.isfinite(coords.to_u(theta))) and np.isfinite(model.log_prob(theta)[0]):
+        if not coords.contains(theta) and np.isfinite(model.log_prob(theta)[0]):
             outside = theta
             break
     assert outside is not None

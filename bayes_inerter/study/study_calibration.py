@@ -371,7 +371,7 @@ def in_domain(cs: StudyCalibration, record: Record, theta) -> bool:
     :data:`STUDY_SBC_PRIORS`, the box ``theta`` is drawn from: a raised floor of tau's
     prior (``cs.tau_floor``) says nothing of the impedance map's domain."""
     model = PosteriorModel(record, priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood)
-    return bool(np.all(np.isfinite(default_coordinates(model, "impedance").to_u(np.asarray(theta, dtype=float)))))
+    return default_coordinates(model, "impedance").contains(theta)
 
 
 def _in_joint_domain(cs: StudyCalibration, records, theta) -> bool:
@@ -384,7 +384,7 @@ def _in_joint_domain(cs: StudyCalibration, records, theta) -> bool:
     values = PosteriorModel(records[0], priors=STUDY_SBC_PRIORS, likelihood=cs.likelihood).values(
         np.asarray(theta, dtype=float))
     joint = jm.start([values] * len(records))
-    return bool(np.all(np.isfinite(default_coordinates(jm, "impedance").to_u(joint))))
+    return default_coordinates(jm, "impedance").contains(joint)
 
 
 #: Which of the motion-in likelihood's deviations :func:`drawn_deviations` draws.

@@ -152,6 +152,11 @@ class Coordinates:
                                                                                theta[..., k])
         return u
 
+    def contains(self, theta) -> bool:
+        """Whether every point of ``theta`` (..., ndim) lies in these coordinates' domain
+        (its u finite): outside it, a walker cannot be placed there."""
+        return bool(np.all(np.isfinite(self.to_u(np.asarray(theta, dtype=float)))))
+
     def log_jacobian(self, u) -> np.ndarray | float:
         """log |det d theta / d u| at u."""
         return self.transform(u)[1]

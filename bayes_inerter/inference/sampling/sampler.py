@@ -456,7 +456,7 @@ def _reachable(model, coords: Coordinates, start, stored: dict | None) -> Coordi
     or the checkpoint continued was written in them."""
     kind = ((stored or {}).get("coordinates") or {}).get("kind")
     if kind == "unconstrained" or (kind is None and start is not None and not callable(start)
-                                   and not np.all(np.isfinite(coords.to_u(np.asarray(start[0], dtype=float))))):
+                                   and not coords.contains(start[0])):
         return default_coordinates(model, "unconstrained")
     return coords
 
@@ -489,26 +489,23 @@ def _first_walkers(target: Target, nwalkers: int, seed: int, start, executor: Ex
         raise ValueError("no parameters within the priors reproduce this record (the best start found "
                          "has zero posterior density): check its columns, units and masses with "
                          "bayes-inerter inspect, and the model")
-    if not np.all(np.isfinite(coords.to_u(start_theta))):
+    if not coords.contains(start_theta):
         advice = ("use --coordinates unconstrained, which covers the whole prior"
                   if coords.kind == "impedance" else "check the record and the priors")
         raise ValueError(f"the start lies outside the {coords.kind} coordinates' domain; {advice}")
-
-    def inside(t):  # a walker drawn outside the coordinates' domain is drawn again
-        return bool(np.all(np.isfinite(coords.to_u(t))))
 
     centres = [start_theta]
     t0 = time.perf_counter()
     if searched:
         lp = float(start[1]) if len(start) > 1 and start[1] is not None else model.log_prob(start_theta)[0]
         centres += [theta for theta, _ in mirrored_modes(model, start_theta, lp, map=_model_map(executor))
-                    if inside(theta)]
+                    if coords.contains(theta)]
         centres += [theta for theta, _ in held_modes(model, start_theta, lp, map=_model_map(executor))
-                    if inside(theta)]
+                    if coords.contains(theta)]
     seconds["modes"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     counts = [nwalkers // len(centres) + (k < nwalkers % len(centres)) for k in range(len(centres))]
-    ensembles = [coords.to_u(np.vstack([laplace_ensemble(model, centre, n, rng, accept=inside, beta=beta)[0]
+    ensembles = [coords.to_u(np.vstack([laplace_ensemble(model, centre, n, rng, accept=coords.contains, beta=beta)[0]
                                         for centre, n in zip(centres, counts)])) for beta in betas]
     state = emcee.State(ensembles[0], random_state=np.random.RandomState(seed).get_state())
     seconds["ensemble"] = time.perf_counter() - t0
