@@ -1,7 +1,7 @@
 """Which calibration records the untempered chain cannot cross: read by the device's forces.
 
 For each single-record replicate of the given calibration folders (their committed
-``replicates.jsonl`` and ``settings.json``; nothing is fitted), the drive's inertial force
+packed replicates and ``settings.json``; nothing is fitted), the drive's inertial force
 amplitude b w^2 X over its dissipative one f_0 + c_f w X, at the replicate's frequency
 (``frequencies[k % len(frequencies)]``, as ``study_calibration.replicate_device`` draws it)
 and the generator's amplitude X, both from the truth. Writes one row per replicate and a
@@ -23,6 +23,7 @@ import math
 from pathlib import Path
 
 from _table import write_table
+from bayes_inerter.study.replicate_store import finished
 
 #: Bin edges of the ratio (inertial over dissipative force amplitude), chosen as round
 #: decades and halves before the table was read.
@@ -42,17 +43,15 @@ def replicate_rows(folder: Path) -> list[dict]:
     freqs = settings["frequencies"]
     amplitude = settings["generator"]["amplitude"]
     rows = []
-    with open(folder / "replicates.jsonl") as f:
-        for line in f:
-            r = json.loads(line)
-            freq = freqs[r["replicate"] % len(freqs)]
-            taus = r.get("tau_by_parameter") or {}
-            rows.append({"folder": folder.name, "replicate": r["replicate"], "freq_hz": freq,
-                         "ratio": force_ratio(r["truth"], freq, amplitude),
-                         "converged": bool(r["converged"]), "steps": r["iterations"],
-                         "tau_max": r["tau_max"],
-                         "slowest": max(taus, key=taus.get) if taus else "",
-                         "b_held_94": r["hdi"]["94"]["b"]})
+    for r in finished(folder):
+        freq = freqs[r["replicate"] % len(freqs)]
+        taus = r.get("tau_by_parameter") or {}
+        rows.append({"folder": folder.name, "replicate": r["replicate"], "freq_hz": freq,
+                     "ratio": force_ratio(r["truth"], freq, amplitude),
+                     "converged": bool(r["converged"]), "steps": r["iterations"],
+                     "tau_max": r["tau_max"],
+                     "slowest": max(taus, key=taus.get) if taus else "",
+                     "b_held_94": r["hdi"]["94"]["b"]})
     return rows
 
 

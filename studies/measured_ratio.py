@@ -20,13 +20,13 @@ many of them ``fit`` warns "friction-dominated" (paper_grid.csv).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
 from _table import write_table
 from deviation_scale_probe import SEED23
 from bayes_inerter.records.reactance import drive_impedance
+from bayes_inerter.study.replicate_store import finished
 from bayes_inerter.study.study_calibration import Config, replicate_device
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -43,14 +43,12 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     cs = Config(**SEED23).settings()
     rows = []
-    with open(a.folder / "replicates.jsonl") as f:
-        for line in f:
-            r = json.loads(line)
-            record = replicate_device(cs, r["replicate"]).records[0]
-            held = {lvl: sum(r["hdi"][lvl].values()) for lvl in ("94", "50")}
-            rows.append({"replicate": r["replicate"], "measured_ratio": round(drive_impedance(record).ratio, 4),
-                         "converged": r["converged"], "steps": r["iterations"], "tau_max": round(r["tau_max"], 1),
-                         "intervals": len(r["hdi"]["94"]), "held_94": held["94"], "held_50": held["50"]})
+    for r in finished(a.folder):
+        record = replicate_device(cs, r["replicate"]).records[0]
+        held = {lvl: sum(r["hdi"][lvl].values()) for lvl in ("94", "50")}
+        rows.append({"replicate": r["replicate"], "measured_ratio": round(drive_impedance(record).ratio, 4),
+                     "converged": r["converged"], "steps": r["iterations"], "tau_max": round(r["tau_max"], 1),
+                     "intervals": len(r["hdi"]["94"]), "held_94": held["94"], "held_50": held["50"]})
     rows.sort(key=lambda r: r["measured_ratio"])
     table = []
     for level in LEVELS:

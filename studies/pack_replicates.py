@@ -1,5 +1,5 @@
 """Pack a finished study folder's replicates (``replicates/``, one JSON each) into one
-file, ``replicates.jsonl`` (``bayes_inerter.study.replicate_store``), or unpack them
+gzipped file, ``replicates.jsonl.gz`` (``bayes_inerter.study.replicate_store``), or unpack them
 again. Every study reads both, and a run continued into a packed folder writes its new
 replicates loose beside the packed file; pack a folder once its run is done.
 

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import sys
 from pathlib import Path
 
@@ -31,6 +30,7 @@ from bayes_inerter.cli.study_script import config_from_folder
 from bayes_inerter.inference.sampling import optimize
 from bayes_inerter.inference.sampling.tempering import Tempering
 from bayes_inerter.study.manifest import script_configuration, write_manifest
+from bayes_inerter.study.replicate_store import load_replicates, write_replicate
 from bayes_inerter.study.study_calibration import IDENTIFIED, Config, study_replicate
 
 from _table import write_table
@@ -54,7 +54,7 @@ def main(argv=None) -> int:
         print(f"error: --steps must be at least 20, got {args.steps}", file=sys.stderr)
         return 2
     out = Path(args.out)
-    (out / "replicates").mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     cs = config_from_folder(Config, V12).settings()
     if not args.rule:
         cs = dataclasses.replace(cs, steps=args.steps)
@@ -63,16 +63,16 @@ def main(argv=None) -> int:
     if args.mirror_shares:
         optimize.MIRROR_SHARES = tuple(args.mirror_shares)  # read at each start search
     write_manifest(out, script_configuration())
-    v12 = {r["replicate"]: r for r in map(json.loads, (V12 / "replicates.jsonl").read_text().splitlines())}
+    v12 = load_replicates(V12)
+    done = load_replicates(out)  # packed or loose: a rerun fits only the missing ones
     for i, k in enumerate(args.replicates, 1):
-        path = out / "replicates" / f"{k:04d}.json"
-        if not path.exists():
-            got = study_replicate(cs, k, Path(args.work) / f"{k:04d}")
-            path.write_text(json.dumps(got))
+        if k not in done:
+            done[k] = study_replicate(cs, k, Path(args.work) / f"{k:04d}")
+            write_replicate(out, k, done[k])
         print(f"[{i}/{len(args.replicates)}] replicate {k} done", flush=True)
     rows = []
     for k in args.replicates:
-        long_ = json.loads((out / "replicates" / f"{k:04d}.json").read_text())
+        long_ = done[k]
         short = v12[k]
         a, b = short["identified"][IDENTIFIED], long_["identified"][IDENTIFIED]
         rows.append({"replicate": k, "frequency": cs.frequencies[k % len(cs.frequencies)],

@@ -77,7 +77,7 @@ from ..records.reactance import drive_impedance
 from ..records.record import Record
 from ..simulate import SimulationError
 from . import stop_rule
-from .replicate_store import PACKED, finished
+from .replicate_store import finished, is_packed
 
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
            "coverage_rows", "chains_long_enough", "write_study_calibration", "run_study_calibration", "inspect_replicate",
@@ -609,8 +609,8 @@ def raise_cap(out, max_steps: int) -> list[int]:
                          "there is no cap to raise")
     if not (isinstance(max_steps, int) and max_steps > old):
         raise ValueError(f"the new cap must be a whole number of steps above the folder's {old}, got {max_steps!r}")
-    if (out / PACKED).exists():
-        raise ValueError(f"{out}'s replicates are packed in {PACKED}; unpack them first "
+    if is_packed(out):
+        raise ValueError(f"{out}'s replicates are packed; unpack them first "
                          "(python studies/pack_replicates.py --unpack)")
     moved = []
     keep = out / f"capped-{old}"
