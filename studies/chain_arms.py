@@ -28,7 +28,6 @@ import math
 import sys
 from pathlib import Path
 
-import h5py
 import numpy as np
 
 from _table import read_rows, sampled_model, write_table
@@ -36,11 +35,6 @@ from bayes_inerter.inference import LikelihoodSettings, PosteriorModel
 from bayes_inerter.inference.sampling.checkpoint import read_chain
 from bayes_inerter.inference.sampling.coordinates import drive_omega
 from bayes_inerter.records import read_record
-
-
-def stored_log_prob(checkpoint: Path, steps: int) -> np.ndarray:
-    with h5py.File(checkpoint, "r", locking=False) as f:
-        return f["mcmc"]["log_prob"][:steps].copy()
 
 
 def main(argv=None) -> int:
@@ -59,14 +53,14 @@ def main(argv=None) -> int:
             print(f"error: {path} does not exist; give a fit folder holding chain.h5 and the record it fitted",
                   file=sys.stderr)
             return 2
-    chain = read_chain(checkpoint)
+    chain, log_prob = read_chain(checkpoint, log_prob=True)
     steps, walkers, ndim = chain.shape
     record = read_record(a.record)
     model, coords = sampled_model(PosteriorModel(record, likelihood=LikelihoodSettings(residual="motion")),
                                   checkpoint)
     theta, log_jac = coords.transform(chain[-1])
     again = np.array([model.log_prob(t)[0] for t in theta]) + log_jac
-    stored = stored_log_prob(checkpoint, steps)[-1]
+    stored = log_prob[-1]
     if not np.allclose(again, stored, atol=1e-6, rtol=0):
         print(f"error: the posterior at the chain's last walkers differs from the stored one by up to "
               f"{np.max(np.abs(again - stored)):.3g} nats; give the record and defaults that fit used",
@@ -87,8 +81,9 @@ def main(argv=None) -> int:
                      "mean_log10_k_B": round(float(np.mean(theta[s, :, names.index("k_B")]) / math.log(10)), 3),
                      "mean_log10_z_n": round(float(np.mean(np.log10(z_n[s]))), 3)})
     for r in rows:
-        print(f"steps {r['steps']:>12}: stiff bearing {r['stiff_bearing_share']:.3f}, mean log b {r['mean_log_b']:.4f}, "
-              f"log10 k_B {r['mean_log10_k_B']:.3f}, log10 |z_n| {r['mean_log10_z_n']:.3f}")
+        print(f"steps {r['steps']:>12}: stiff bearing {r['stiff_bearing_share']:.3f}, "
+              f"mean log b {r['mean_log_b']:.4f}, log10 k_B {r['mean_log10_k_B']:.3f}, "
+              f"log10 |z_n| {r['mean_log10_z_n']:.3f}")
     if a.out is not None:
         kept = [r for r in read_rows(a.out) if r["chain"] != rows[0]["chain"]]
         write_table(a.out, kept + rows)

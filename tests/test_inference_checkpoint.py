@@ -47,6 +47,10 @@ def test_a_new_checkpoint_holds_its_identity_as_json(tmp_path):
     opened = open_checkpoint(path, identity=json.loads(json.dumps(IDENTITY)))
     assert opened.steps == 3 and not opened.recovered
     assert read_chain(path).shape == (3, 4, 2)
+    chain, log_prob = read_chain(path, log_prob=True)
+    with h5py.File(path, "r") as f:
+        np.testing.assert_array_equal(chain, f["mcmc"]["chain"][:3])
+        np.testing.assert_array_equal(log_prob, f["mcmc"]["log_prob"][:3])
 
 
 @pytest.mark.parametrize("change, said", [

@@ -179,10 +179,11 @@ def new_checkpoint(path, *, identity: dict, write_seconds: float = WRITE_SECONDS
     return TwinBackend(path, write_seconds=write_seconds)
 
 
-def read_chain(path) -> np.ndarray:
+def read_chain(path, *, log_prob: bool = False):
     """The steps of the checkpoint at ``path`` that a continued run would keep: the
-    sealed steps of its longer intact file, shape (steps, walkers, parameters). Safe to
-    call while a run writes it."""
+    sealed steps of its longer intact file, shape (steps, walkers, parameters); with
+    ``log_prob``, (those steps, their log-probabilities (steps, walkers)), both from that
+    file. Safe to call while a run writes it."""
     import h5py
 
     path = Path(path)
@@ -194,7 +195,8 @@ def read_chain(path) -> np.ndarray:
                               + (" (it was written by an older version of bayes-inerter)" if older else ""))
     best = max(intact, key=lambda s: s.steps)
     with h5py.File(best.path, "r", locking=False) as f:
-        return f[GROUP]["chain"][: best.steps].copy()
+        chain = f[GROUP]["chain"][: best.steps].copy()
+        return (chain, f[GROUP]["log_prob"][: best.steps].copy()) if log_prob else chain
 
 
 def steps_written(path) -> int:
