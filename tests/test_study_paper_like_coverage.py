@@ -162,3 +162,26 @@ def test_a_tempered_replicate_is_fitted_tempered_and_says_so(tmp_path, monkeypat
     untempered = plc.replicate(0, 6000, 500, tau_rtol=0.05)
     assert calls[1]["convergence"].tau_rtol == untempered["tau_rtol"] == 0.05
     assert calls[1]["tempering"] is None and "tempering" not in untempered and "swap_rates" not in untempered
+
+
+def test_a_work_folder_holds_the_fit_while_it_runs_and_goes_when_done(tmp_path, monkeypatch):
+    from pathlib import Path
+
+    from bayes_inerter.study import paper_like_coverage as plc
+
+    calls, seen = [], []
+    fake = _fake_fit(calls)
+
+    def fit(record, out, **options):  # the folder exists while the fit runs there
+        Path(out).mkdir(parents=True)
+        (Path(out) / "chain.h5").write_bytes(b"steps")
+        seen.append(Path(out))
+        return fake(record, out, **options)
+
+    monkeypatch.setattr(plc, "fit_record", fit)
+    work = tmp_path / "work"
+    config = Config(replicates=1, seed0=6000, max_steps=500, work=str(work))
+    plc._run((0, tmp_path / "out", config, "abc"))
+    assert seen == [work / "0000" / "fit"]  # the same path a rerun continues from
+    assert not (work / "0000").exists()  # removed once the replicate is written
+    assert [r["replicate"] for r in plc.finished(tmp_path / "out")] == [0]

@@ -34,7 +34,10 @@ alone (the folders' default, and ``fit``'s); a folder keeps one sampler.
 (``Convergence.tau_rtol``; a folder keeps one, each replicate names it, ``stop_rule``).
 ``freq`` F runs only the replicates driven at F Hz. ``duration`` D makes every record D s
 long, ramp included (the paper's are 10 s: 3 steady periods at 0.5 Hz, results/record-length);
-a folder keeps one length.
+a folder keeps one length. ``work`` W runs replicate k's fit in W/<k> (``fit_record``'s
+folder, its checkpoint included), removed once the replicate is written: a run stopped
+mid-chain continues that chain when run again, where the default (None, a temporary
+folder) starts it over; a continued replicate's ``seconds`` count only its last run.
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import shutil
 import tempfile
 import time
 from dataclasses import dataclass, field
@@ -84,16 +88,27 @@ def likelihood_settings(text: str) -> dict:
 
 def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
               likelihood: str = "default", tempering: Tempering | None = None,
-              tau_rtol: float | None = None, duration: float | None = None) -> dict:
+              tau_rtol: float | None = None, duration: float | None = None, folder=None) -> dict:
+    """Replicate ``k`` fitted (see the module docstring). ``folder``: where its fit runs,
+    continued from the checkpoint there if an earlier run left one, and removed once the
+    fit is done (None: a temporary folder, nothing kept if stopped)."""
     setting, freq = grid_case(k)
     seed = seed0 + k
     rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family], duration=duration)
     b_true = paper_parameters(setting).b
     t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory() as tmp:
-        res = fit_record(rec, Path(tmp) / "fit", seed=seed, plots=False,
-                         likelihood=LikelihoodSettings(**settings_changes(likelihood)),
-                         convergence=stop_rule.convergence(max_steps, tau_rtol), tempering=tempering)
+
+    def fit(where: Path):
+        return fit_record(rec, where, seed=seed, plots=False,
+                          likelihood=LikelihoodSettings(**settings_changes(likelihood)),
+                          convergence=stop_rule.convergence(max_steps, tau_rtol), tempering=tempering)
+
+    if folder is None:
+        with tempfile.TemporaryDirectory() as tmp:
+            res = fit(Path(tmp) / "fit")
+    else:
+        res = fit(Path(folder) / "fit")
+        shutil.rmtree(folder, ignore_errors=True)
     b = np.asarray(res.idata.posterior["b"]).ravel()
     tau = np.asarray(list(res.tau.values()) if isinstance(res.tau, dict) else res.tau, dtype=float)
     out = {"replicate": k, "setting": setting, "freq_hz": freq, "seed": seed, "b_true": b_true,
@@ -125,8 +140,9 @@ def _ladder_entry(tempering: Tempering | None) -> list | None:
 
 def _run(job) -> dict:
     k, out, config, commit = job
+    folder = None if config.work is None else Path(config.work) / f"{k:04d}"
     got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder(),
-                    config.tau_rtol, config.duration)
+                    config.tau_rtol, config.duration, folder)
     write_replicate(out, k, got, indent=1)
     return got
 
@@ -256,6 +272,9 @@ class Config:
                 "Convergence.tau_rtol); a folder keeps one"})
     duration: float | None = field(default=None, metadata={
         "help": "each record's length, s, ramp included (default: the paper's 10 s); a folder keeps one"})
+    work: str | None = field(default=None, metadata={
+        "help": "where each replicate's fit runs until done, continued there by the next run if this one stops "
+                "(default: a temporary folder, a stopped fit starts over)"})
     summarise: bool = field(default=False, metadata={"help": "only write the tables from the replicates there"})
     against: str | None = field(default=None, metadata={
         "help": "with summarise: a folder of the same replicates fitted otherwise; also writes pairs.csv and "
