@@ -120,3 +120,19 @@ def test_exit_codes_say_how_the_study_ended(tmp_path, capsys, behaviour, code, s
     module, _ = fake_study(behaviour)
     assert study_main(module, out=tmp_path / "o", argv=["--processes", "1"]) == code
     assert said in capsys.readouterr().err
+
+
+def test_a_continued_run_shows_what_it_found_done_from_its_first_line(tmp_path, capsys):
+    """A study that finds 2 of 3 replicates done reports (2, 3) first: the bar's first
+    line, which off a terminal stays up until the next item ends, says 2/3, not 0/3."""
+    module = types.ModuleType("bayes_inerter.study.fake")
+
+    def run(config, out, executor, *, progress=None):
+        progress(2, 3)
+        (out / "table.csv").write_text("x\n1\n")
+        return StudyOutput(written=(out / "table.csv",), failed=(), lines=())
+
+    module.Config, module.run = Config, run
+    assert study_main(module, out=tmp_path / "here", argv=["--processes", "1"]) == EXIT_OK
+    err = capsys.readouterr().err
+    assert "2/3" in err and "0/3" not in err

@@ -123,14 +123,15 @@ def config_from_folder(config_type, folder, run: int = 0) -> Any:
 def _bar(desc: str) -> tuple[Callable, Callable]:
     """(progress, close) of a bar on standard error, made at the first progress a study
     reports (none for one that reports none), that also prints where standard error is
-    not a terminal (at most every 30 s there)."""
+    not a terminal (at most every 30 s there). Its first line counts what a continued
+    run found done, not 0."""
     from tqdm import tqdm
 
     shown = []
 
     def progress(done: int, total: int) -> None:
         if not shown:
-            shown.append(tqdm(desc=desc, total=total, unit="item", file=sys.stderr,
+            shown.append(tqdm(desc=desc, total=total, initial=done, unit="item", file=sys.stderr,
                               mininterval=0.5 if sys.stderr.isatty() else 30))
         bar = shown[0]
         bar.total = total
