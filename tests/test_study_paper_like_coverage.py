@@ -176,7 +176,9 @@ def test_a_work_folder_holds_the_fit_while_it_runs_and_goes_when_done(tmp_path, 
         Path(out).mkdir(parents=True)
         (Path(out) / "chain.h5").write_bytes(b"steps")
         seen.append(Path(out))
-        return fake(record, out, **options)
+        got = fake(record, out, **options)
+        got.timings = {"sampling": 2.0, "sampling_all_runs": 5.04, "steps_timed": 750}  # two runs built it
+        return got
 
     monkeypatch.setattr(plc, "fit_record", fit)
     work = tmp_path / "work"
@@ -184,4 +186,6 @@ def test_a_work_folder_holds_the_fit_while_it_runs_and_goes_when_done(tmp_path, 
     plc._run((0, tmp_path / "out", config, "abc"))
     assert seen == [work / "0000" / "fit"]  # the same path a rerun continues from
     assert not (work / "0000").exists()  # removed once the replicate is written
-    assert [r["replicate"] for r in plc.finished(tmp_path / "out")] == [0]
+    (got,) = plc.finished(tmp_path / "out")
+    assert got["replicate"] == 0
+    assert got["sampling_s_all_runs"] == 5.0 and got["steps_timed"] == 750  # every run's, not the last one's

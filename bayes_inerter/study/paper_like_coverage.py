@@ -37,7 +37,9 @@ long, ramp included (the paper's are 10 s: 3 steady periods at 0.5 Hz, results/r
 a folder keeps one length. ``work`` W runs replicate k's fit in W/<k> (``fit_record``'s
 folder, its checkpoint included), removed once the replicate is written: a run stopped
 mid-chain continues that chain when run again, where the default (None, a temporary
-folder) starts it over; a continued replicate's ``seconds`` count only its last run.
+folder) starts it over; a continued replicate's ``seconds`` count only its last run, and
+its ``sampling_s_all_runs`` the sampling of every run that wrote its fit.json, over its
+``steps_timed`` steps (a run stopped before that leaves its steps untimed).
 """
 
 from __future__ import annotations
@@ -117,6 +119,11 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
            "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
            "likelihood_settings": likelihood_settings(likelihood), "tau_rtol": stop_rule.resolved(tau_rtol)}
+    timings = getattr(res, "timings", None) or {}
+    timed = {k: timings[k] for k in ("sampling_all_runs", "steps_timed") if k in timings}
+    if timed:  # seconds per step of a chain continued across runs ("seconds" is the last run's alone)
+        out["sampling_s_all_runs"] = round(float(timed["sampling_all_runs"]), 1)
+        out["steps_timed"] = int(timed["steps_timed"])
     by_parameter = getattr(res, "tau_by_parameter", None)
     if by_parameter:  # which parameters are slow, readable without fitting again (absent before)
         out["tau_by_parameter"] = {n: round(float(t), 1) for n, t in by_parameter.items()}
