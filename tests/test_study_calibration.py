@@ -125,6 +125,40 @@ def test_a_resuming_replicate_is_given_a_work_folder_under_the_run(tmp_path):
     assert got[0]["folder"] == str(tmp_path / "elsewhere" / "0000")
 
 
+@dataclass(frozen=True)
+class _Checkpointing:
+    """Settings whose replicate leaves a chain in its work folder, or fails after it."""
+
+    resumes: ClassVar[bool] = True
+    seed: int = 0
+    fail: bool = False
+
+    def replicate(self, k, folder=None):
+        (folder / "fit").mkdir(parents=True)
+        (folder / "fit" / "chain.h5").write_bytes(b"steps")
+        if self.fail:
+            raise RuntimeError("only 50 posterior draws kept")
+        return {"replicate": k}
+
+
+def test_a_work_folder_goes_once_its_result_is_written_and_stays_where_it_failed(tmp_path, monkeypatch):
+    from bayes_inerter.study import calibration
+
+    work = tmp_path / "work"
+    run_replicates(_Checkpointing(), tmp_path / "a", 1, work=work)
+    assert (tmp_path / "a" / "replicates" / "0000.json").is_file() and not (work / "0000").exists()
+    run_replicates(_Checkpointing(fail=True), tmp_path / "b", 1, work=work)
+    assert (work / "0000" / "fit" / "chain.h5").is_file()  # the failed replicate's chain, for a look
+
+    def no_disk(out, k, result):
+        raise OSError("No space left on device")
+
+    monkeypatch.setattr(calibration, "write_replicate", no_disk)
+    with pytest.raises(OSError):
+        run_replicates(_Checkpointing(), tmp_path / "c", 1, work=tmp_path / "w2")
+    assert (tmp_path / "w2" / "0000" / "fit" / "chain.h5").is_file()  # the chain kept for the next run
+
+
 def test_a_result_file_is_written_whole_and_leaves_nothing_beside_it(tmp_path):
     from bayes_inerter.study.output import write_json
 

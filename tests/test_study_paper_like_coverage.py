@@ -189,3 +189,42 @@ def test_a_work_folder_holds_the_fit_while_it_runs_and_goes_when_done(tmp_path, 
     (got,) = plc.finished(tmp_path / "out")
     assert got["replicate"] == 0
     assert got["sampling_s_all_runs"] == 5.0 and got["steps_timed"] == 750  # every run's, not the last one's
+
+
+def test_a_work_folder_outlives_a_replicate_that_could_not_be_written(tmp_path, monkeypatch):
+    from pathlib import Path
+
+    from bayes_inerter.study import paper_like_coverage as plc
+
+    fake = _fake_fit([])
+
+    def fit(record, out, **options):
+        Path(out).mkdir(parents=True)
+        (Path(out) / "chain.h5").write_bytes(b"steps")
+        return fake(record, out, **options)
+
+    def no_disk(out, k, result, indent=None):
+        raise OSError("No space left on device")
+
+    monkeypatch.setattr(plc, "fit_record", fit)
+    monkeypatch.setattr(plc, "write_replicate", no_disk)
+    work = tmp_path / "work"
+    with pytest.raises(OSError):
+        plc._run((0, tmp_path / "out", Config(replicates=1, max_steps=500, work=str(work)), "abc"))
+    assert (work / "0000" / "fit" / "chain.h5").is_file()  # the next run continues the chain
+
+
+def test_a_work_folder_of_another_run_is_refused_and_one_without_a_stamp_taken(tmp_path):
+    from bayes_inerter.study import paper_like_coverage as plc
+
+    work, out = tmp_path / "work", tmp_path / "out"
+    got = plc._work_folder(Config(max_steps=80000, work=str(work)), out, 3)
+    assert got == work / "0003" and (got / plc.WORK_STAMP).is_file()
+    assert plc._work_folder(Config(max_steps=80000, work=str(work)), out, 3) == got  # the same run goes on
+    with pytest.raises(ValueError, match=r"max_steps 80000 there, 20000 here.*another --work"):
+        plc._work_folder(Config(max_steps=20000, work=str(work)), out, 3)
+    with pytest.raises(ValueError, match="out "):
+        plc._work_folder(Config(max_steps=80000, work=str(work)), tmp_path / "other", 3)
+    (work / "0004" / "fit").mkdir(parents=True)  # a chain left by code before the stamp
+    assert plc._work_folder(Config(max_steps=20000, work=str(work)), out, 4) == work / "0004"
+    assert plc._work_folder(Config(), out, 0) is None  # no work folder: a temporary one per fit

@@ -33,6 +33,7 @@ import copy
 import csv
 import json
 import math
+import shutil
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -169,7 +170,8 @@ def replicate(cs: CalibrationSettings, k: int, checkpoint=None) -> dict:
 
 
 #: Where a replicate whose settings resume (``resumes``) runs its fit by default:
-#: ``out``/.running/<k>, removed when the replicate is done (not committed: .gitignore).
+#: ``out``/.running/<k>, removed once the replicate's result is written (kept where it
+#: failed; not committed: .gitignore).
 #: A chain's checkpoint there is tens of megabytes: a study keeping its results small
 #: gives ``run_replicates`` a ``work`` folder elsewhere.
 RUNNING = ".running"
@@ -177,14 +179,14 @@ RUNNING = ".running"
 
 def _worker(args):
     cs, k, out, work = args
+    folder = work / f"{k:04d}" if getattr(cs, "resumes", False) else None
     try:
-        if getattr(cs, "resumes", False):
-            result = cs.replicate(k, work / f"{k:04d}")
-        else:
-            result = cs.replicate(k)
+        result = cs.replicate(k) if folder is None else cs.replicate(k, folder)
     except Exception as exc:  # one replicate's failure is reported, the others go on
         result = {"replicate": k, "error": f"{type(exc).__name__}: {exc}"}
     write_replicate(out, k, result)
+    if folder is not None and "error" not in result:  # only once the result is on disk
+        shutil.rmtree(folder, ignore_errors=True)
     return result
 
 

@@ -37,15 +37,17 @@ long, ramp included (the paper's are 10 s: 3 steady periods at 0.5 Hz, results/r
 a folder keeps one length. ``work`` W runs replicate k's fit in W/<k> (``fit_record``'s
 folder, its checkpoint included), removed once the replicate is written: a run stopped
 mid-chain continues that chain when run again, where the default (None, a temporary
-folder) starts it over; a continued replicate's ``seconds`` count only its last run, and
-its ``sampling_s_all_runs`` the sampling of every run that wrote its fit.json, over its
-``steps_timed`` steps (a run stopped before that leaves its steps untimed).
+folder) starts it over. The folder is stamped with the run's output folder, cap and
+tolerance, and one stamped otherwise is refused. A continued replicate's ``seconds``
+count only its last run; ``sampling_s_all_runs`` over ``steps_timed`` is its seconds per
+step (a run stopped before it wrote fit.json leaves its steps untimed).
 """
 
 from __future__ import annotations
 
 import csv
 import dataclasses
+import json
 import math
 import shutil
 import tempfile
@@ -92,8 +94,8 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
               likelihood: str = "default", tempering: Tempering | None = None,
               tau_rtol: float | None = None, duration: float | None = None, folder=None) -> dict:
     """Replicate ``k`` fitted (see the module docstring). ``folder``: where its fit runs,
-    continued from the checkpoint there if an earlier run left one, and removed once the
-    fit is done (None: a temporary folder, nothing kept if stopped)."""
+    continued from the checkpoint there if an earlier run left one; the caller removes it
+    once the replicate is written (None: a temporary folder, nothing kept if stopped)."""
     setting, freq = grid_case(k)
     seed = seed0 + k
     rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family], duration=duration)
@@ -110,7 +112,6 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
             res = fit(Path(tmp) / "fit")
     else:
         res = fit(Path(folder) / "fit")
-        shutil.rmtree(folder, ignore_errors=True)
     b = np.asarray(res.idata.posterior["b"]).ravel()
     tau = np.asarray(list(res.tau.values()) if isinstance(res.tau, dict) else res.tau, dtype=float)
     out = {"replicate": k, "setting": setting, "freq_hz": freq, "seed": seed, "b_true": b_true,
@@ -118,7 +119,8 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "tau_max": float(np.nanmax(tau)) if np.any(np.isfinite(tau)) else None,
            "seconds": round(time.perf_counter() - t0, 1), "identified": bool(res.b_interval.identified),
            "phi": res.b_interval.phi, "commit": commit, "family": family, "likelihood": likelihood,
-           "likelihood_settings": likelihood_settings(likelihood), "tau_rtol": stop_rule.resolved(tau_rtol)}
+           "likelihood_settings": likelihood_settings(likelihood), "tau_rtol": stop_rule.resolved(tau_rtol),
+           "max_steps": int(max_steps)}
     timings = getattr(res, "timings", None) or {}
     timed = {k: timings[k] for k in ("sampling_all_runs", "steps_timed") if k in timings}
     if timed:  # seconds per step of a chain continued across runs ("seconds" is the last run's alone)
@@ -147,11 +149,42 @@ def _ladder_entry(tempering: Tempering | None) -> list | None:
 
 def _run(job) -> dict:
     k, out, config, commit = job
-    folder = None if config.work is None else Path(config.work) / f"{k:04d}"
+    folder = _work_folder(config, out, k)
     got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder(),
                     config.tau_rtol, config.duration, folder)
     write_replicate(out, k, got, indent=1)
+    if folder is not None:  # only once the replicate is on disk: a crash before keeps the chain
+        shutil.rmtree(folder, ignore_errors=True)
     return got
+
+
+#: The file in a replicate's work folder that names the study its chain belongs to.
+WORK_STAMP = "study.json"
+
+
+def _work_folder(config: Config, out: Path, k: int) -> Path | None:
+    """Replicate ``k``'s folder in ``config.work`` (None without one), stamped with the
+    study it runs for: its output folder, cap and tolerance, which the chain's own
+    checkpoint does not hold. A folder stamped for another study is refused
+    (ValueError), so that two studies sharing a work folder, or a rerun with another
+    cap, never continue each other's chains; a folder without a stamp is taken."""
+    if config.work is None:
+        return None
+    folder = Path(config.work) / f"{k:04d}"
+    stamp = {"out": str(Path(out).resolve()), "max_steps": int(config.max_steps),
+             "tau_rtol": stop_rule.resolved(config.tau_rtol)}
+    path = folder / WORK_STAMP
+    if path.exists():
+        found = json.loads(path.read_text())
+        if found != stamp:
+            differ = ", ".join(f"{key} {found.get(key)!r} there, {value!r} here" for key, value in stamp.items()
+                               if found.get(key) != value)
+            raise ValueError(f"{folder} holds replicate {k}'s chain for another run ({differ}); "
+                             "give another --work folder or remove that one")
+    else:
+        folder.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(stamp) + "\n")
+    return folder
 
 
 def with_errors(r: dict) -> dict:

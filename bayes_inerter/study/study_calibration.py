@@ -52,7 +52,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import shutil
 import tempfile
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -504,14 +503,14 @@ def study_replicate(cs: StudyCalibration, k: int, folder=None) -> dict:
     """Replicate ``k``: the truth's rank among ``cs.draws`` posterior draws per physical
     parameter, whether each of the :data:`LEVELS` intervals (highest-density and
     equal-tailed) holds it, and the chain's diagnostics. ``folder``: where its fit runs,
-    continued from the checkpoint there if an earlier run left one, and removed once the
-    replicate is done (None: a temporary folder, nothing kept if stopped)."""
+    continued from the checkpoint there if an earlier run left one (the caller removes it
+    once the replicate is written: ``calibration.run_replicates``; None: a temporary
+    folder, nothing kept if stopped)."""
     if folder is None:
         with tempfile.TemporaryDirectory() as tmp:
             rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(tmp) / "fit")
     else:
         rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(folder) / "fit")
-        shutil.rmtree(folder, ignore_errors=True)
     kept["b"] = kept.pop(f"b_{cs.setting}")
     n_kept = len(kept["b"])
     if n_kept < cs.draws:
