@@ -29,11 +29,13 @@ number of steps (``steps``); a replicate whose chain did not mix shows in the ra
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import csv
 import json
 import math
 import shutil
+import tempfile
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -49,7 +51,7 @@ from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 from .replicate_store import load_replicates, write_replicate
 
-__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "run_calibration", "coverage_table",
+__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "fit_folder", "run_calibration", "coverage_table",
            "compare_calibrations", "Config", "run", "case_name", "failed_items"]
 
 _P = paper_parameters("A1")
@@ -175,6 +177,19 @@ def replicate(cs: CalibrationSettings, k: int, checkpoint=None) -> dict:
 #: A chain's checkpoint there is tens of megabytes: a study keeping its results small
 #: gives ``run_replicates`` a ``work`` folder elsewhere.
 RUNNING = ".running"
+
+
+@contextlib.contextmanager
+def fit_folder(folder=None):
+    """Where a replicate's fit runs: ``folder``/fit, kept on leaving so that a stopped
+    run continues its chain there (the caller removes ``folder`` once the replicate is
+    written, as :func:`run_replicates` does), or for None a fit folder in a temporary
+    folder, removed on leaving (nothing kept if stopped)."""
+    if folder is not None:
+        yield Path(folder) / "fit"
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        yield Path(tmp) / "fit"
 
 
 def _worker(args):

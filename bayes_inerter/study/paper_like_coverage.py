@@ -50,7 +50,6 @@ import dataclasses
 import json
 import math
 import shutil
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -64,6 +63,7 @@ from ..inference.sampling.tempering import Tempering
 from ..inference.summaries.results import hdi
 from ..records.paper_like import PaperLike, laboratory, paper_like_record
 from . import stop_rule
+from .calibration import fit_folder
 from .manifest import source_commit
 from .output import StudyOutput
 from .replicate_store import finished, load_replicates, write_replicate
@@ -101,17 +101,10 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
     rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family], duration=duration)
     b_true = paper_parameters(setting).b
     t0 = time.perf_counter()
-
-    def fit(where: Path):
-        return fit_record(rec, where, seed=seed, plots=False,
-                          likelihood=LikelihoodSettings(**settings_changes(likelihood)),
-                          convergence=stop_rule.convergence(max_steps, tau_rtol), tempering=tempering)
-
-    if folder is None:
-        with tempfile.TemporaryDirectory() as tmp:
-            res = fit(Path(tmp) / "fit")
-    else:
-        res = fit(Path(folder) / "fit")
+    with fit_folder(folder) as where:
+        res = fit_record(rec, where, seed=seed, plots=False,
+                         likelihood=LikelihoodSettings(**settings_changes(likelihood)),
+                         convergence=stop_rule.convergence(max_steps, tau_rtol), tempering=tempering)
     b = np.asarray(res.idata.posterior["b"]).ravel()
     tau = np.asarray(list(res.tau.values()) if isinstance(res.tau, dict) else res.tau, dtype=float)
     out = {"replicate": k, "setting": setting, "freq_hz": freq, "seed": seed, "b_true": b_true,
@@ -122,10 +115,9 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
            "likelihood_settings": likelihood_settings(likelihood), "tau_rtol": stop_rule.resolved(tau_rtol),
            "max_steps": int(max_steps)}
     timings = getattr(res, "timings", None) or {}
-    timed = {k: timings[k] for k in ("sampling_all_runs", "steps_timed") if k in timings}
-    if timed:  # seconds per step of a chain continued across runs ("seconds" is the last run's alone)
-        out["sampling_s_all_runs"] = round(float(timed["sampling_all_runs"]), 1)
-        out["steps_timed"] = int(timed["steps_timed"])
+    if "sampling_all_runs" in timings and "steps_timed" in timings:  # seconds per step across runs
+        out["sampling_s_all_runs"] = round(float(timings["sampling_all_runs"]), 1)
+        out["steps_timed"] = int(timings["steps_timed"])
     by_parameter = getattr(res, "tau_by_parameter", None)
     if by_parameter:  # which parameters are slow, readable without fitting again (absent before)
         out["tau_by_parameter"] = {n: round(float(t), 1) for n, t in by_parameter.items()}

@@ -52,7 +52,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import tempfile
 from dataclasses import dataclass, field
 from typing import ClassVar
 from pathlib import Path
@@ -76,6 +75,7 @@ from ..records.reactance import drive_impedance
 from ..records.record import Record
 from ..simulate import SimulationError
 from . import stop_rule
+from .calibration import fit_folder
 from .replicate_store import finished, is_packed
 
 __all__ = ["STUDY_SBC_PRIORS", "LEVELS", "StudyCalibration", "ReplicateDevice", "replicate_device", "study_replicate", "raise_cap",
@@ -506,11 +506,8 @@ def study_replicate(cs: StudyCalibration, k: int, folder=None) -> dict:
     continued from the checkpoint there if an earlier run left one (the caller removes it
     once the replicate is written: ``calibration.run_replicates``; None: a temporary
     folder, nothing kept if stopped)."""
-    if folder is None:
-        with tempfile.TemporaryDirectory() as tmp:
-            rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(tmp) / "fit")
-    else:
-        rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, Path(folder) / "fit")
+    with fit_folder(folder) as where:
+        rng, truth, _, redraws, res, kept = _fit_replicate(cs, k, where)
     kept["b"] = kept.pop(f"b_{cs.setting}")
     n_kept = len(kept["b"])
     if n_kept < cs.draws:
