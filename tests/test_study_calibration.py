@@ -159,6 +159,20 @@ def test_a_work_folder_goes_once_its_result_is_written_and_stays_where_it_failed
     assert (tmp_path / "w2" / "0000" / "fit" / "chain.h5").is_file()  # the chain kept for the next run
 
 
+def test_a_work_folder_of_another_run_is_refused_before_any_fit_starts(tmp_path):
+    from bayes_inerter.study.calibration import WORK_STAMP, stamped_folder, work_stamp
+
+    work = tmp_path / "work"
+    run_replicates(_Checkpointing(fail=True), tmp_path / "a", 1, work=work)  # leaves work/0000, stamped for a
+    assert json.loads((work / "0000" / WORK_STAMP).read_text())["out"] == str((tmp_path / "a").resolve())
+    with pytest.raises(ValueError, match="another run .*out"):
+        run_replicates(_Checkpointing(), tmp_path / "b", 1, work=work)
+    assert not (tmp_path / "b" / "replicates" / "0000.json").exists()  # nothing fitted
+    (work / "0000" / WORK_STAMP).unlink()  # a chain left by code before the stamp is taken, and stamped
+    assert stamped_folder(work / "0000", work_stamp(_Checkpointing(), tmp_path / "b")) == work / "0000"
+    assert json.loads((work / "0000" / WORK_STAMP).read_text())["out"] == str((tmp_path / "b").resolve())
+
+
 def test_a_result_file_is_written_whole_and_leaves_nothing_beside_it(tmp_path):
     from bayes_inerter.study.output import write_json
 

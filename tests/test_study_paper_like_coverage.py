@@ -216,12 +216,13 @@ def test_a_work_folder_outlives_a_replicate_that_could_not_be_written(tmp_path, 
 
 def test_a_work_folder_of_another_run_is_refused_and_one_without_a_stamp_taken(tmp_path):
     from bayes_inerter.study import paper_like_coverage as plc
+    from bayes_inerter.study.calibration import WORK_STAMP
 
     work, out = tmp_path / "work", tmp_path / "out"
     got = plc._work_folder(Config(max_steps=80000, work=str(work)), out, 3)
-    assert got == work / "0003" and (got / plc.WORK_STAMP).is_file()
+    assert got == work / "0003" and (got / WORK_STAMP).is_file()
     assert plc._work_folder(Config(max_steps=80000, work=str(work)), out, 3) == got  # the same run goes on
-    with pytest.raises(ValueError, match=r"max_steps 80000 there, 20000 here.*another --work"):
+    with pytest.raises(ValueError, match=r"max_steps 80000 there, 20000 here.*another work folder"):
         plc._work_folder(Config(max_steps=20000, work=str(work)), out, 3)
     with pytest.raises(ValueError, match="out "):
         plc._work_folder(Config(max_steps=80000, work=str(work)), tmp_path / "other", 3)

@@ -51,7 +51,7 @@ from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 from .replicate_store import load_replicates, write_replicate
 
-__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "fit_folder", "run_calibration", "coverage_table",
+__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "fit_folder", "stamped_folder", "work_stamp", "run_calibration", "coverage_table",
            "compare_calibrations", "Config", "run", "case_name", "failed_items"]
 
 _P = paper_parameters("A1")
@@ -192,9 +192,44 @@ def fit_folder(folder=None):
         yield Path(tmp) / "fit"
 
 
+#: The file in a replicate's work folder that names the run its chain belongs to.
+WORK_STAMP = "study.json"
+
+
+def stamped_folder(folder, stamp: dict, *, create: bool = True) -> Path:
+    """``folder``, where a replicate's fit runs, checked against the run it is for:
+    ``stamp`` (JSON-able; the run's output folder and what the chain's checkpoint does
+    not hold, its cap and tolerance). A folder stamped otherwise is refused
+    (ValueError), so that two runs sharing a work folder, or a rerun with another cap,
+    never continue each other's chains; a folder without a stamp (an earlier version's)
+    is taken. With ``create``, the folder is made and stamped where it is not."""
+    folder = Path(folder)
+    path = folder / WORK_STAMP
+    if path.exists():
+        found = json.loads(path.read_text())
+        if found != stamp:
+            differ = ", ".join(f"{key} {found.get(key)!r} there, {value!r} here" for key, value in stamp.items()
+                               if found.get(key) != value)
+            raise ValueError(f"{folder} holds a replicate's chain for another run ({differ}); "
+                             "give another work folder or remove that one")
+    elif create:
+        folder.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(stamp) + "\n")
+    return folder
+
+
+def work_stamp(cs, out) -> dict:
+    """The stamp of ``cs``'s run into ``out`` (:func:`stamped_folder`): the output
+    folder, and the cap and tolerance where ``cs`` has them (settings.json pins the rest
+    of ``out``'s settings, but :func:`.study_calibration.raise_cap` raises its cap)."""
+    return {"out": str(Path(out).resolve()),
+            **{name: getattr(cs, name) for name in ("max_steps", "tau_rtol") if hasattr(cs, name)}}
+
+
 def _worker(args):
     cs, k, out, work = args
-    folder = work / f"{k:04d}" if getattr(cs, "resumes", False) else None
+    folder = (stamped_folder(work / f"{k:04d}", work_stamp(cs, out)) if getattr(cs, "resumes", False)
+              else None)
     try:
         result = cs.replicate(k) if folder is None else cs.replicate(k, folder)
     except Exception as exc:  # one replicate's failure is reported, the others go on
@@ -250,6 +285,9 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
     if progress:
         progress(done, replicates)
     work = out / RUNNING if work is None else Path(work)
+    if getattr(cs, "resumes", False):  # refused here, before any fit starts, not in a worker
+        for k in todo:
+            stamped_folder(work / f"{k:04d}", work_stamp(cs, out), create=False)
     jobs = [(cs, k, out, work) for k in todo]
     mine = executor is None
     executor = make_executor(processes if len(jobs) > 1 else 1) if mine else executor

@@ -47,7 +47,6 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import json
 import math
 import shutil
 import time
@@ -63,7 +62,7 @@ from ..inference.sampling.tempering import Tempering
 from ..inference.summaries.results import hdi
 from ..records.paper_like import PaperLike, laboratory, paper_like_record
 from . import stop_rule
-from .calibration import fit_folder
+from .calibration import fit_folder, stamped_folder
 from .manifest import source_commit
 from .output import StudyOutput
 from .replicate_store import finished, load_replicates, write_replicate
@@ -150,33 +149,15 @@ def _run(job) -> dict:
     return got
 
 
-#: The file in a replicate's work folder that names the study its chain belongs to.
-WORK_STAMP = "study.json"
-
-
 def _work_folder(config: Config, out: Path, k: int) -> Path | None:
     """Replicate ``k``'s folder in ``config.work`` (None without one), stamped with the
-    study it runs for: its output folder, cap and tolerance, which the chain's own
-    checkpoint does not hold. A folder stamped for another study is refused
-    (ValueError), so that two studies sharing a work folder, or a rerun with another
-    cap, never continue each other's chains; a folder without a stamp is taken."""
+    study it runs for (``calibration.stamped_folder``): its output folder, cap and
+    tolerance, which the chain's own checkpoint does not hold."""
     if config.work is None:
         return None
-    folder = Path(config.work) / f"{k:04d}"
-    stamp = {"out": str(Path(out).resolve()), "max_steps": int(config.max_steps),
-             "tau_rtol": stop_rule.resolved(config.tau_rtol)}
-    path = folder / WORK_STAMP
-    if path.exists():
-        found = json.loads(path.read_text())
-        if found != stamp:
-            differ = ", ".join(f"{key} {found.get(key)!r} there, {value!r} here" for key, value in stamp.items()
-                               if found.get(key) != value)
-            raise ValueError(f"{folder} holds replicate {k}'s chain for another run ({differ}); "
-                             "give another --work folder or remove that one")
-    else:
-        folder.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(stamp) + "\n")
-    return folder
+    return stamped_folder(Path(config.work) / f"{k:04d}", {
+        "out": str(Path(out).resolve()), "max_steps": int(config.max_steps),
+        "tau_rtol": stop_rule.resolved(config.tau_rtol)})
 
 
 def with_errors(r: dict) -> dict:
