@@ -67,6 +67,22 @@ def test_adaptation_in_normal_scores_with_block_moves_shares_its_weight_and_says
             Adaptation(**bad)
 
 
+def test_adaptation_with_correlated_blocks_fits_them_and_keeps_older_checkpoints_identity():
+    from bayes_inerter.inference.sampling.identity import _adaptation
+
+    rng = np.random.default_rng(5)
+    chain = rng.lognormal(size=(300, 20, 3))
+    still = rng.normal(0.0, 1.0, size=(300, 20))
+    adapt = Adaptation(every=400, knots=100, block_partners="correlated")
+    assert adapt.fit(chain, still)[1].partners == "correlated"
+    assert Adaptation(every=400, knots=100).fit(chain, still)[1].partners == "random"  # the default
+    assert "its most correlated partners" in adapt.describe()
+    assert "block_partners" not in _adaptation(Adaptation())  # checkpoints written before it match
+    assert _adaptation(adapt)["block_partners"] == "correlated"
+    with pytest.raises(ValueError, match="block partners"):
+        Adaptation(block_partners="nearest")
+
+
 class _Chain:
     """A stand-in back end: the chain so far (steps, walkers, ndim) and its log posterior."""
 

@@ -298,6 +298,35 @@ def test_block_move_leaves_the_target_invariant(sizes, wide):
     assert p > 0.001  # as for the proposal in normal scores: the smallest of 5 p-values
 
 
+def test_correlated_block_move_leaves_the_target_invariant():
+    # the fitted normal's correlations (not the target's) choose the blocks
+    cov = np.array([[1.0, 0.0, 0.8, 0.0], [0.0, 2.0, 0.0, -0.9], [0.8, 0.0, 1.0, 0.0], [0.0, -0.9, 0.0, 1.0]])
+    sampler, p = _run_gaussian(BlockMove(np.full(4, 0.3), cov, _SCORES, sizes=(1, 2, 3), partners="correlated"),
+                               steps=30)
+    assert 0.05 < np.mean(sampler.acceptance_fraction) < 0.95
+    assert p > 0.001
+
+
+def test_correlated_blocks_are_a_coordinate_and_its_most_correlated_partners():
+    # pairs (0, 2) and (1, 3) tied, 3 weakly to 0: a block of two is always a tied pair,
+    # a block of three adds the next most correlated; the random blocks seldom tie the pair
+    cov = np.array([[1.0, 0.0, 0.8, 0.2], [0.0, 1.0, 0.0, -0.7], [0.8, 0.0, 1.0, 0.0], [0.2, -0.7, 0.0, 1.0]])
+    zk = ndtri((np.arange(50) + 0.5) / 50)
+    scores = NormalScores(np.column_stack([zk] * 4), zk)
+    x = np.random.default_rng(41).multivariate_normal(np.zeros(4), cov, size=4000)
+    moved = {}
+    for partners in ("random", "correlated"):
+        move = BlockMove(np.zeros(4), cov, scores, sizes=(2,), partners=partners)
+        q, _ = move._propose(x, np.random.RandomState(43))
+        moved[partners] = {tuple(np.flatnonzero(row)) for row in q != x}, (q != x)
+    assert moved["correlated"][0] == {(0, 2), (1, 3)}
+    assert len(moved["random"][0]) == 6  # every pair of four
+    np.testing.assert_array_equal(BlockMove(np.zeros(4), cov, scores, partners="correlated").neighbours[:, :3],
+                                  [[0, 2, 3], [1, 3, 0], [2, 0, 1], [3, 1, 0]])
+    with pytest.raises(ValueError, match="partners"):
+        BlockMove(np.zeros(4), cov, scores, partners="nearest")
+
+
 @pytest.mark.parametrize("broken", [_BlockWithoutJacobian, _BlockWithoutHastings])
 def test_the_invariance_check_sees_a_block_move_without_its_factors(broken):
     assert _run_gaussian(broken(np.full(4, 0.3), np.diag([1.0, 2.0, 0.5, 1.0]), _SCORES), steps=30)[1] < 1e-6

@@ -23,6 +23,7 @@ import numpy as np
 from .convergence import transient
 from .marginals import KNOTS
 from .moves import BlockMove, IndependenceMove
+from .moves.block import PARTNERS
 from .transport import TriangularScores
 
 __all__ = ["Adaptation", "Schedule", "STRETCH", "FIT_MAX_STEPS", "NAMED"]
@@ -33,7 +34,8 @@ __all__ = ["Adaptation", "Schedule", "STRETCH", "FIT_MAX_STEPS", "NAMED"]
 #: the default).
 NAMED = {"adaptive": {"knots": None, "blocks": 0.0},
          "scores": {"knots": 200, "blocks": 0.0},
-         "blocks": {"knots": 200, "blocks": 0.5}}
+         "blocks": {"knots": 200, "blocks": 0.5},
+         "correlated": {"knots": 200, "blocks": 0.5, "block_partners": "correlated"}}
 
 #: The fitted moves learn from at most this many of the chain's steps after its
 #: transient: a longer chain is thinned evenly to them (every ceil(n / FIT_MAX_STEPS)-th
@@ -77,6 +79,9 @@ class Adaptation:
         many knots per coordinate (default 200), or (None) in the sampler's coordinates.
     blocks : share of ``weight`` given to a :class:`.moves.BlockMove` fitted in the
         same normal scores (needs ``knots``; default 0.5; 0: none).
+    block_partners : how a block move picks its coordinates (:data:`.moves.block.PARTNERS`):
+        "random" (default), or "correlated", a coordinate and its most correlated partners
+        under the fitted normal (:class:`.moves.BlockMove`).
     transport : the independence move's t fitted after a triangular quadratic map of the
         normal scores (:class:`.transport.TriangularScores`; needs ``knots``), the block
         move kept in the normal scores alone (default False: not measured to mix faster
@@ -92,12 +97,16 @@ class Adaptation:
     knots: int | None = KNOTS
     blocks: float = 0.5
     transport: bool = False
+    block_partners: str = "random"
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.blocks < 1.0:
             raise ValueError(f"adaptation's block share must lie in [0, 1), got {self.blocks}")
         if self.blocks > 0.0 and self.knots is None:
             raise ValueError("adaptation block moves are fitted in normal scores: give knots too")
+        if self.block_partners not in PARTNERS:
+            raise ValueError(f"adaptation's block partners must be one of {', '.join(PARTNERS)}, "
+                             f"got {self.block_partners!r}")
         if self.transport and self.knots is None:
             raise ValueError("adaptation's transport map starts from normal scores: give knots too")
         if self.knots is not None and not (isinstance(self.knots, int) and self.knots >= 4):
@@ -132,7 +141,8 @@ class Adaptation:
             return proposal, None
         scores = proposal.scores if proposal is not None else None
         scores = scores.scores if isinstance(scores, TriangularScores) else scores
-        return proposal, BlockMove.fit(draws, knots=self.knots, scores=scores, z=z)  # z: None after the map
+        return proposal, BlockMove.fit(draws, knots=self.knots, scores=scores, z=z,  # z: None after the map
+                                       partners=self.block_partners)
 
     def _transported(self, draws: np.ndarray, t: dict) -> IndependenceMove | None:
         """The independence move's t fitted after the triangular map of ``draws``, or None
@@ -160,6 +170,8 @@ class Adaptation:
             law += " after a triangular quadratic map"
         if self.blocks > 0.0:
             law += f"; {self.blocks:g} of its share to block moves from a normal in the same scores"
+            if self.block_partners == "correlated":
+                law += ", each block a coordinate and its most correlated partners"
         return (f"IndependenceMove {self.weight:.3g} ({law}, dof {self.dof:g}, scale {self.scale:g}, "
                 f"{self.wide:g} of it {self.wide_scale:g} x wider, refitted every {self.every} steps; "
                 f"the others scaled by {1 - self.weight:.3g} once fitted)")

@@ -87,7 +87,7 @@ def _prior(prior) -> dict:
 #: Settings added after checkpoints were first written, with the value in effect before
 #: each existed: an identity leaves a setting out while it holds that value, so a
 #: checkpoint written before the setting existed still matches.
-LATER_ADAPTATION = {"transport": False}
+LATER_ADAPTATION = {"transport": False, "block_partners": "random"}
 LATER_COORDINATES = {"series": None, "compliance": None}
 LATER_TEMPERING = {"adapt_hot": False}
 #: Likelihood settings added after checkpoints were written, with the value in effect

@@ -16,7 +16,10 @@ from emcee.moves import MHMove
 from ..marginals import NormalScores
 from ._draws import usable_draws
 
-__all__ = ["BlockMove"]
+__all__ = ["BlockMove", "PARTNERS"]
+
+#: How a block's coordinates are chosen (:class:`BlockMove`'s ``partners``).
+PARTNERS = ("random", "correlated")
 
 
 class BlockMove(MHMove):
@@ -24,6 +27,14 @@ class BlockMove(MHMove):
     picks a block of coordinates at random (its size drawn from ``sizes``, the
     coordinates uniformly among all) and proposes new values for them alone from the
     conditional law of that block given the walker's other coordinates, the rest kept.
+
+    With ``partners="correlated"`` a block is one coordinate drawn uniformly and, for a
+    block of m, the m - 1 others most correlated with it under the fitted normal (by
+    |correlation|; fixed once fitted): the coordinates the records tie together, such as
+    the Coulomb force and the viscous coefficient, or the nut's and the bearing's
+    stiffness and damping, then move together, where a block of random coordinates
+    seldom holds both of a tied pair and each alone can move only as far as its narrow
+    conditional law allows.
 
     The law is a normal N(mean, cov) in z = T(x) (``scores``, ``marginals.NormalScores``),
     the block's conditional normal widened by ``scale`` and, in a share ``wide`` of the
@@ -35,7 +46,7 @@ class BlockMove(MHMove):
     """
 
     def __init__(self, mean, cov, scores: NormalScores, *, sizes=(1, 2, 3), scale: float = 1.2,
-                 wide: float = 0.1, wide_scale: float = 3.0):
+                 wide: float = 0.1, wide_scale: float = 3.0, partners: str = "random"):
         mean = np.asarray(mean, dtype=float)
         cov = np.asarray(cov, dtype=float)
         d = len(mean)
@@ -46,9 +57,15 @@ class BlockMove(MHMove):
             raise ValueError(f"block sizes must lie in 1..{d}, got {sizes!r}")
         if not (scale > 0 and wide_scale > 0 and 0.0 <= wide < 1.0):
             raise ValueError(f"scales must be positive and the wide share in [0, 1), got {scale}, {wide_scale}, {wide}")
-        self.mean, self.scores, self.sizes = mean, scores, sizes
+        if partners not in PARTNERS:
+            raise ValueError(f"block partners must be one of {', '.join(PARTNERS)}, got {partners!r}")
+        self.mean, self.scores, self.sizes, self.partners = mean, scores, sizes, partners
         np.linalg.cholesky(cov)  # LinAlgError if not positive definite
         self.precision = np.linalg.inv(cov)
+        sd = np.sqrt(np.diag(cov))
+        strength = np.abs(cov / np.outer(sd, sd))
+        np.fill_diagonal(strength, np.inf)  # a coordinate first, then its partners, most correlated first
+        self.neighbours = np.argsort(-strength, axis=1, kind="stable")
         self.scale, self.wide, self.wide_scale = float(scale), float(wide), float(wide_scale)
         super().__init__(self._propose)
 
@@ -94,7 +111,10 @@ class BlockMove(MHMove):
         z, jac_old = self.scores.forward(x)
         k = max(self.sizes)
         sizes = np.asarray(self.sizes)[random.randint(len(self.sizes), size=n)]
-        order = np.argsort(random.rand(n, d), axis=1)[:, :k]
+        if self.partners == "correlated":
+            order = self.neighbours[random.randint(d, size=n), :k]
+        else:
+            order = np.argsort(random.rand(n, d), axis=1)[:, :k]
         active = np.arange(k) < sizes[:, None]  # (n, k): the slots that are the block
         idx = np.where(active, order, 0)
         both = active[:, :, None] & active[:, None, :]
