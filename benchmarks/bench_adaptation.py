@@ -9,11 +9,12 @@ paper-like device's records of laboratory LAB, ``records.paper_like``) is sample
 convergence criteria hold (``Convergence()``: 50 tau after the transient, tau settled,
 R-hat < 1.05, bulk ESS >= 400), twice from the same start (one restarted Nelder-Mead
 optimum per record) with the same seed, walkers and coordinates: with the one-t
-adaptation (``adaptive``, the default until 2026-11-25) and without it (the ensemble
+adaptation (``adaptive``, an earlier default) and without it (the ensemble
 moves alone), or with the variants named (``scores``: its t fitted in the chain's
 normal scores, 200 knots; ``blocks``: the same with half the fitted share to block
-moves, ``moves.BlockMove``, the default since; ``correlated``: those block moves made of a
-coordinate and its most correlated partners, ``Adaptation(block_partners="correlated")``).
+moves of random coordinates, ``moves.BlockMove``, the default after it;
+``correlated``: those block moves made of a coordinate and its most correlated partners,
+``Adaptation(block_partners="correlated")``, the default since).
 The two runs of a record run at the same time, one process each, so they
 share the machine alike: read the ratios.
 Writes one row per run (steps and seconds to converge, the largest autocorrelation
