@@ -71,8 +71,8 @@ def test_a_folder_keeps_one_stopping_rule(tmp_path):
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
     with pytest.raises(ValueError, match=f"tau_rtol 0.05, not {Convergence().tau_rtol:g}: continue it with "
                                          "--tau-rtol 0.05"):
-        run(Config(replicates=1), tmp_path, Serial())
-    got = run(Config(replicates=1, tau_rtol=0.05), tmp_path, Serial())
+        run(Config(replicates=1, block_partners="random"), tmp_path, Serial())
+    got = run(Config(replicates=1, tau_rtol=0.05, block_partners="random"), tmp_path, Serial())
     assert (tmp_path / "coverage.csv").exists() and not got.failed
 
 
@@ -85,14 +85,36 @@ def test_a_folder_keeps_one_record_length(tmp_path):
     today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood), "tau_rtol": 0.05}
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
     with pytest.raises(ValueError, match="another length than 20 s; choose another folder"):
-        run(Config(replicates=1, tau_rtol=0.05, duration=20.0), tmp_path, Serial())
+        run(Config(replicates=1, tau_rtol=0.05, duration=20.0, block_partners="random"), tmp_path, Serial())
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps({**today, "duration_s": 20.0}))
     with pytest.raises(ValueError, match="another length than the paper's 10 s"):
-        run(Config(replicates=1, tau_rtol=0.05), tmp_path, Serial())
-    got = run(Config(replicates=1, tau_rtol=0.05, duration=20.0), tmp_path, Serial())
+        run(Config(replicates=1, tau_rtol=0.05, block_partners="random"), tmp_path, Serial())
+    got = run(Config(replicates=1, tau_rtol=0.05, duration=20.0, block_partners="random"), tmp_path, Serial())
     assert not got.failed
     with pytest.raises(ValueError, match="duration must be a positive number"):
         Config(duration=0.0)
+
+
+def test_a_folder_keeps_one_choice_of_block_moves(tmp_path, monkeypatch):
+    """Replicates that do not name their block moves were fitted with random blocks: a
+    default run (correlated blocks) is refused and told how to go on with theirs; a
+    replicate fitted now names its choice, and the fit is given it."""
+    from bayes_inerter.study import paper_like_coverage as plc
+
+    (tmp_path / "replicates").mkdir()
+    one = finished(COMMITTED)[0]
+    today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood), "tau_rtol": 0.05}
+    (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
+    with pytest.raises(ValueError, match="other block moves than 'correlated' \\(give --block-partners random"):
+        run(Config(replicates=1, tau_rtol=0.05), tmp_path, Serial())
+    assert not run(Config(replicates=1, tau_rtol=0.05, block_partners="random"), tmp_path, Serial()).failed
+    calls = []
+    monkeypatch.setattr(plc, "fit_record", _fake_fit(calls))
+    assert plc.replicate(0, 6000, 500)["block_partners"] == "correlated" == calls[0]["adaptation"].block_partners
+    assert "block_partners" not in plc.replicate(0, 6000, 500, block_partners="random")
+    assert calls[1]["adaptation"].block_partners == "random"
+    with pytest.raises(ValueError, match="block_partners must be one of"):
+        Config(block_partners="nearest")
 
 
 def test_summarise_of_an_empty_folder_says_what_to_do(tmp_path):
@@ -106,7 +128,7 @@ def test_progress_counts_only_the_replicates_of_the_frequency_asked(tmp_path):
     for r in finished(COMMITTED):
         replicate_path(tmp_path, r["replicate"]).write_text(json.dumps({**r, "likelihood_settings": today}))
     seen = []
-    run(Config(freq=0.5, replicates=100, tau_rtol=0.05), tmp_path, Serial(),  # the rule they were stopped by
+    run(Config(freq=0.5, replicates=100, tau_rtol=0.05, block_partners="random"), tmp_path, Serial(),  # as fitted
         progress=lambda done, total: seen.append((done, total)))
     at_half = sum(r["freq_hz"] == 0.5 for r in finished(COMMITTED))
     assert at_half < 100 and seen == [(at_half, at_half)]

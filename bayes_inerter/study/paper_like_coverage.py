@@ -57,6 +57,8 @@ import numpy as np
 
 from ..device import FREQUENCIES_HZ, grid_case, paper_parameters
 from ..inference.fit import fit_record
+from ..inference.sampling.adaptation import Adaptation
+from ..inference.sampling.moves.block import PARTNERS
 from ..inference.posterior.likelihood import LikelihoodSettings, settings_changes
 from ..inference.sampling.tempering import Tempering
 from ..inference.summaries.results import hdi
@@ -91,10 +93,13 @@ def likelihood_settings(text: str) -> dict:
 
 def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
               likelihood: str = "default", tempering: Tempering | None = None,
-              tau_rtol: float | None = None, duration: float | None = None, folder=None) -> dict:
+              tau_rtol: float | None = None, duration: float | None = None, folder=None,
+              block_partners: str | None = None) -> dict:
     """Replicate ``k`` fitted (see the module docstring). ``folder``: where its fit runs,
     continued from the checkpoint there if an earlier run left one; the caller removes it
-    once the replicate is written (None: a temporary folder, nothing kept if stopped)."""
+    once the replicate is written (None: a temporary folder, nothing kept if stopped).
+    ``block_partners``: the adaptation's (``Adaptation.block_partners``; None: its default)."""
+    adaptation = Adaptation() if block_partners is None else Adaptation(block_partners=block_partners)
     setting, freq = grid_case(k)
     seed = seed0 + k
     rec = paper_like_record(setting, freq, seed=seed, device=FAMILIES[family], duration=duration)
@@ -103,7 +108,8 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
     with fit_folder(folder) as where:
         res = fit_record(rec, where, seed=seed, plots=False,
                          likelihood=LikelihoodSettings(**settings_changes(likelihood)),
-                         convergence=stop_rule.convergence(max_steps, tau_rtol), tempering=tempering)
+                         convergence=stop_rule.convergence(max_steps, tau_rtol), tempering=tempering,
+                         adaptation=adaptation)
     b = np.asarray(res.idata.posterior["b"]).ravel()
     tau = np.asarray(list(res.tau.values()) if isinstance(res.tau, dict) else res.tau, dtype=float)
     out = {"replicate": k, "setting": setting, "freq_hz": freq, "seed": seed, "b_true": b_true,
@@ -124,6 +130,8 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
         out.update(tempering=_ladder_entry(tempering), swap_rates=res.tempering["swap_rates"])
     if duration is not None:  # absent for the paper's 10 s, as in the replicates written before the option
         out["duration_s"] = float(duration)
+    if adaptation.block_partners != EARLIER_PARTNERS:  # absent for random blocks, as before the option
+        out["block_partners"] = adaptation.block_partners
     for level in LEVELS:
         lo, hi = hdi(b, level)
         key = round(100 * level)
@@ -142,11 +150,16 @@ def _run(job) -> dict:
     k, out, config, commit = job
     folder = _work_folder(config, out, k)
     got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder(),
-                    config.tau_rtol, config.duration, folder)
+                    config.tau_rtol, config.duration, folder, config.block_partners)
     write_replicate(out, k, got, indent=1)
     if folder is not None:  # only once the replicate is on disk: a crash before keeps the chain
         shutil.rmtree(folder, ignore_errors=True)
     return got
+
+
+#: Block moves before ``Adaptation.block_partners`` existed: a replicate without the
+#: entry was fitted with them.
+EARLIER_PARTNERS = "random"
 
 
 def _work_folder(config: Config, out: Path, k: int) -> Path | None:
@@ -288,6 +301,9 @@ class Config:
     work: str | None = field(default=None, metadata={
         "help": "where each replicate's fit runs until done, continued there by the next run if this one stops "
                 "(default: a temporary folder, a stopped fit starts over)"})
+    block_partners: str = field(default=Adaptation().block_partners, metadata={
+        "choices": PARTNERS, "help": "how the adaptation's block moves pick their coordinates "
+                                     "(Adaptation.block_partners); a folder keeps one"})
     summarise: bool = field(default=False, metadata={"help": "only write the tables from the replicates there"})
     against: str | None = field(default=None, metadata={
         "help": "with summarise: a folder of the same replicates fitted otherwise; also writes pairs.csv and "
@@ -302,6 +318,8 @@ class Config:
             raise ValueError(f"freq must be one of {', '.join(f'{f:g}' for f in FREQUENCIES_HZ)} Hz, got {self.freq:g}")
         if self.duration is not None and not self.duration > 0:
             raise ValueError(f"duration must be a positive number of seconds, got {self.duration!r}")
+        if self.block_partners not in PARTNERS:
+            raise ValueError(f"block_partners must be one of {', '.join(PARTNERS)}, got {self.block_partners!r}")
         if self.against is not None and not self.summarise:
             raise ValueError("against compares finished replicates: give it with summarise")
         self.ladder()  # its own check of the ladder
@@ -342,6 +360,9 @@ def _refuse_mixing(found: list[dict], config: Config, out: Path) -> None:
          "replicates recorded them)"),
         (lambda r: r.get("tempering") == _ladder_entry(ladder), f"fitted with another sampler than {asked}"),
         (lambda r: r.get("duration_s") == config.duration, f"of records of another length than {length}"),
+        (lambda r: r.get("block_partners", EARLIER_PARTNERS) == config.block_partners,
+         f"fitted with other block moves than {config.block_partners!r} (give --block-partners "
+         f"{'random' if config.block_partners != 'random' else 'correlated'} to go on with theirs)"),
     )
     for same, what in checks:
         if not all(same(r) for r in found):
