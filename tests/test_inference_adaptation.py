@@ -86,6 +86,31 @@ def test_adaptation_with_correlated_blocks_fits_them_and_keeps_older_checkpoints
         Adaptation(block_partners="nearest")
 
 
+def test_the_command_lines_block_partners_are_the_packages():
+    from bayes_inerter.cli import BLOCK_PARTNERS, DEFAULT_BLOCK_PARTNERS
+    from bayes_inerter.inference.sampling.moves.block import PARTNERS
+
+    assert BLOCK_PARTNERS == PARTNERS and DEFAULT_BLOCK_PARTNERS == Adaptation().block_partners
+
+
+def test_a_checkpoint_of_random_blocks_is_refused_by_name_and_one_without_blocks_kept():
+    from bayes_inerter.inference.sampling.identity import _adaptation, mismatch
+
+    def identity(adaptation):
+        return {"format": 2, "adaptation": _adaptation(adaptation)}
+
+    # an identity written before the setting existed (random blocks, no entry)
+    before = {"format": 2, "adaptation": {"weight": 0.5, "every": 250, "dof": 10.0, "scale": 1.1, "wide": 0.2,
+                                          "wide_scale": 3.0, "knots": 200, "blocks": 0.5}}
+    assert mismatch(before, identity(Adaptation(block_partners="random"))) is None
+    got = mismatch(before, identity(Adaptation()))
+    assert got is not None and "'random' then, 'correlated' now" in got.what and "--block-partners" in got.fix
+    # without block moves the choice is no part of the kernel: earlier checkpoints match
+    unblocked = {"format": 2, "adaptation": {**before["adaptation"], "knots": None, "blocks": 0.0}}
+    assert "block_partners" not in _adaptation(Adaptation(knots=None, blocks=0.0))
+    assert mismatch(unblocked, identity(Adaptation(knots=None, blocks=0.0))) is None
+
+
 class _Chain:
     """A stand-in back end: the chain so far (steps, walkers, ndim) and its log posterior."""
 

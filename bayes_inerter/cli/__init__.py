@@ -16,8 +16,8 @@ import sys
 from ..executor import caused_by_interrupt
 from .fit import cmd_fit
 from .identify import cmd_identify
-from .parser import (CHECKPOINT_SECONDS, DEFAULT_RESIDUAL, FIT_COORDINATES, FIT_RESIDUALS, RECORD_CHECKS,  # noqa: F401
-                     build_parser)  # (tests' names)
+from .parser import (BLOCK_PARTNERS, CHECKPOINT_SECONDS, DEFAULT_BLOCK_PARTNERS, DEFAULT_RESIDUAL,  # noqa: F401
+                     FIT_COORDINATES, FIT_RESIDUALS, RECORD_CHECKS, build_parser)  # (tests' names)
 from .records import cmd_demo, cmd_generate, cmd_inspect
 from .status import (EXIT_FAIL, EXIT_INTERRUPTED, EXIT_PIPE, CliError, interrupted, on_sigint,  # noqa: F401
                      reset_interrupt)  # (CliError: tests' name)

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["build_parser", "CHECKPOINT_SECONDS", "FIT_COORDINATES", "FIT_RESIDUALS", "RECORD_CHECKS"]
+__all__ = ["build_parser", "CHECKPOINT_SECONDS", "FIT_COORDINATES", "FIT_RESIDUALS", "RECORD_CHECKS",
+           "BLOCK_PARTNERS", "DEFAULT_BLOCK_PARTNERS"]
 
 
 def _number_type(convert, ok, requirement: str, noun: str = "number"):
@@ -42,6 +43,9 @@ FIT_COORDINATES = ("impedance", "unconstrained", "physical", "series", "complian
 #: ``inference.posterior.likelihood.RESIDUALS`` and its default, written out likewise.
 FIT_RESIDUALS = ("ar1", "iid", "harmonic", "motion")
 DEFAULT_RESIDUAL = "motion"
+#: ``inference.sampling.moves.block.PARTNERS`` and ``Adaptation``'s default, written out likewise.
+BLOCK_PARTNERS = ("random", "correlated")
+DEFAULT_BLOCK_PARTNERS = "correlated"
 
 
 def _add_generator_options(p: argparse.ArgumentParser) -> None:
@@ -156,6 +160,9 @@ def _add_fit(sub) -> argparse.ArgumentParser:
                    help="where the walkers move (%(default)s; the outputs are the same parameters either way)")
     p.add_argument("--no-adaptation", action="store_true",
                    help="emcee's ensemble moves alone, without the independence move fitted to the chain")
+    p.add_argument("--block-partners", choices=BLOCK_PARTNERS, default=DEFAULT_BLOCK_PARTNERS,
+                   help="how the fitted block moves pick their coordinates (%(default)s: a coordinate and its most "
+                        "correlated partners; random: the earlier choice, to continue a checkpoint written with it)")
     p.add_argument("--tempering", type=_at_least_two, metavar="TEMPS",
                    help="parallel tempering with this many temperatures (default: none; 4 is the ladder "
                         "measured); each step costs TEMPS times the evaluations, hot copies of the posterior carry "

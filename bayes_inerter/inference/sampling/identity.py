@@ -103,14 +103,27 @@ def stored_likelihood(settings):
     return {**LATER_LIKELIHOOD, **settings} if isinstance(settings, dict) else settings
 
 
+def _with_later(fields: dict, later: dict) -> dict:
+    """``fields`` with those of ``later`` it leaves out at the value ``later`` gives them
+    (the inverse of :func:`_without_later`; a setting without block moves keeps none)."""
+    out = {**later, **fields}
+    if not out.get("blocks"):
+        out.pop("block_partners", None)
+    return out
+
+
 def _without_later(fields: dict, later: dict) -> dict:
     """``fields`` less those of ``later`` that hold the value ``later`` gives them."""
     return {k: v for k, v in fields.items() if not (k in later and v == later[k])}
 
 
 def _adaptation(adaptation) -> dict:
-    """The adaptation's settings (its dataclass's fields; see :data:`LATER_ADAPTATION`)."""
-    return _plain(_without_later(dataclasses.asdict(adaptation), LATER_ADAPTATION))
+    """The adaptation's settings (its dataclass's fields; see :data:`LATER_ADAPTATION`);
+    without block moves, how they would pick their coordinates is no part of the kernel."""
+    fields = dataclasses.asdict(adaptation)
+    if not fields.get("blocks"):
+        fields.pop("block_partners", None)
+    return _plain(_without_later(fields, LATER_ADAPTATION))
 
 
 def _coordinates(coords) -> dict:
@@ -163,6 +176,10 @@ def mismatch(stored: dict, current: dict) -> Mismatch | None:
                         "run with --fresh to start over (or remove the folder)")
     if "likelihood" in stored:
         stored = {**stored, "likelihood": stored_likelihood(stored["likelihood"])}
+    if isinstance(stored.get("adaptation"), dict) and isinstance(current.get("adaptation"), dict):
+        # a setting left out as its earlier value is named by that value, then and now
+        stored = {**stored, "adaptation": _with_later(stored["adaptation"], LATER_ADAPTATION)}
+        current = {**current, "adaptation": _with_later(current["adaptation"], LATER_ADAPTATION)}
     keys = list(_NAMES) + [k for k in current if k not in _NAMES and k != "format"]
     for key in keys:
         found = _first_difference(stored.get(key), current.get(key), ())
@@ -226,7 +243,7 @@ def _say(key: str, path: tuple, then, now, single: bool) -> Mismatch:
             then, now = _show(then), _show(now)
         return Mismatch(key, f"{name} ({_where(('adaptation',) + path if path else ())}{then} then, {now} now)",
                         "continuing would change the kernel mid-chain: run with the same adaptation setting "
-                        "(--no-adaptation or not), or --fresh to start over, or another --out")
+                        "(--no-adaptation or not, --block-partners), or --fresh to start over, or another --out")
     record = "the record" if single else f"record {path[0] + 1}" if path and isinstance(path[0], int) else ""
     if key == "records" and len(path) == 1 and isinstance(then, dict) and isinstance(now, dict):
         arrays = ", ".join(k for k in now if then.get(k) != now[k])
