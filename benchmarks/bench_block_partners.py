@@ -17,7 +17,7 @@ against the log-probabilities the chain stored). Per coordinate, the mean of acc
 times the squared jump in normal scores (the expected squared jump distance, ESJD) says
 how far one application of the move carries it: in units of its posterior variance, so
 a coordinate moved 0.006 a step needs hundreds of such steps to cross its posterior.
-Both moves see the same states and random numbers. One row per choice of partners to
+Both moves see the same states and seed. One row per choice of partners to
 results/performance/block_partners.csv; the ratios are printed.
 """
 

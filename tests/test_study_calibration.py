@@ -163,14 +163,37 @@ def test_a_work_folder_of_another_run_is_refused_before_any_fit_starts(tmp_path)
     from bayes_inerter.study.calibration import WORK_STAMP, stamped_folder, work_stamp
 
     work = tmp_path / "work"
-    run_replicates(_Checkpointing(fail=True), tmp_path / "a", 1, work=work)  # leaves work/0000, stamped for a
-    assert json.loads((work / "0000" / WORK_STAMP).read_text())["out"] == str((tmp_path / "a").resolve())
+    stamped_folder(work / "0001", work_stamp(_Checkpointing(), tmp_path / "a"))  # replicate 1's chain, run a's
     with pytest.raises(ValueError, match="another run .*out"):
-        run_replicates(_Checkpointing(), tmp_path / "b", 1, work=work)
-    assert not (tmp_path / "b" / "replicates" / "0000.json").exists()  # nothing fitted
-    (work / "0000" / WORK_STAMP).unlink()  # a chain left by code before the stamp is taken, and stamped
-    assert stamped_folder(work / "0000", work_stamp(_Checkpointing(), tmp_path / "b")) == work / "0000"
-    assert json.loads((work / "0000" / WORK_STAMP).read_text())["out"] == str((tmp_path / "b").resolve())
+        run_replicates(_Checkpointing(), tmp_path / "b", 2, work=work)
+    assert not (tmp_path / "b" / "replicates" / "0000.json").exists()  # not even replicate 0 fitted
+    assert not (work / "0000").exists()
+    # the cap is no part of the stamp: a chain stopped under a cap goes on under a raised one
+    assert "max_steps" not in work_stamp(_Checkpointing(), tmp_path / "a")
+    (work / "0001" / WORK_STAMP).unlink()  # a chain left by code before the stamp is taken, and stamped
+    assert stamped_folder(work / "0001", work_stamp(_Checkpointing(), tmp_path / "b")) == work / "0001"
+    assert json.loads((work / "0001" / WORK_STAMP).read_text())["out"] == str((tmp_path / "b").resolve())
+
+
+@dataclass(frozen=True)
+class _Partnered:
+    """Settings with a block-moves choice whose default changed after runs were saved."""
+
+    seed: int = 0
+    block_partners: str = "correlated"
+
+    def replicate(self, k):
+        return {"replicate": k}
+
+
+def test_a_run_saved_before_the_block_moves_setting_goes_on_with_random_blocks(tmp_path):
+    run_replicates(_Partnered(), tmp_path, 1)
+    saved = json.loads((tmp_path / "settings.json").read_text())
+    (tmp_path / "settings.json").write_text(json.dumps({k: v for k, v in saved.items() if k != "block_partners"}))
+    with pytest.raises(ValueError, match="other calibration settings"):
+        run_replicates(_Partnered(), tmp_path, 2)
+    assert run_replicates(_Partnered(block_partners="random"), tmp_path, 2)[1] == {"replicate": 1}
+    assert run_replicates(_Plain(), tmp_path / "plain", 1) == [{"replicate": 0}]  # settings without the field
 
 
 def test_a_result_file_is_written_whole_and_leaves_nothing_beside_it(tmp_path):

@@ -220,10 +220,10 @@ def stamped_folder(folder, stamp: dict, *, create: bool = True) -> Path:
 
 def work_stamp(cs, out) -> dict:
     """The stamp of ``cs``'s run into ``out`` (:func:`stamped_folder`): the output
-    folder, and the cap and tolerance where ``cs`` has them (settings.json pins the rest
-    of ``out``'s settings, but :func:`.study_calibration.raise_cap` raises its cap)."""
-    return {"out": str(Path(out).resolve()),
-            **{name: getattr(cs, name) for name in ("max_steps", "tau_rtol") if hasattr(cs, name)}}
+    folder, and the tolerance where ``cs`` has one. settings.json pins the rest of
+    ``out``'s settings; the cap is left out, because a chain stopped under a cap goes on
+    as the same chain under the one :func:`.study_calibration.raise_cap` raises it to."""
+    return {"out": str(Path(out).resolve()), **({"tau_rtol": cs.tau_rtol} if hasattr(cs, "tau_rtol") else {})}
 
 
 def _worker(args):
@@ -240,13 +240,19 @@ def _worker(args):
     return result
 
 
+#: Settings whose default changed after runs were saved without them, with the value
+#: those runs had: a study's block moves were random before ``block_partners`` existed.
+LATER_SETTINGS = {"block_partners": "random"}
+
+
 def _with_defaults(saved: dict, defaults: dict) -> dict:
     """Settings saved before a field existed hold no value for it: it had its default
     (a tempering ladder's too, :data:`..inference.sampling.identity.LATER_TEMPERING`,
-    where the study's own default is no ladder)."""
+    where the study's own default is no ladder), or the value :data:`LATER_SETTINGS`
+    names where the default has changed since."""
     from ..inference.sampling.identity import LATER_TEMPERING
 
-    out = dict(saved)
+    out = {**{k: v for k, v in LATER_SETTINGS.items() if k in defaults}, **saved}
     if isinstance(out.get("tempering"), dict):
         out["tempering"] = {**LATER_TEMPERING, **out["tempering"]}
     for k, v in defaults.items():

@@ -63,6 +63,8 @@ from ..device import TABLE_I, paper_parameters
 from ..inference.sampling import optimize
 from ..inference.sampling.convergence import Convergence
 from ..inference.sampling.coordinates import default_coordinates
+from ..inference.sampling.adaptation import Adaptation
+from ..inference.sampling.moves.block import PARTNERS
 from ..inference.sampling.tempering import Tempering
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
 from ..inference.posterior.likelihood import LikelihoodSettings
@@ -191,6 +193,10 @@ class StudyCalibration:
         are uniform given its records, so they stay uniform: the calibration then speaks
         for records at or above that ratio. Where the ratio is small the chains stop at
         their cap (results/capped-by-force-ratio).
+    block_partners : how the fits' adaptive block moves pick their coordinates
+        (``Adaptation.block_partners``; default its default, "correlated"). A run saved
+        before the setting existed was fitted with "random" blocks and is continued
+        with them (``calibration.LATER_SETTINGS``).
     """
 
     setting: str = "A3"
@@ -212,6 +218,7 @@ class StudyCalibration:
     domain: bool = False
     motion_device: str = "truth"
     min_ratio: float | None = None
+    block_partners: str = Adaptation().block_partners
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "frequencies", tuple(float(f) for f in self.frequencies))
@@ -224,6 +231,8 @@ class StudyCalibration:
             if isinstance(self.min_ratio, bool) or not isinstance(self.min_ratio, (int, float)) \
                     or not math.isfinite(self.min_ratio) or self.min_ratio <= 0:
                 raise ValueError(f"min_ratio must be a positive number, got {self.min_ratio!r}")
+        if self.block_partners not in PARTNERS:
+            raise ValueError(f"block_partners must be one of {', '.join(PARTNERS)}, got {self.block_partners!r}")
         if self.interval_draws not in INTERVAL_DRAWS:
             raise ValueError(f"interval_draws must be one of {', '.join(INTERVAL_DRAWS)}, got {self.interval_draws!r}")
         if self.draw_deviations and self.likelihood.residual != "motion":
@@ -268,7 +277,9 @@ class StudyCalibration:
                 + ("" if self.tau_floor is None else f", tau's prior floor {self.tau_floor:g} N")
                 + (", the likelihood's deviations drawn into the force" if self.draw_deviations else "")
                 + (", the force's harmonics drawn from the likelihood itself" if self.likelihood_force else "")
-                + (", the motion made by an independent device" if self.motion_device == "independent" else ""))
+                + (", the motion made by an independent device" if self.motion_device == "independent" else "")
+                + (f", {self.block_partners} block moves" if self.block_partners != Adaptation().block_partners
+                   else ""))
 
 
 @dataclass(frozen=True)
@@ -478,11 +489,12 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     device = _draw_device(cs, rng, k)
     truth, records, redraws = device.truth, device.records, device.redraws
     convergence = stop_rule.convergence(cs.max_steps, cs.tau_rtol, replicas=cs.replica_rule)
+    adaptation = Adaptation(block_partners=cs.block_partners)
     if cs.single:
         kept_draws = cs.interval_draws == "kept"
         res = fit_record(records[0], out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=cs.priors(),
                          plots=False, likelihood=cs.likelihood, convergence=convergence, interval="posterior",
-                         tempering=cs.tempering, all_draws=kept_draws)
+                         tempering=cs.tempering, all_draws=kept_draws, adaptation=adaptation)
         if kept_draws:
             with np.load(out / ALL_DRAWS_FILE) as f:
                 kept = {n: f[n].ravel() for n in f.files}
@@ -493,7 +505,7 @@ def _fit_replicate(cs: StudyCalibration, k: int, out: Path):
     else:
         res = fit_joint(records, out, steps=cs.steps, seed=int(rng.integers(2**31)), priors=cs.priors(),
                         plots=False, all_draws=True, likelihood=cs.likelihood, convergence=convergence,
-                        tempering=cs.tempering)
+                        tempering=cs.tempering, adaptation=adaptation)
         with np.load(out / ALL_DRAWS_FILE) as f:
             kept = {n: f[n].ravel() for n in f.files}
     return rng, truth, records, redraws, res, kept
@@ -989,6 +1001,9 @@ class Config:
     motion_device: str | None = field(default=None, metadata={
         "help": "which device makes the records' motion: the 'truth' (default) or an 'independent' draw "
                 "(with --likelihood-force)"})
+    block_partners: str | None = field(default=None, metadata={
+        "choices": PARTNERS, "help": "how the fits' block moves pick their coordinates (default: the package's, "
+                                     "Adaptation.block_partners); a folder keeps one"})
     work: str | None = field(default=None, metadata={
         "help": "where each replicate's fit runs until done (default: OUT/.running)"})
     raise_cap: bool = field(default=False, metadata={"help": "raise the folder's cap to --max-steps first"})
@@ -1037,6 +1052,8 @@ class Config:
             extra["motion_device"] = self.motion_device
         if self.min_ratio is not None:
             extra["min_ratio"] = self.min_ratio
+        if self.block_partners is not None:
+            extra["block_partners"] = self.block_partners
         return dataclasses.replace(StudyCalibration(), steps=None if self.converge else self.steps, seed=self.seed,
                                    single=self.single, max_steps=self.max_steps, **extra)
 
