@@ -168,8 +168,12 @@ def test_a_work_folder_of_another_run_is_refused_before_any_fit_starts(tmp_path)
         run_replicates(_Checkpointing(), tmp_path / "b", 2, work=work)
     assert not (tmp_path / "b" / "replicates" / "0000.json").exists()  # not even replicate 0 fitted
     assert not (work / "0000").exists()
-    # the cap is no part of the stamp: a chain stopped under a cap goes on under a raised one
+    # the cap is no part of the stamp: a chain stopped under a cap goes on under a raised one,
+    # also where an earlier version stamped it
     assert "max_steps" not in work_stamp(_Checkpointing(), tmp_path / "a")
+    earlier = {**work_stamp(_Checkpointing(), tmp_path / "a"), "max_steps": 20000}
+    (work / "0001" / WORK_STAMP).write_text(json.dumps(earlier))
+    assert stamped_folder(work / "0001", work_stamp(_Checkpointing(), tmp_path / "a")) == work / "0001"
     (work / "0001" / WORK_STAMP).unlink()  # a chain left by code before the stamp is taken, and stamped
     assert stamped_folder(work / "0001", work_stamp(_Checkpointing(), tmp_path / "b")) == work / "0001"
     assert json.loads((work / "0001" / WORK_STAMP).read_text())["out"] == str((tmp_path / "b").resolve())

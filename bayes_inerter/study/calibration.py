@@ -199,17 +199,18 @@ WORK_STAMP = "study.json"
 def stamped_folder(folder, stamp: dict, *, create: bool = True) -> Path:
     """``folder``, where a replicate's fit runs, checked against the run it is for:
     ``stamp`` (JSON-able; the run's output folder and what the chain's checkpoint does
-    not hold, its cap and tolerance). A folder stamped otherwise is refused
-    (ValueError), so that two runs sharing a work folder, or a rerun with another cap,
-    never continue each other's chains; a folder without a stamp (an earlier version's)
-    is taken. With ``create``, the folder is made and stamped where it is not."""
+    not hold, such as its cap and tolerance). A folder stamped otherwise in what
+    ``stamp`` names is refused (ValueError), so that two runs sharing a work folder, or
+    a rerun with another cap where the cap is stamped, never continue each other's
+    chains; a folder without a stamp (an earlier version's) is taken. With ``create``,
+    the folder is made and stamped where it is not."""
     folder = Path(folder)
     path = folder / WORK_STAMP
     if path.exists():
         found = json.loads(path.read_text())
-        if found != stamp:
-            differ = ", ".join(f"{key} {found.get(key)!r} there, {value!r} here" for key, value in stamp.items()
-                               if found.get(key) != value)
+        differ = ", ".join(f"{key} {found.get(key)!r} there, {value!r} here" for key, value in stamp.items()
+                           if found.get(key) != value)  # what ``stamp`` names: a key it no longer holds is let be
+        if differ:
             raise ValueError(f"{folder} holds a replicate's chain for another run ({differ}); "
                              "give another work folder or remove that one")
     elif create:
