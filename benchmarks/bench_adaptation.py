@@ -12,9 +12,9 @@ optimum per record) with the same seed, walkers and coordinates: with the one-t
 adaptation (``adaptive``, an earlier default) and without it (the ensemble
 moves alone), or with the variants named (``scores``: its t fitted in the chain's
 normal scores, 200 knots; ``blocks``: the same with half the fitted share to block
-moves of random coordinates, ``moves.BlockMove``, the default after it;
+moves of random coordinates, ``moves.BlockMove``, the default since;
 ``correlated``: those block moves made of a coordinate and its most correlated partners,
-``Adaptation(block_partners="correlated")``, the default since).
+``Adaptation(block_partners="correlated")``, an option).
 The two runs of a record run at the same time, one process each, so they
 share the machine alike: read the ratios.
 Writes one row per run (steps and seconds to converge, the largest autocorrelation

@@ -21,9 +21,9 @@ coordinates (impedance). Move sets:
   :mod:`bayes_inerter.inference.sampling.marginals`);
 - ``blocks``: the same, half of the fitted share to block moves of random coordinates
   from a normal in those scores (``Adaptation(knots=200, blocks=0.5,
-  block_partners="random")``, ``moves.BlockMove``: the default until ``correlated``);
+  block_partners="random")``, ``moves.BlockMove``: the default since);
 - ``correlated``: those block moves made of a coordinate and its most correlated
-  partners (``Adaptation(block_partners="correlated")``, the default since).
+  partners (``Adaptation(block_partners="correlated")``, an option).
 
 (Move sets measured earlier and since removed with their code, differential evolution
 in random subspaces and a mixture of t's as the proposal: docs/inference.md, "Moves

@@ -73,15 +73,15 @@ def test_adaptation_with_correlated_blocks_fits_them_and_keeps_older_checkpoints
     rng = np.random.default_rng(5)
     chain = rng.lognormal(size=(300, 20, 3))
     still = rng.normal(0.0, 1.0, size=(300, 20))
-    adapt = Adaptation(every=400, knots=100)
-    assert adapt.fit(chain, still)[1].partners == "correlated"  # the default
-    earlier = Adaptation(every=400, knots=100, block_partners="random")
-    assert earlier.fit(chain, still)[1].partners == "random"
+    adapt = Adaptation(every=400, knots=100, block_partners="correlated")
+    assert adapt.fit(chain, still)[1].partners == "correlated"
+    earlier = Adaptation(every=400, knots=100)
+    assert earlier.fit(chain, still)[1].partners == "random"  # the default
     assert "its most correlated partners" in adapt.describe() and "partners" not in earlier.describe()
-    # checkpoints written before the setting existed hold random blocks: they match the
-    # earlier choice, not the default
-    assert "block_partners" not in _adaptation(earlier)
-    assert _adaptation(Adaptation())["block_partners"] == "correlated"
+    # checkpoints written before the setting existed hold random blocks, the default:
+    # their identity stays as it was
+    assert "block_partners" not in _adaptation(Adaptation())
+    assert _adaptation(adapt)["block_partners"] == "correlated"
     with pytest.raises(ValueError, match="block partners"):
         Adaptation(block_partners="nearest")
 
@@ -93,7 +93,7 @@ def test_the_command_lines_block_partners_are_the_packages():
     assert BLOCK_PARTNERS == PARTNERS and DEFAULT_BLOCK_PARTNERS == Adaptation().block_partners
 
 
-def test_a_checkpoint_of_random_blocks_is_refused_by_name_and_one_without_blocks_kept():
+def test_a_checkpoint_of_other_block_moves_is_refused_by_name_and_one_without_blocks_kept():
     from bayes_inerter.inference.sampling.identity import _adaptation, mismatch
 
     def identity(adaptation):
@@ -102,8 +102,8 @@ def test_a_checkpoint_of_random_blocks_is_refused_by_name_and_one_without_blocks
     # an identity written before the setting existed (random blocks, no entry)
     before = {"format": 2, "adaptation": {"weight": 0.5, "every": 250, "dof": 10.0, "scale": 1.1, "wide": 0.2,
                                           "wide_scale": 3.0, "knots": 200, "blocks": 0.5}}
-    assert mismatch(before, identity(Adaptation(block_partners="random"))) is None
-    got = mismatch(before, identity(Adaptation()))
+    assert mismatch(before, identity(Adaptation())) is None
+    got = mismatch(before, identity(Adaptation(block_partners="correlated")))
     assert got is not None and "'random' then, 'correlated' now" in got.what and "--block-partners" in got.fix
     # without block moves the choice is no part of the kernel: earlier checkpoints match
     unblocked = {"format": 2, "adaptation": {**before["adaptation"], "knots": None, "blocks": 0.0}}

@@ -97,8 +97,8 @@ def test_a_folder_keeps_one_record_length(tmp_path):
 
 def test_a_folder_keeps_one_choice_of_block_moves(tmp_path, monkeypatch):
     """Replicates that do not name their block moves were fitted with random blocks: a
-    default run (correlated blocks) is refused and told how to go on with theirs; a
-    replicate fitted now names its choice, and the fit is given it."""
+    run asking correlated ones is refused and told how to go on with theirs; a replicate
+    fitted with correlated blocks names them, and the fit is given its choice."""
     from bayes_inerter.study import paper_like_coverage as plc
 
     (tmp_path / "replicates").mkdir()
@@ -106,12 +106,13 @@ def test_a_folder_keeps_one_choice_of_block_moves(tmp_path, monkeypatch):
     today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood), "tau_rtol": 0.05}
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
     with pytest.raises(ValueError, match="other block moves than 'correlated' \\(give --block-partners random"):
-        run(Config(replicates=1, tau_rtol=0.05), tmp_path, Serial())
-    assert not run(Config(replicates=1, tau_rtol=0.05, block_partners="random"), tmp_path, Serial()).failed
+        run(Config(replicates=1, tau_rtol=0.05, block_partners="correlated"), tmp_path, Serial())
+    assert not run(Config(replicates=1, tau_rtol=0.05), tmp_path, Serial()).failed  # the default: random
     calls = []
     monkeypatch.setattr(plc, "fit_record", _fake_fit(calls))
-    assert plc.replicate(0, 6000, 500)["block_partners"] == "correlated" == calls[0]["adaptation"].block_partners
-    assert "block_partners" not in plc.replicate(0, 6000, 500, block_partners="random")
+    got = plc.replicate(0, 6000, 500, block_partners="correlated")
+    assert got["block_partners"] == "correlated" == calls[0]["adaptation"].block_partners
+    assert "block_partners" not in plc.replicate(0, 6000, 500)
     assert calls[1]["adaptation"].block_partners == "random"
     with pytest.raises(ValueError, match="block_partners must be one of"):
         Config(block_partners="nearest")

@@ -45,7 +45,7 @@ FIT_RESIDUALS = ("ar1", "iid", "harmonic", "motion")
 DEFAULT_RESIDUAL = "motion"
 #: ``inference.sampling.moves.block.PARTNERS`` and ``Adaptation``'s default, written out likewise.
 BLOCK_PARTNERS = ("random", "correlated")
-DEFAULT_BLOCK_PARTNERS = "correlated"
+DEFAULT_BLOCK_PARTNERS = "random"
 
 
 def _add_generator_options(p: argparse.ArgumentParser) -> None:
@@ -161,8 +161,8 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--no-adaptation", action="store_true",
                    help="emcee's ensemble moves alone, without the independence move fitted to the chain")
     p.add_argument("--block-partners", choices=BLOCK_PARTNERS, default=DEFAULT_BLOCK_PARTNERS,
-                   help="how the fitted block moves pick their coordinates (%(default)s: a coordinate and its most "
-                        "correlated partners; random: the earlier choice, to continue a checkpoint written with it)")
+                   help="how the fitted block moves pick their coordinates (%(default)s; correlated: a coordinate "
+                        "and its most correlated partners)")
     p.add_argument("--tempering", type=_at_least_two, metavar="TEMPS",
                    help="parallel tempering with this many temperatures (default: none; 4 is the ladder "
                         "measured); each step costs TEMPS times the evaluations, hot copies of the posterior carry "

@@ -241,8 +241,9 @@ def _worker(args):
     return result
 
 
-#: Settings whose default changed after runs were saved without them, with the value
-#: those runs had: a study's block moves were random before ``block_partners`` existed.
+#: Settings added after runs were saved without them, with the value those runs had
+#: whatever the default: a study's block moves were random before ``block_partners``
+#: existed.
 LATER_SETTINGS = {"block_partners": "random"}
 
 

@@ -194,7 +194,7 @@ class StudyCalibration:
         for records at or above that ratio. Where the ratio is small the chains stop at
         their cap (results/capped-by-force-ratio).
     block_partners : how the fits' adaptive block moves pick their coordinates
-        (``Adaptation.block_partners``; default its default, "correlated"). A run saved
+        (``Adaptation.block_partners``; default its default, "random"). A run saved
         before the setting existed was fitted with "random" blocks and is continued
         with them (``calibration.LATER_SETTINGS``).
     """

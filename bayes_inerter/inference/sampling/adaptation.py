@@ -31,8 +31,8 @@ __all__ = ["Adaptation", "Schedule", "STRETCH", "FIT_MAX_STEPS", "NAMED"]
 #: The adaptive samplers that studies and benchmarks compare side by side, by name:
 #: keyword arguments of :class:`Adaptation` (``adaptive``: one t in the sampler's
 #: coordinates; ``scores``: the t in normal scores; ``blocks``: that and block moves of
-#: random coordinates; ``correlated``: block moves of a coordinate and its most
-#: correlated partners, the default).
+#: random coordinates, the default; ``correlated``: block moves of a coordinate and its
+#: most correlated partners).
 NAMED = {"adaptive": {"knots": None, "blocks": 0.0},
          "scores": {"knots": 200, "blocks": 0.0},
          "blocks": {"knots": 200, "blocks": 0.5, "block_partners": "random"},
@@ -56,8 +56,7 @@ class Adaptation:
     """The fitted moves' share of the steps, and when they are refitted (see module
     docstring). By default the independence move's t is fitted in the chain's normal
     scores (:mod:`.marginals`), and half of the fitted moves' share goes to block moves
-    (:class:`.moves.BlockMove`) from a normal in the same scores, each block a coordinate
-    and its most correlated partners; ``knots=None,
+    (:class:`.moves.BlockMove`) from a normal in the same scores; ``knots=None,
     blocks=0`` is one t in the sampler's coordinates, the earlier default. Measured side by side with it (same starts and seeds): on the joint model
     of 9 records (``studies/joint_mixing.py``, 3,000 steps) the largest autocorrelation
     time over the last four fifths fell from 115.0 to 30.0 steps; on single records to
@@ -82,9 +81,9 @@ class Adaptation:
     blocks : share of ``weight`` given to a :class:`.moves.BlockMove` fitted in the
         same normal scores (needs ``knots``; default 0.5; 0: none).
     block_partners : how a block move picks its coordinates (:data:`.moves.block.PARTNERS`):
-        "correlated" (default), a coordinate and its most correlated partners under the
-        fitted normal, or "random", the earlier default (:class:`.moves.BlockMove`;
-        measured side by side in docs/inference.md, "Adaptation").
+        "random" (default), or "correlated", a coordinate and its most correlated partners
+        under the fitted normal (:class:`.moves.BlockMove`; measured side by side in
+        docs/inference.md, "Adaptation": fewer steps on two records, not on two others).
     transport : the independence move's t fitted after a triangular quadratic map of the
         normal scores (:class:`.transport.TriangularScores`; needs ``knots``), the block
         move kept in the normal scores alone (default False: not measured to mix faster
@@ -100,7 +99,7 @@ class Adaptation:
     knots: int | None = KNOTS
     blocks: float = 0.5
     transport: bool = False
-    block_partners: str = "correlated"
+    block_partners: str = "random"
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.blocks < 1.0:
