@@ -50,8 +50,10 @@ def test_identity_is_plain_data_and_survives_json(records):
     assert isinstance(ident["priors"]["b"]["low"], float)  # floats as floats, not text
     assert ident["priors"]["f_share"] == {"law": "Uniform", "low": 0.0, "high": 1.0}
     assert ident["coordinates"]["kind"] == "impedance" and ident["coordinates"]["impedance"]["b_index"] == [0]
-    # the transport map's switch appears only when on: checkpoints written before it match
-    assert ident["adaptation"] == {k: v for k, v in dataclasses.asdict(Adaptation()).items() if k != "transport"}
+    # the transport map's switch and the block moves' partners appear only away from the
+    # values of the checkpoints written before them: those match
+    assert ident["adaptation"] == {k: v for k, v in dataclasses.asdict(Adaptation()).items()
+                                   if k not in ("transport", "block_partners")}
     assert ident["moves"] == [["DEMove", 0.6], ["DESnookerMove", 0.1], ["StretchMove", 0.3]]
     assert (ident["nwalkers"], ident["ndim"]) == (24, model.ndim)
     assert _stored(ident) == ident
