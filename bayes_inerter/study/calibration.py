@@ -46,13 +46,15 @@ from ..executor import make_executor
 from ..inference.posterior.model import LikelihoodSettings, PosteriorModel
 from ..inference.posterior.priors import LogNormal, LogUniform, Uniform
 from ..inference.summaries.results import ar1_noise, posterior_sample
+from ..inference.sampling.identity import LATER_ADAPTATION, LATER_TEMPERING
 from ..inference.sampling.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
 from .replicate_store import load_replicates, write_replicate
 
-__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "fit_folder", "stamped_folder", "work_stamp", "run_calibration", "coverage_table",
-           "compare_calibrations", "Config", "run", "case_name", "failed_items"]
+__all__ = ["SBC_PRIORS", "CalibrationSettings", "replicate", "run_replicates", "fit_folder", "stamped_folder",
+           "work_stamp", "run_calibration", "coverage_table", "compare_calibrations", "Config", "run", "case_name",
+           "failed_items"]
 
 _P = paper_parameters("A1")
 #: The calibration prior (see module docstring).
@@ -242,18 +244,16 @@ def _worker(args):
 
 
 #: Settings added after runs were saved without them, with the value those runs had
-#: whatever the default: a study's block moves were random before ``block_partners``
-#: existed.
-LATER_SETTINGS = {"block_partners": "random"}
+#: (which need not stay the default): a study's block moves, as a checkpoint's
+#: (``identity.LATER_ADAPTATION``), were random before ``block_partners`` existed.
+LATER_SETTINGS = {"block_partners": LATER_ADAPTATION["block_partners"]}
 
 
 def _with_defaults(saved: dict, defaults: dict) -> dict:
     """Settings saved before a field existed hold no value for it: it had its default
     (a tempering ladder's too, :data:`..inference.sampling.identity.LATER_TEMPERING`,
-    where the study's own default is no ladder), or the value :data:`LATER_SETTINGS`
-    names where the default has changed since."""
-    from ..inference.sampling.identity import LATER_TEMPERING
-
+    where the study's own default is no ladder), or for those of :data:`LATER_SETTINGS`
+    the value it names."""
     out = {**{k: v for k, v in LATER_SETTINGS.items() if k in defaults}, **saved}
     if isinstance(out.get("tempering"), dict):
         out["tempering"] = {**LATER_TEMPERING, **out["tempering"]}
@@ -294,8 +294,9 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
         progress(done, replicates)
     work = out / RUNNING if work is None else Path(work)
     if getattr(cs, "resumes", False):  # refused here, before any fit starts, not in a worker
+        stamp = work_stamp(cs, out)
         for k in todo:
-            stamped_folder(work / f"{k:04d}", work_stamp(cs, out), create=False)
+            stamped_folder(work / f"{k:04d}", stamp, create=False)
     jobs = [(cs, k, out, work) for k in todo]
     mine = executor is None
     executor = make_executor(processes if len(jobs) > 1 else 1) if mine else executor

@@ -58,6 +58,7 @@ import numpy as np
 from ..device import FREQUENCIES_HZ, grid_case, paper_parameters
 from ..inference.fit import fit_record
 from ..inference.sampling.adaptation import Adaptation
+from ..inference.sampling.identity import LATER_ADAPTATION
 from ..inference.sampling.moves.block import PARTNERS
 from ..inference.posterior.likelihood import LikelihoodSettings, settings_changes
 from ..inference.sampling.tempering import Tempering
@@ -157,9 +158,9 @@ def _run(job) -> dict:
     return got
 
 
-#: Block moves before ``Adaptation.block_partners`` existed: a replicate without the
-#: entry was fitted with them.
-EARLIER_PARTNERS = "random"
+#: Block moves before ``Adaptation.block_partners`` existed (as a checkpoint's,
+#: ``identity.LATER_ADAPTATION``): a replicate without the entry was fitted with them.
+EARLIER_PARTNERS = LATER_ADAPTATION["block_partners"]
 
 
 def _work_folder(config: Config, out: Path, k: int) -> Path | None:

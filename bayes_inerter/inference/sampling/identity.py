@@ -105,11 +105,15 @@ def stored_likelihood(settings):
 
 def _with_later(fields: dict, later: dict) -> dict:
     """``fields`` with those of ``later`` it leaves out at the value ``later`` gives them
-    (the inverse of :func:`_without_later`; a setting without block moves keeps none)."""
-    out = {**later, **fields}
-    if not out.get("blocks"):
-        out.pop("block_partners", None)
-    return out
+    (the inverse of :func:`_without_later`), less what is no part of the kernel
+    (:func:`_kernel_fields`)."""
+    return _kernel_fields({**later, **fields})
+
+
+def _kernel_fields(fields: dict) -> dict:
+    """An adaptation's settings less how block moves would pick their coordinates where
+    it has no block moves: that is no part of its kernel."""
+    return {k: v for k, v in fields.items() if not (k == "block_partners" and not fields.get("blocks"))}
 
 
 def _without_later(fields: dict, later: dict) -> dict:
@@ -118,12 +122,9 @@ def _without_later(fields: dict, later: dict) -> dict:
 
 
 def _adaptation(adaptation) -> dict:
-    """The adaptation's settings (its dataclass's fields; see :data:`LATER_ADAPTATION`);
-    without block moves, how they would pick their coordinates is no part of the kernel."""
-    fields = dataclasses.asdict(adaptation)
-    if not fields.get("blocks"):
-        fields.pop("block_partners", None)
-    return _plain(_without_later(fields, LATER_ADAPTATION))
+    """The adaptation's settings (its dataclass's fields; see :data:`LATER_ADAPTATION`
+    and :func:`_kernel_fields`)."""
+    return _plain(_without_later(_kernel_fields(dataclasses.asdict(adaptation)), LATER_ADAPTATION))
 
 
 def _coordinates(coords) -> dict:
