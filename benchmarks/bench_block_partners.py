@@ -39,9 +39,10 @@ from bayes_inerter.inference.sampling.target import Target
 from bayes_inerter.records.paper_like import PaperLike, paper_like_record
 
 
-def _esjd(move, scores, target, x, lp, repeats: int, seed: int):
-    """(acceptance, per-coordinate ESJD in normal scores) of ``move`` from the states ``x``."""
+def _esjd(move, target, x, lp, repeats: int, seed: int):
+    """(acceptance, per-coordinate ESJD in its normal scores) of ``move`` from the states ``x``."""
     random = np.random.RandomState(seed)
+    scores = move.scores
     z = scores.forward(x)[0]
     accepted, jumps = [], np.zeros(x.shape[1])
     for _ in range(repeats):
@@ -88,7 +89,7 @@ def main():
         _, move = Adaptation(block_partners=partners).fit(chain, log_p)
         if move is None:
             sys.exit(f"error: {args.chain} holds too few steps to fit a block move")
-        results[partners] = _esjd(move, move.scores, target, x, lp, args.repeats, args.seed)
+        results[partners] = _esjd(move, target, x, lp, args.repeats, args.seed)
         acc, esjd = results[partners]
         record_row("block_partners", {
             "chain": Path(args.chain).parent.name, "record": f"{setting}_{freq:g}Hz", "laboratory": args.paper_like,
