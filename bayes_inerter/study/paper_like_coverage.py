@@ -351,6 +351,7 @@ def _refuse_mixing(found: list[dict], config: Config, out: Path) -> None:
     their coverage counts would not belong to one configuration."""
     ladder = config.ladder()
     families = sorted({r.get("family", "default") for r in found})
+    partners = sorted({r.get("block_partners", EARLIER_PARTNERS) for r in found} - {config.block_partners})
     asked = "the ensemble alone" if ladder is None else ladder.describe()
     length = "the paper's 10 s" if config.duration is None else f"{config.duration:g} s"
     checks = (
@@ -363,7 +364,7 @@ def _refuse_mixing(found: list[dict], config: Config, out: Path) -> None:
         (lambda r: r.get("duration_s") == config.duration, f"of records of another length than {length}"),
         (lambda r: r.get("block_partners", EARLIER_PARTNERS) == config.block_partners,
          f"fitted with other block moves than {config.block_partners!r} (give --block-partners "
-         f"{'random' if config.block_partners != 'random' else 'correlated'} to go on with theirs)"),
+         f"{' or '.join(partners)} to go on with theirs)"),
     )
     for same, what in checks:
         if not all(same(r) for r in found):
