@@ -7,7 +7,7 @@ results/full/paper-like/records to draw another laboratory with --seed); results
 fits were sampled with --tempering 4, and only that reuses them.
 
     python studies/study.py [--processes 2] [--scheduler tcp://host:port] [--seed 0]
-                            [--paper-like-steps N] [--tempering T (default: none)] [--report-only]
+                            [--paper-like-steps N] [--max-steps N] [--tempering T (default: none)] [--report-only]
 """
 
 import sys

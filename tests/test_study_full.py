@@ -20,6 +20,30 @@ def test_the_configuration_refuses_too_few_steps():
         Config(paper_like_steps=5)
     with pytest.raises(ValueError, match="whole number of temperatures"):
         Config(tempering=0)
+    with pytest.raises(ValueError, match="max_steps must be a whole number of at least 100"):
+        Config(max_steps=50)
+
+
+def test_the_cap_reaches_every_single_record_chain_of_both_studies(tmp_path, monkeypatch):
+    import types
+
+    from bayes_inerter.study import full
+
+    plans = []
+
+    def fake_run_study(plan, folder, **_):
+        plans.append(plan)
+        return types.SimpleNamespace(outcomes=[], seconds={"total": 0.0})
+
+    monkeypatch.setattr(full, "run_study", fake_run_study)
+    monkeypatch.setattr(full, "paper_like_records", lambda folder, seed: folder)
+    monkeypatch.setattr(full, "_report", lambda out, seed: out / "REPORT.md")
+    run(Config(max_steps=80000), tmp_path, Serial())
+    assert [p.max_steps for p in plans] == [80000, 80000]
+    assert all(job.max_steps == 80000 for job in plans[0].jobs({"A0_1Hz": ("A0_1Hz.csv", "A0", 1.0)}, tmp_path))
+    run(Config(max_steps=80000, paper_like_steps=300), tmp_path, Serial())
+    assert (plans[2].steps, plans[2].max_steps) == (300, None)  # fixed steps: no cap to read
+    assert (plans[3].steps, plans[3].max_steps) == (None, 80000)
 
 
 def test_tempering_reaches_every_single_record_fit_of_both_studies(tmp_path, monkeypatch):
@@ -37,7 +61,8 @@ def test_tempering_reaches_every_single_record_fit_of_both_studies(tmp_path, mon
     monkeypatch.setattr(full, "paper_like_records", lambda folder, seed: folder)
     monkeypatch.setattr(full, "_report", lambda out, seed: out / "REPORT.md")
     run(Config(tempering=4), tmp_path, Serial())
-    control, headline = plans
+    headline, control = plans  # the headline first
+    assert headline.records_dir is not None and control.records_dir is None
     assert control.tempering == headline.tempering == 4
     assert control.joint and not headline.joint  # the joint model itself is not tempered
     run(Config(tempering=1), tmp_path, Serial())

@@ -167,6 +167,35 @@ def test_a_jobs_tempering_reaches_its_fit(tmp_path, monkeypatch):
     assert seen == [None, Tempering(3)]
 
 
+def test_a_jobs_cap_reaches_its_fit_and_a_job_recorded_without_one_had_fits(tmp_path, monkeypatch):
+    from dataclasses import asdict
+
+    import bayes_inerter.inference as inference
+    from bayes_inerter.inference.sampling.convergence import Convergence
+    from bayes_inerter.inference.sampling.tempering import MAX_STEPS
+    from bayes_inerter.study.runner import _same_job
+
+    seen = []
+
+    def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
+        seen.append(options["convergence"])
+        raise ValueError("stand-in fit")
+
+    monkeypatch.setattr(inference, "fit_record", fake_fit)
+    monkeypatch.setattr("bayes_inerter.records.read_record", lambda path: None)
+    for cap, temps in ((None, None), (80000, None), (30000, 3)):
+        with pytest.raises(ValueError, match="stand-in fit"):
+            runner_module.run_job(FitJob("r.csv", str(tmp_path / "f"), tempering=temps, max_steps=cap),
+                                  plots=False)
+    assert seen[0] is None  # fit's own rule
+    assert seen[1] == Convergence(max_steps=80000) and Convergence().max_steps != 80000
+    assert seen[2].max_steps == 30000 and MAX_STEPS != 30000
+    job = FitJob(str(tmp_path / "A0_1Hz.csv"), str(tmp_path / "fit"))
+    old = {k: v for k, v in asdict(job).items() if k != "max_steps"}
+    assert _same_job(old, job)
+    assert not _same_job(old, FitJob(job.record, job.out, max_steps=80000))
+
+
 def _copy_of(study, tmp_path):
     """A copy of the module's study folder, for a test that runs into it again (the
     shared folder's REPORT.md and study.json must stay the first run's, whatever order
@@ -433,3 +462,32 @@ def test_a_joint_fit_of_another_likelihood_is_not_reused(tmp_path):
     older = {k: v for k, v in info["likelihood"].items() if k != "reversals"}
     (tmp_path / "fit.json").write_text(json.dumps({**info, "likelihood": older}))
     assert finished_joint(tmp_path, recs, plan) is not None
+
+
+def test_cli_study_caps_chains_run_until_converged(tmp_path, monkeypatch, capsys):
+    import bayes_inerter.study as study_pkg
+
+    seen = []
+
+    def fake_run_study(plan, out, **kwargs):
+        seen.append(plan)
+        raise KeyboardInterrupt  # stop here: only the plan matters
+
+    monkeypatch.setattr(study_pkg, "run_study", fake_run_study)
+    assert main(["study", "--max-steps", "80000", "--out", str(tmp_path / "o")]) == 130
+    assert main(["study", "--quick", "--max-steps", "900", "--out", str(tmp_path / "o")]) == 130
+    assert (seen[0].steps, seen[0].max_steps) == (None, 80000)
+    assert (seen[1].steps, seen[1].max_steps) == (None, 900)  # the quick study's fixed steps give way
+    capsys.readouterr()
+    code = main(["study", "--steps", "50", "--max-steps", "900", "--out", str(tmp_path / "p")])
+    err = capsys.readouterr().err
+    assert code == 1 and err.startswith("error: --steps") and "give one of them" in err
+    assert "Traceback" not in err and not (tmp_path / "p").exists() and len(seen) == 2
+
+
+def test_a_plan_takes_fixed_steps_or_a_cap_not_both():
+    with pytest.raises(ValueError, match="give one of them"):
+        tiny_plan(max_steps=900)  # tiny_plan fixes the steps
+    with pytest.raises(ValueError, match="max_steps must be a positive whole number"):
+        tiny_plan(steps=None, max_steps=0)
+    assert tiny_plan(steps=None, max_steps=900).max_steps == 900

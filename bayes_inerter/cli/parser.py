@@ -207,6 +207,9 @@ def _add_study(sub) -> argparse.ArgumentParser:
                    help="each fit draws its figures as it ends (default: later, by bayes-inerter report DIR)")
     p.add_argument("--records", help="a folder of your CSV records to fit instead of generated ones")
     p.add_argument("--steps", type=_positive_int, help="steps per chain (default: the plan's; full: until converged)")
+    p.add_argument("--max-steps", type=_positive_int,
+                   help="each record's chain until converged, but at most this many steps (default: fit's, 20000, "
+                        "10000 tempered)")
     p.add_argument("--seed", type=int, help="seed of the generated records' noise and of the chains (0)")
     p.add_argument("--joint-steps", type=_positive_int,
                    help="steps of the joint model's chain (full study; default: until converged)")

@@ -18,8 +18,13 @@ def _plan(args):
 
     plan = quick_plan() if args.quick else full_plan()
     changes = {}
+    if args.steps is not None and args.max_steps is not None:
+        raise CliError("--steps fixes each chain's length and --max-steps caps a chain run until converged: "
+                       "give one of them")
     if args.steps is not None:
         changes["steps"] = args.steps
+    if args.max_steps is not None:  # until converged, also where the plan fixes the steps (quick)
+        changes.update(steps=None, max_steps=args.max_steps)
     if args.seed is not None:
         changes["seed"] = args.seed
     if args.joint_steps is not None:

@@ -49,6 +49,9 @@ class FitJob:
     #: parallel tempering's temperatures (``sampler.Tempering``, down to its default
     #: hottest beta); None: the ensemble alone
     tempering: int | None = None
+    #: the chain's cap when it runs to the convergence rule (``steps`` None); None:
+    #: ``fit``'s own (``tempering.default_convergence``)
+    max_steps: int | None = None
 
     @property
     def key(self) -> str:
@@ -68,6 +71,8 @@ class StudyPlan:
         or else it is estimated from the record (``records.drive``).
     generator : how generated records are made; ``seed`` seeds their noise.
     steps : steps per chain; None runs each until converged.
+    max_steps : the single-record chains' cap when they run until converged (None:
+        ``fit``'s, 20,000 steps, 10,000 tempered); not the joint model's.
     comparison : (settings, frequencies) of the records also fitted with the
         ``compare_models``.
     compare_models : the models fitted beside the two-port one in the comparison
@@ -101,6 +106,7 @@ class StudyPlan:
     generator: GeneratorSettings = field(default_factory=GeneratorSettings)
     seed: int = 0
     steps: int | None = None
+    max_steps: int | None = None
     walkers: int | None = None
     comparison: tuple = ((), ())
     compare_models: tuple = COMPARE_MODELS
@@ -119,10 +125,13 @@ class StudyPlan:
         odd = [m for m in self.compare_models if m not in MODELS or m == "two-port"]
         if odd:
             raise ValueError(f"comparison models must be other models of {', '.join(MODELS)}; got {odd}")
-        for name in ("steps", "joint_steps"):
+        for name in ("steps", "joint_steps", "max_steps"):
             value = getattr(self, name)
             if value is not None and not (isinstance(value, int) and value >= 1):
                 raise ValueError(f"{name} must be a positive whole number or None, got {value!r}")
+        if self.steps is not None and self.max_steps is not None:
+            raise ValueError("steps fixes each chain's length and max_steps caps a chain run until converged: "
+                             "give one of them")
         if self.tempering is not None and not (isinstance(self.tempering, int) and self.tempering >= 2):
             raise ValueError(f"tempering needs at least 2 temperatures, got {self.tempering!r}")
 
@@ -139,7 +148,7 @@ class StudyPlan:
                 models += list(self.compare_models)
             for model in models:
                 jobs.append(FitJob(str(path), str(out / "fits" / model / name), model, self.steps,
-                                   self.walkers, self.seed + i, self.tempering))
+                                   self.walkers, self.seed + i, self.tempering, self.max_steps))
         return sorted(jobs, key=lambda job: job.model != "two-port")  # stable: records' order within each
 
 

@@ -15,11 +15,12 @@ import dataclasses
 import json
 import functools
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from ..executor import Dask, Executor, LocalProcesses, WorkerDied
 from ..inference.summaries.results import LOO_FILE
-from ..inference.sampling.tempering import Tempering
+from ..inference.sampling.tempering import Tempering, default_convergence
 from .plan import FitJob
 
 __all__ = ["run_job", "run_jobs", "finished", "DONE_FILE"]
@@ -58,7 +59,8 @@ def _same_job(recorded, job: FitJob) -> bool:
     in another place, are the same study."""
     if not isinstance(recorded, dict):
         return False
-    recorded = {"tempering": None, **recorded}  # a job recorded before the option was untempered
+    # a job recorded before these options was untempered, with fit's own cap
+    recorded = {"tempering": None, "max_steps": None, **recorded}
     want = dataclasses.asdict(job)
     names = ("record", "out")
     if {k: v for k, v in recorded.items() if k not in names} != {k: v for k, v in want.items() if k not in names}:
@@ -74,8 +76,10 @@ def run_job(job: FitJob, plots: bool = True) -> dict:
 
     t0 = time.perf_counter()
     rec = read_record(job.record)
+    tempering = Tempering.of(job.tempering)
+    convergence = None if job.max_steps is None else replace(default_convergence(tempering), max_steps=job.max_steps)
     res = fit_record(rec, job.out, model=job.model, steps=job.steps, walkers=job.walkers, seed=job.seed,
-                     processes=1, plots=plots, tempering=Tempering.of(job.tempering))
+                     processes=1, plots=plots, tempering=tempering, convergence=convergence)
     outcome = {
         "key": job.key, "status": "done", "converged": bool(res.converged), "reason": res.reason,
         "iterations": int(res.iterations), "seconds": time.perf_counter() - t0,
