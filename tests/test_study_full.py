@@ -24,7 +24,9 @@ def test_the_configuration_refuses_too_few_steps():
         Config(max_steps=50)
 
 
-def test_the_cap_reaches_every_single_record_chain_of_both_studies(tmp_path, monkeypatch):
+def _plans_run(monkeypatch) -> list:
+    """The plans ``run`` hands its studies, in order, none of them run (the plumbing is
+    tested, not a study)."""
     import types
 
     from bayes_inerter.study import full
@@ -38,6 +40,11 @@ def test_the_cap_reaches_every_single_record_chain_of_both_studies(tmp_path, mon
     monkeypatch.setattr(full, "run_study", fake_run_study)
     monkeypatch.setattr(full, "paper_like_records", lambda folder, seed: folder)
     monkeypatch.setattr(full, "_report", lambda out, seed: out / "REPORT.md")
+    return plans
+
+
+def test_the_cap_reaches_every_single_record_chain_of_both_studies(tmp_path, monkeypatch):
+    plans = _plans_run(monkeypatch)
     run(Config(max_steps=80000), tmp_path, Serial())
     assert [p.max_steps for p in plans] == [80000, 80000]
     assert all(job.max_steps == 80000 for job in plans[0].jobs({"A0_1Hz": ("A0_1Hz.csv", "A0", 1.0)}, tmp_path))
@@ -47,19 +54,7 @@ def test_the_cap_reaches_every_single_record_chain_of_both_studies(tmp_path, mon
 
 
 def test_tempering_reaches_every_single_record_fit_of_both_studies(tmp_path, monkeypatch):
-    import types
-
-    from bayes_inerter.study import full
-
-    plans = []
-
-    def fake_run_study(plan, folder, **_):
-        plans.append(plan)
-        return types.SimpleNamespace(outcomes=[], seconds={"total": 0.0})
-
-    monkeypatch.setattr(full, "run_study", fake_run_study)
-    monkeypatch.setattr(full, "paper_like_records", lambda folder, seed: folder)
-    monkeypatch.setattr(full, "_report", lambda out, seed: out / "REPORT.md")
+    plans = _plans_run(monkeypatch)
     run(Config(tempering=4), tmp_path, Serial())
     headline, control = plans  # the headline first
     assert headline.records_dir is not None and control.records_dir is None

@@ -149,44 +149,43 @@ def test_a_job_recorded_before_tempering_was_an_option_is_the_untempered_job(tmp
                      FitJob(job.record, job.out, steps=4, tempering=4))
 
 
-def test_a_jobs_tempering_reaches_its_fit(tmp_path, monkeypatch):
+def _fit_options(monkeypatch, jobs) -> list[dict]:
+    """The options ``run_job`` hands ``fit_record`` for each of ``jobs``, no fit run (the
+    plumbing is tested, not a fit)."""
     import bayes_inerter.inference as inference
-    from bayes_inerter.inference.sampling.tempering import Tempering
 
     seen = []
 
-    def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
-        seen.append(options["tempering"])
+    def fake_fit(rec, out, **options):
+        seen.append(options)
         raise ValueError("stand-in fit")
 
     monkeypatch.setattr(inference, "fit_record", fake_fit)
     monkeypatch.setattr("bayes_inerter.records.read_record", lambda path: None)
-    for temps in (None, 3):
+    for job in jobs:
         with pytest.raises(ValueError, match="stand-in fit"):
-            runner_module.run_job(FitJob("r.csv", str(tmp_path / "f"), steps=4, tempering=temps), plots=False)
-    assert seen == [None, Tempering(3)]
+            runner_module.run_job(job, plots=False)
+    return seen
 
 
-def test_a_jobs_cap_reaches_its_fit_and_a_job_recorded_without_one_had_fits(tmp_path, monkeypatch):
+def test_a_jobs_tempering_reaches_its_fit(tmp_path, monkeypatch):
+    from bayes_inerter.inference.sampling.tempering import Tempering
+
+    seen = _fit_options(monkeypatch, [FitJob("r.csv", str(tmp_path / "f"), steps=4, tempering=temps)
+                                      for temps in (None, 3)])
+    assert [options["tempering"] for options in seen] == [None, Tempering(3)]
+
+
+def test_a_jobs_cap_reaches_its_fit_and_a_job_recorded_without_one_had_fits_cap(tmp_path, monkeypatch):
     from dataclasses import asdict
 
-    import bayes_inerter.inference as inference
     from bayes_inerter.inference.sampling.convergence import Convergence
     from bayes_inerter.inference.sampling.tempering import MAX_STEPS
     from bayes_inerter.study.runner import _same_job
 
-    seen = []
-
-    def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
-        seen.append(options["convergence"])
-        raise ValueError("stand-in fit")
-
-    monkeypatch.setattr(inference, "fit_record", fake_fit)
-    monkeypatch.setattr("bayes_inerter.records.read_record", lambda path: None)
-    for cap, temps in ((None, None), (80000, None), (30000, 3)):
-        with pytest.raises(ValueError, match="stand-in fit"):
-            runner_module.run_job(FitJob("r.csv", str(tmp_path / "f"), tempering=temps, max_steps=cap),
-                                  plots=False)
+    seen = [options["convergence"] for options in _fit_options(
+        monkeypatch, [FitJob("r.csv", str(tmp_path / "f"), tempering=temps, max_steps=cap)
+                      for cap, temps in ((None, None), (80000, None), (30000, 3))])]
     assert seen[0] is None  # fit's own rule
     assert seen[1] == Convergence(max_steps=80000) and Convergence().max_steps != 80000
     assert seen[2].max_steps == 30000 and MAX_STEPS != 30000

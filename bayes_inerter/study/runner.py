@@ -15,7 +15,6 @@ import dataclasses
 import json
 import functools
 import time
-from dataclasses import replace
 from pathlib import Path
 
 from ..executor import Dask, Executor, LocalProcesses, WorkerDied
@@ -77,7 +76,8 @@ def run_job(job: FitJob, plots: bool = True) -> dict:
     t0 = time.perf_counter()
     rec = read_record(job.record)
     tempering = Tempering.of(job.tempering)
-    convergence = None if job.max_steps is None else replace(default_convergence(tempering), max_steps=job.max_steps)
+    convergence = (None if job.max_steps is None
+                   else dataclasses.replace(default_convergence(tempering), max_steps=job.max_steps))
     res = fit_record(rec, job.out, model=job.model, steps=job.steps, walkers=job.walkers, seed=job.seed,
                      processes=1, plots=plots, tempering=tempering, convergence=convergence)
     outcome = {
