@@ -216,7 +216,7 @@ def _add_study(sub) -> argparse.ArgumentParser:
     p.add_argument("--no-joint", action="store_true", help="skip the joint model of all records")
     p.add_argument("--tempering", type=_at_least_two, metavar="TEMPS",
                    help="fit each record with parallel tempering of this many temperatures (default: none, as "
-                        "fit; results/full was sampled with 4; the joint model is not tempered)")
+                        "fit, and results/full; the joint model is not tempered)")
     p.add_argument("--identify", action=argparse.BooleanOptionalAction, default=None,
                    help="also fit every record by the paper's least squares (eq. 4; about 20 s a 10 s record on one core) and set it "
                         "beside the posterior in least_squares.csv (default: full study yes, quick no)")

@@ -19,7 +19,7 @@ Two studies, then one report:
 
 Running it again reuses finished fits and the paper-like records (delete
 ``out``/paper-like/records to draw another laboratory); a fit is reused only under the
-same tempering, so results/full's, sampled with 4 temperatures, with ``--tempering 4``. ``studies/study.py`` runs it
+same tempering and cap, so results/full's with ``--max-steps 80000``. ``studies/study.py`` runs it
 through ``cli.study_script``.
 """
 
@@ -61,9 +61,8 @@ class Config:
         studies (None: ``fit``'s, 20,000 steps; ``StudyPlan.max_steps``).
     report_only : only write REPORT.md again from the results there.
     tempering : parallel tempering's temperatures for every single-record fit of both
-        studies (``StudyPlan.tempering``; default None, the ensemble alone, as ``fit``;
-        the committed results/full was sampled with 4, under the rule before it read the
-        replicas, CHANGELOG.md). The joint model is not tempered.
+        studies (``StudyPlan.tempering``; default None, the ensemble alone, as ``fit``
+        and the committed results/full). The joint model is not tempered.
     """
 
     seed: int = field(default=0, metadata={"help": "the paper-like laboratory's seed"})

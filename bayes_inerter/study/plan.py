@@ -95,7 +95,7 @@ class StudyPlan:
         record; ``study.least_squares``) and set it beside the posterior in
         ``least_squares.csv``.
     tempering : the single-record fits' parallel tempering, temperatures (None, the
-        default: the ensemble alone, as ``fit``'s; results/full was sampled with 4).
+        default: the ensemble alone, as ``fit``'s and results/full's).
         The joint model is not tempered.
     """
 
