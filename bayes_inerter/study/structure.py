@@ -113,6 +113,10 @@ IDENTIFICATION_SD = 0.015
 #: accelerometer calibrate them all), a relative sd in log b; the lead's own prior is
 #: a second, separate common scale.
 COMMON_SD = 0.02
+#: The paper-like coverage study whose replicates give A0's error under the package's own
+#: fit (its folder beside ``out``): the one run with ``fit``'s default (no tempering, each
+#: chain to the rule or 80,000 steps, 100 laboratories).
+COVERAGE_FOLDER = "coverage-paper-like-untempered-80k"
 
 
 def with_identification_error(ident: Identified, per_setting: float = IDENTIFICATION_SD,
@@ -393,7 +397,7 @@ class Config:
         :data:`COMMON_SD`: assumptions).
     full : the full study's folder whose b's are fitted (None: ``full`` beside ``out``).
     coverage : the paper-like coverage study's replicates.csv, for A0's error under the
-        package's own fit (None: ``coverage-paper-like-v5`` beside ``out``; skipped
+        package's own fit (None: :data:`COVERAGE_FOLDER` beside ``out``; skipped
         where it is not there).
     """
 
@@ -404,7 +408,7 @@ class Config:
     common: float = field(default=COMMON_SD, metadata={"help": "a scale error common to every setting's b, relative sd"})
     full: str | None = field(default=None, metadata={"help": "the full study's folder (default: OUT/../full)"})
     coverage: str | None = field(default=None, metadata={
-        "help": "the paper-like coverage study's replicates.csv (default: OUT/../coverage-paper-like-v5)"})
+        "help": f"the paper-like coverage study's replicates.csv (default: OUT/../{COVERAGE_FOLDER})"})
 
     def __post_init__(self) -> None:
         if not (isinstance(self.steps, int) and self.steps >= 100):
@@ -449,7 +453,7 @@ def run(config: Config, out, executor=None, *, progress=None):
     out = Path(out)
     full = Path(config.full) if config.full else out.parent / "full"
     coverage_file = Path(config.coverage) if config.coverage else (
-        out.parent / "coverage-paper-like-v5" / "replicates.csv")
+        out.parent / COVERAGE_FOLDER / "replicates.csv")
     for need in (full / "joint" / "b_draws.npz", full / "paper-like" / "inertance.csv",
                  full / "inertance_records.csv", full / "paper-like" / "least_squares.csv"):
         if not need.is_file():
