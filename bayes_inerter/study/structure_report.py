@@ -57,7 +57,7 @@ def _paper_like_a0(inertance) -> str:
 
 
 def structure_section(expl, fits, freq, priors, per_setting: float, common: float, without_a0, least_squares,
-                      coverage=(), paper_like=(), coverage_source: str = "results/coverage-paper-like-untempered-80k") -> str:
+                      coverage=(), paper_like=(), *, coverage_source: str) -> str:
     """REPORT.md's section on the structure study (``structure.run``), written from its
     numbers: the nested explanations ``expl``, the structural ``fits`` of the control and
     the paper-like b's, the per-frequency shares ``freq``, the identification error
