@@ -252,3 +252,38 @@ def test_a_work_folder_of_another_run_is_refused_and_one_without_a_stamp_taken(t
     (work / "0004" / "fit").mkdir(parents=True)  # a chain left by code before the stamp
     assert plc._work_folder(Config(max_steps=20000, work=str(work)), out, 4) == work / "0004"
     assert plc._work_folder(Config(), out, 0) is None  # no work folder: a temporary one per fit
+
+
+def test_b_over_gain_is_held_against_the_laboratorys_own_gain_ratio(tmp_path, monkeypatch):
+    """A posterior that samples the gain gives b / gain's intervals, which the summary
+    holds against b g_F / g_a of the replicate's laboratory, not against b."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from bayes_inerter.records.paper_like import laboratory
+    from bayes_inerter.study import paper_like_coverage as plc
+    from bayes_inerter.study.replicate_store import write_replicate
+
+    lab = laboratory(6000)
+    apparent = 753.34 * lab.force_gain / lab.accel_gain
+    rng = np.random.default_rng(1)
+    gain = np.exp(rng.normal(0.0, 0.005, size=(2, 400)))
+    ratio = rng.normal(apparent, 0.5, size=(2, 400))  # b / gain tightly about b g_F / g_a
+
+    def fit(record, out, **options):
+        return SimpleNamespace(idata=SimpleNamespace(posterior={"b": ratio * gain, "gain": gain}), converged=True,
+                               iterations=750, tau=np.array([4.0]), tau_by_parameter=None,
+                               b_interval=SimpleNamespace(identified=True, phi=0.9))
+
+    monkeypatch.setattr(plc, "fit_record", fit)
+    got = plc.replicate(0, 6000, 500)
+    lo, hi = got["hdi94_b_over_gain"]
+    assert lo < apparent < hi and hi - lo < 3.0 < got["hdi94"][1] - got["hdi94"][0]
+    write_replicate(tmp_path, 0, got)
+    shifted = {**got, "replicate": 1, "hdi94_b_over_gain": [apparent + 1.0, apparent + 2.0]}  # misses
+    write_replicate(tmp_path, 1, shifted)
+    (row,) = [r for r in plc.summarise(tmp_path) if r["freq_hz"] == "all"]
+    assert row["converged_with_b_over_gain"] == 2 and row["coverage94_b_over_gain_converged"] == 0.5
+    lines = list(csv.DictReader((tmp_path / "replicates.csv").open()))
+    assert [x["covered94_b_over_gain"] for x in lines] == ["True", "False"]

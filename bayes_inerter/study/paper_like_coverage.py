@@ -19,7 +19,10 @@ whether they hold the true b (Table 2's, which the generator uses), whether the 
 calls b identified (``FitResult.b_interval.identified``), the chain's state and seconds;
 in replicates.csv also b's error beside the part its laboratory's sensor gains explain
 (``with_errors``), so a bias of the likelihood is not confused with a laboratory's
-miscalibrated sensors.
+miscalibrated sensors. Where the fit samples the sensors' gain ratio, also b / gain's
+intervals, held against b g_F / g_a: b's own intervals are widened by the gain's prior,
+which the generator's sensors are drawn from, so they alone cannot tell whether the
+part the record decides is calibrated.
 
 ``family`` makes the records of a device family the likelihood was not designed on
 (``FAMILIES``: a wider nut backlash, a larger break-away, noise coloured at 20 Hz, the two
@@ -139,6 +142,12 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
         out[f"hdi{key}"] = [float(lo), float(hi)]
         out[f"covered{key}"] = bool(lo <= b_true <= hi)
         out[f"width{key}_pct"] = 100.0 * (hi - lo) / b_true
+    posterior = res.idata.posterior
+    if "gain" in posterior:  # b beyond the sensors' calibration, what the record itself tells (absent before)
+        ratio = b / np.asarray(posterior["gain"]).ravel()
+        for level in LEVELS:
+            lo, hi = hdi(ratio, level)
+            out[f"hdi{round(100 * level)}_b_over_gain"] = [float(lo), float(hi)]
     return out
 
 
@@ -184,8 +193,15 @@ def with_errors(r: dict) -> dict:
     ``error_beyond_gain_pct`` the error that is left after it."""
     lab = laboratory(r["seed"], device=FAMILIES[r.get("family", "default")])
     gain = lab.force_gain / lab.accel_gain
-    return {**r, "error_pct": 100.0 * (r["b_median"] / r["b_true"] - 1.0), "gain_ratio_pct": 100.0 * (gain - 1.0),
-            "error_beyond_gain_pct": 100.0 * (r["b_median"] / (r["b_true"] * gain) - 1.0)}
+    out = {**r, "error_pct": 100.0 * (r["b_median"] / r["b_true"] - 1.0), "gain_ratio_pct": 100.0 * (gain - 1.0),
+           "error_beyond_gain_pct": 100.0 * (r["b_median"] / (r["b_true"] * gain) - 1.0)}
+    apparent = r["b_true"] * gain  # what b / gain estimates: the sampled gain stands for g_a / g_F
+    for key in ("94", "50"):
+        if f"hdi{key}_b_over_gain" in r:
+            lo, hi = r[f"hdi{key}_b_over_gain"]
+            out[f"covered{key}_b_over_gain"] = bool(lo <= apparent <= hi)
+            out[f"width{key}_b_over_gain_pct"] = 100.0 * (hi - lo) / apparent
+    return out
 
 
 def summarise(out: Path) -> list[dict]:
@@ -194,6 +210,10 @@ def summarise(out: Path) -> list[dict]:
         fields = ["replicate", "setting", "freq_hz", "seed", "b_true", "b_median", "hdi94", "hdi50", "covered94",
                   "covered50", "width94_pct", "identified", "converged", "steps", "tau_max", "seconds", "phi",
                   "error_pct", "gain_ratio_pct", "error_beyond_gain_pct"]
+        beyond = any("covered94_b_over_gain" in r for r in reps)
+        if beyond:  # only folders whose replicates hold b / gain, so older tables are remade unchanged
+            fields += [f"{what}{key}_b_over_gain{unit}" for key in ("94", "50")
+                       for what, unit in (("covered", ""), ("width", "_pct"))]
         w = csv.DictWriter(f, fields)
         w.writeheader()
         for r in reps:
@@ -216,6 +236,14 @@ def summarise(out: Path) -> list[dict]:
         row["converged_identified"] = len(good)
         for key in ("94", "50"):
             row[f"coverage{key}_converged"] = round(sum(r[f"covered{key}"] for r in good) / len(good), 3) if good else ""
+        if beyond:  # b / gain's intervals against b g_F / g_a, among the converged replicates that hold them
+            held = [r for r in good if "covered94_b_over_gain" in r]
+            row["converged_with_b_over_gain"] = len(held)
+            for key in ("94", "50"):
+                row[f"coverage{key}_b_over_gain_converged"] = \
+                    round(sum(r[f"covered{key}_b_over_gain"] for r in held) / len(held), 3) if held else ""
+            row["median_width94_b_over_gain_pct"] = \
+                round(float(np.median([r["width94_b_over_gain_pct"] for r in held])), 2) if held else ""
         row["median_seconds"] = round(float(np.median([r["seconds"] for r in sel])), 1)
         for key in ("error_pct", "error_beyond_gain_pct"):
             row[f"mean_{key}"] = round(float(np.mean([r[key] for r in sel])), 2)
