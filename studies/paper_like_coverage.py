@@ -5,7 +5,8 @@ chain to the convergence rule. One JSON per replicate in --out/replicates (run a
 go on); replicates.csv and coverage.csv from all of them.
 
     python studies/paper_like_coverage.py --replicates 27 [--seed0 1000] [--out results/paper-like-coverage]
-        [--max-steps 20000] [--processes 2] [--family default] [--likelihood input_noise=16]
+        [--max-steps 20000] [--processes 2] [--family default] [--model two-port-stribeck]
+        [--likelihood input_noise=16]
         [--freq 0.5] [--duration 20] [--work runs/NAME] [--summarise [--against FOLDER]]
 
 With --summarise --against FOLDER (the same replicates fitted otherwise) it also writes

@@ -287,3 +287,20 @@ def test_b_over_gain_is_held_against_the_laboratorys_own_gain_ratio(tmp_path, mo
     assert row["converged_with_b_over_gain"] == 2 and row["coverage94_b_over_gain_converged"] == 0.5
     lines = list(csv.DictReader((tmp_path / "replicates.csv").open()))
     assert [x["covered94_b_over_gain"] for x in lines] == ["True", "False"]
+
+
+def test_a_replicate_fits_the_model_asked_and_a_folder_keeps_one(tmp_path, monkeypatch):
+    from bayes_inerter.study import paper_like_coverage as plc
+
+    calls = []
+    monkeypatch.setattr(plc, "fit_record", _fake_fit(calls))
+    richer = plc.replicate(0, 6000, 500, model="two-port-stribeck")
+    assert calls[0]["model"] == "two-port-stribeck" and richer["model"] == "two-port-stribeck"
+    assert "model" not in plc.replicate(0, 6000, 500) and calls[1]["model"] == "two-port"
+    with pytest.raises(ValueError, match="unknown model 'three-port'"):
+        Config(model="three-port")
+    (tmp_path / "replicates").mkdir()
+    today = {**finished(COMMITTED)[0], "likelihood_settings": likelihood_settings(Config().likelihood)}
+    (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
+    with pytest.raises(ValueError, match="of the model two-port, not two-port-stribeck"):
+        run(Config(model="two-port-stribeck"), tmp_path, Serial())

@@ -26,7 +26,9 @@ part the record decides is calibrated.
 
 ``family`` makes the records of a device family the likelihood was not designed on
 (``FAMILIES``: a wider nut backlash, a larger break-away, noise coloured at 20 Hz, the two
-sensors' delays unequal); a folder keeps one family. ``likelihood`` (``name=value,...``)
+sensors' delays unequal); a folder keeps one family. ``model`` fits another model than the
+paper's two-port one (``MOTION_MODELS``: the richer ones, which hold some of those
+effects); a folder keeps one model. ``likelihood`` (``name=value,...``)
 fits with those of ``LikelihoodSettings`` changed (``input_noise=16``,
 ``law_beyond_viscous=false``), a candidate beside the default on the same seeds; a
 folder keeps one likelihood, its every setting recorded in each replicate (a change of
@@ -64,6 +66,7 @@ from ..inference.sampling.adaptation import Adaptation
 from ..inference.sampling.identity import LATER_ADAPTATION
 from ..inference.sampling.moves.block import PARTNERS
 from ..inference.posterior.likelihood import LikelihoodSettings, settings_changes
+from ..inference.posterior.model import MOTION_MODELS
 from ..inference.sampling.tempering import Tempering
 from ..inference.summaries.results import hdi
 from ..records.paper_like import PaperLike, laboratory, paper_like_record
@@ -98,11 +101,12 @@ def likelihood_settings(text: str) -> dict:
 def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commit: str = "",
               likelihood: str = "default", tempering: Tempering | None = None,
               tau_rtol: float | None = None, duration: float | None = None, folder=None,
-              block_partners: str | None = None) -> dict:
+              block_partners: str | None = None, model: str = "two-port") -> dict:
     """Replicate ``k`` fitted (see the module docstring). ``folder``: where its fit runs,
     continued from the checkpoint there if an earlier run left one; the caller removes it
     once the replicate is written (None: a temporary folder, nothing kept if stopped).
-    ``block_partners``: the adaptation's (``Adaptation.block_partners``; None: its default)."""
+    ``block_partners``: the adaptation's (``Adaptation.block_partners``; None: its default).
+    ``model``: the model fitted (``fit_record``'s; the paper's two-port one by default)."""
     adaptation = Adaptation() if block_partners is None else Adaptation(block_partners=block_partners)
     setting, freq = grid_case(k)
     seed = seed0 + k
@@ -110,7 +114,7 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
     b_true = paper_parameters(setting).b
     t0 = time.perf_counter()
     with fit_folder(folder) as where:
-        res = fit_record(rec, where, seed=seed, plots=False,
+        res = fit_record(rec, where, model=model, seed=seed, plots=False,
                          likelihood=LikelihoodSettings(**settings_changes(likelihood)),
                          convergence=stop_rule.convergence(max_steps, tau_rtol), tempering=tempering,
                          adaptation=adaptation)
@@ -134,6 +138,8 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
         out.update(tempering=_ladder_entry(tempering), swap_rates=res.tempering["swap_rates"])
     if duration is not None:  # absent for the paper's 10 s, as in the replicates written before the option
         out["duration_s"] = float(duration)
+    if model != "two-port":  # absent for the paper's model, as in the replicates written before the option
+        out["model"] = model
     if adaptation.block_partners != EARLIER_PARTNERS:  # absent for random blocks, as before the option
         out["block_partners"] = adaptation.block_partners
     for level in LEVELS:
@@ -160,7 +166,7 @@ def _run(job) -> dict:
     k, out, config, commit = job
     folder = _work_folder(config, out, k)
     got = replicate(k, config.seed0, config.max_steps, config.family, commit, config.likelihood, config.ladder(),
-                    config.tau_rtol, config.duration, folder, config.block_partners)
+                    config.tau_rtol, config.duration, folder, config.block_partners, config.model)
     write_replicate(out, k, got, indent=1)
     if folder is not None:  # only once the replicate is on disk: a crash before keeps the chain
         shutil.rmtree(folder, ignore_errors=True)
@@ -317,6 +323,8 @@ class Config:
     seed0: int = field(default=1000, metadata={"help": "replicate k's laboratory seed is seed0 + k"})
     max_steps: int = field(default=20000, metadata={"help": "each chain's cap"})
     family: str = field(default="default", metadata={"choices": tuple(FAMILIES), "help": "the device family"})
+    model: str = field(default="two-port", metadata={
+        "choices": MOTION_MODELS, "help": "the model fitted (default: the paper's two-port one); a folder keeps one"})
     likelihood: str = field(default="default", metadata={
         "help": "LikelihoodSettings changed from the default, NAME=VALUE,... (values as JSON)"})
     freq: float | None = field(default=None, metadata={"help": "only the replicates driven at this frequency, Hz"})
@@ -343,6 +351,8 @@ class Config:
             raise ValueError(f"replicates must be a whole number of at least 1, got {self.replicates!r}")
         if self.family not in FAMILIES:
             raise ValueError(f"unknown family {self.family!r}; choose from {', '.join(FAMILIES)}")
+        if self.model not in MOTION_MODELS:
+            raise ValueError(f"unknown model {self.model!r}; choose from {', '.join(MOTION_MODELS)}")
         if self.freq is not None and self.freq not in FREQUENCIES_HZ:
             raise ValueError(f"freq must be one of {', '.join(f'{f:g}' for f in FREQUENCIES_HZ)} Hz, got {self.freq:g}")
         if self.duration is not None and not self.duration > 0:
@@ -375,7 +385,7 @@ def _line(r: dict) -> str:
 
 def _refuse_mixing(found: list[dict], config: Config, out: Path) -> None:
     """ValueError naming the first setting in which a replicate in ``out`` differs from
-    what ``config`` asks (family, likelihood, sampler, record length, stopping rule):
+    what ``config`` asks (family, model, likelihood, sampler, record length, stopping rule):
     their coverage counts would not belong to one configuration."""
     ladder = config.ladder()
     families = sorted({r.get("family", "default") for r in found})
@@ -385,6 +395,8 @@ def _refuse_mixing(found: list[dict], config: Config, out: Path) -> None:
     checks = (
         (lambda r: r.get("family", "default") == config.family,
          f"of family {', '.join(families)}, not {config.family}"),
+        (lambda r: r.get("model", "two-port") == config.model,
+         f"of the model {', '.join(sorted({r.get('model', 'two-port') for r in found}))}, not {config.model}"),
         (lambda r: r.get("likelihood_settings") == likelihood_settings(config.likelihood),
          f"fitted with other likelihood settings than {config.likelihood!r} gives today (or made before "
          "replicates recorded them)"),
