@@ -22,13 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .paper_like_coverage import with_errors
+from .paper_like_coverage import LEVELS, with_errors
 from .replicate_store import finished
 
 __all__ = ["families_table", "NOMINAL"]
 
-#: the intervals' levels, by the key their replicates use
-NOMINAL = {"94": 0.94, "50": 0.5}
+#: the intervals' levels (``paper_like_coverage.LEVELS``), by the key their replicates use
+NOMINAL = {str(round(100 * level)): level for level in LEVELS}
 
 
 def _z(held: int, n: int, nominal: float) -> float | str:
