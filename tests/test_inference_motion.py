@@ -844,3 +844,66 @@ def test_the_richer_models_force_on_noise_free_records_of_a_richer_device(freq):
            for e in (effects, None)]
     assert rms[0] < 2.0
     assert rms[1] > 10 * rms[0]
+
+
+def test_the_form_shape_is_the_forces_derivative_in_log_b():
+    """``form_shape``: on a rigid device F = (b + m_s + m_B) A, so its derivative in log b
+    is b A at every harmonic (real parts, then imaginary parts)."""
+    from bayes_inerter.inference.posterior.motion import form_shape
+
+    p = _rigid()
+    data = motion_data(_record(lambda a: (p["b"] + p["m_s"] + p["m_B"]) * a), FREQ, cutoff=30.0)
+    K = data.harmonics
+    g = form_shape(data, p)
+    assert g.shape == (2 * K, 1)
+    expected = p["b"] * data.harmonic.accel
+    scale = np.abs(expected).max()
+    # to 1e-6 of the force (the stiff links, the simulated drivetrain), over a difference of 2e-3 in log b
+    np.testing.assert_allclose(g[:K, 0] + 1j * g[K:, 0], expected, rtol=0, atol=1e-3 * scale)
+
+
+def test_the_form_sd_adds_its_variance_to_log_bs_along_the_forces_derivative():
+    """``LikelihoodSettings.form_sd`` s: the reference model's deviations gain one column,
+    s times the force's derivative in log b there (prior sd 1). Along log b the
+    log-likelihood's curvature h at the truth of a noise-free rigid record is then
+    g' (D + s^2 g g')^-1 g = q / (1 + s^2 q), q = g' D^-1 g its curvature without: the
+    variance 1 / h gains s^2."""
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.posterior.motion import form_shape
+
+    p = _rigid()
+    rec = _record(lambda a: (p["b"] + p["m_s"] + p["m_B"]) * a)
+    s = 0.005
+    plain = PosteriorModel(rec, "rigid", m_s=p["m_s"], m_B=p["m_B"])
+    formed = PosteriorModel(rec, "rigid", m_s=p["m_s"], m_B=p["m_B"], likelihood=LikelihoodSettings(form_sd=s))
+    params = dataclasses.replace(paper_parameters("A3"), **{**p, "f1_0": 1e-3, "c_f1": 1e-3})
+    theta = plain.to_theta(params, hyper={"tau": 1.0})
+    plain, formed = plain.with_reference(theta), formed.with_reference(theta)
+    assert formed.motion.basis.shape[1] == plain.motion.basis.shape[1] + 1
+    np.testing.assert_allclose(formed.motion.basis[:, -1:], s * form_shape(plain.motion, plain.field_vector(theta)))
+    np.testing.assert_array_equal(formed.motion.scale[-1], [0.0, 0.0, 1.0])
+    i = plain.names.index("b")
+    assert plain.all_priors["b"].log_scale
+
+    def curvature(model, step=1e-4):
+        def at(d):
+            t = np.array(theta, dtype=float)
+            t[i] += d
+            return model.motion_terms(t)[0].sum()
+        return -(at(step) - 2.0 * at(0.0) + at(-step)) / step**2
+
+    h0, hs = curvature(plain), curvature(formed)
+    assert h0 > 1e6  # the record pins b far tighter than s does
+    # the variance gained is s^2 to a few parts in a thousand (the shape is a difference taken
+    # at the reference, and the record's other deviations and noise are not quite zero)
+    assert 1.0 / hs - 1.0 / h0 == pytest.approx(s**2, rel=5e-3)
+
+
+def test_a_form_sd_needs_the_motion_likelihood_its_reference_and_a_sane_size():
+    for bad in (-0.01, 0.2, float("nan"), True):
+        with pytest.raises(ValueError, match="form_sd"):
+            LikelihoodSettings(form_sd=bad)
+    with pytest.raises(ValueError, match="motion-in"):
+        LikelihoodSettings(residual="harmonic", form_sd=0.005)
+    with pytest.raises(ValueError, match="reference"):
+        LikelihoodSettings(form_sd=0.005, normaliser="full", deviation_scale="parameters", input_noise=0)

@@ -50,6 +50,13 @@ def test_a_folder_keeps_one_family_one_likelihood_and_one_sampler(tmp_path):
     with pytest.raises(ValueError, match="other likelihood settings"):
         run(Config(likelihood="input_noise=3"), tmp_path, Serial())
     today = {**one, "likelihood_settings": likelihood_settings(Config().likelihood)}
+    # a replicate written before form_sd existed was fitted without it: the same likelihood as form_sd=0
+    before = {**today, "likelihood_settings": {k: v for k, v in today["likelihood_settings"].items() if k != "form_sd"}}
+    (tmp_path / "replicates" / "0000.json").write_text(json.dumps({**before, "tempering": [4, 0.1]}))
+    with pytest.raises(ValueError, match="another sampler than the ensemble alone"):  # past the likelihood's check
+        run(Config(likelihood="form_sd=0"), tmp_path, Serial())
+    with pytest.raises(ValueError, match="other likelihood settings"):
+        run(Config(likelihood="form_sd=0.005"), tmp_path, Serial())
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
     with pytest.raises(ValueError, match="another sampler than parallel tempering, 4 temperatures"):
         run(Config(tempering=4), tmp_path, Serial())

@@ -63,7 +63,7 @@ import numpy as np
 from ..device import FREQUENCIES_HZ, grid_case, paper_parameters
 from ..inference.fit import fit_record
 from ..inference.sampling.adaptation import Adaptation
-from ..inference.sampling.identity import LATER_ADAPTATION
+from ..inference.sampling.identity import LATER_ADAPTATION, stored_likelihood
 from ..inference.sampling.moves.block import PARTNERS
 from ..inference.posterior.likelihood import LikelihoodSettings, settings_changes
 from ..inference.posterior.model import MOTION_MODELS
@@ -397,7 +397,7 @@ def _refuse_mixing(found: list[dict], config: Config, out: Path) -> None:
          f"of family {', '.join(families)}, not {config.family}"),
         (lambda r: r.get("model", "two-port") == config.model,
          f"of the model {', '.join(sorted({r.get('model', 'two-port') for r in found}))}, not {config.model}"),
-        (lambda r: r.get("likelihood_settings") == likelihood_settings(config.likelihood),
+        (lambda r: stored_likelihood(r.get("likelihood_settings")) == likelihood_settings(config.likelihood),
          f"fitted with other likelihood settings than {config.likelihood!r} gives today (or made before "
          "replicates recorded them)"),
         (lambda r: r.get("tempering") == _ladder_entry(ladder), f"fitted with another sampler than {asked}"),

@@ -155,6 +155,14 @@ class LikelihoodSettings:
         ``friction_law.SD`` (default False: fixed). Where the records carry no
         deviation (the model's own physics) the posterior can shrink it, and with it
         the room it gives the friction's parameters.
+    form_sd : motion-in likelihood only: the model-form uncertainty of b, a relative sd
+        (**assumption**; default 0: none). A richer device's inertance differs from the
+        two-port model's effective one by a factor exp(eps), eps normal with this sd;
+        the likelihood marginalises eps to first order, as a deviation along the predicted
+        force's derivative in log b at the reference point (``motion.form_shape``), so
+        that b's posterior, and every parameter's that moves with it, widens inside the
+        chain. Needs the reference point (``normaliser`` or ``deviation_scale``
+        "reference").
     """
 
     residual: str = "motion"
@@ -178,6 +186,7 @@ class LikelihoodSettings:
     deviation_scale: str = "reference"
     reversal_scale: str = "total"
     law_sampled: bool = False
+    form_sd: float = 0.0
 
     @property
     def sampled_delay_sd(self) -> float:
@@ -237,6 +246,14 @@ class LikelihoodSettings:
         if self.law_sampled and not (self.law and self.residual == "motion"):
             raise ValueError("law_sampled needs the friction law's deviations (law=True) and the motion-in "
                              "likelihood (residual='motion')")
+        if not (isinstance(self.form_sd, (int, float)) and not isinstance(self.form_sd, bool)
+                and 0 <= self.form_sd < 0.2):
+            raise ValueError(f"form_sd must be a relative sd in [0, 0.2), got {self.form_sd!r}")
+        if self.form_sd and self.residual != "motion":
+            raise ValueError("form_sd needs the motion-in likelihood (residual='motion')")
+        if self.form_sd and "reference" not in (self.normaliser, self.deviation_scale):
+            raise ValueError("form_sd needs the reference point: normaliser or deviation_scale 'reference' "
+                             "(or form_sd=0)")
         if not (0 <= self.gain_sd < 1):
             raise ValueError(f"gain_sd must lie in [0, 1), got {self.gain_sd}")
         if not self.cutoff > 0:

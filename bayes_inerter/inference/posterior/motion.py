@@ -135,7 +135,7 @@ from .reversals import SD, deviations_mean, switched_sign, reversal_correction, 
 
 __all__ = ["MotionData", "motion_data", "predicted_force", "deviation_sd", "bearing_force", "motion_variance", "motion_loglik",
            "input_noise_variance", "input_noise_shapes", "with_input_noise", "with_input_shapes", "INPUT_NOISE_SEED",
-           "fundamental_misfit", "plate_hump", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
+           "fundamental_misfit", "plate_hump", "form_shape", "FORM_STEP", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
            "DRIVE_MAX_PERIODS", "ORDER", "FUNDAMENTAL_MAX"]
 
 #: **Assumption** of the reporting: b is called identified only where the fit reproduces
@@ -761,6 +761,24 @@ def with_input_noise(data: MotionData, extra: np.ndarray) -> MotionData:
     P times it, so V_k grows by it."""
     h = data.harmonic
     return dataclasses.replace(data, harmonic=dataclasses.replace(h, var_force=h.var_force + h.periods * extra))
+
+
+#: The relative step in b of :func:`form_shape`'s central difference.
+FORM_STEP = 1e-3
+
+
+def form_shape(data: MotionData, p, gain: float = 1.0, delay: float = 0.0, effects=None) -> np.ndarray:
+    """(2K, 1): the predicted force's derivative in log b at the physical parameters
+    ``p`` (as for :func:`predicted_force`; a central difference of :data:`FORM_STEP`),
+    real parts then imaginary parts: the direction along which a relative error of b
+    moves the force (``LikelihoodSettings.form_sd``)."""
+    x = np.array(_vector(p), dtype=float)
+    up, down = x.copy(), x.copy()
+    up[0] *= math.exp(FORM_STEP)
+    down[0] *= math.exp(-FORM_STEP)
+    d = (predicted_force(data, up, gain, delay, effects)[0]
+         - predicted_force(data, down, gain, delay, effects)[0]) / (2.0 * FORM_STEP)
+    return np.concatenate([d.real, d.imag])[:, None]
 
 
 def with_input_shapes(data: MotionData, shapes: np.ndarray) -> MotionData:
