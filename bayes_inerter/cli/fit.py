@@ -45,7 +45,8 @@ def cmd_fit(args) -> int:
     processes = args.processes or min(2, os.cpu_count() or 1)
     options = dict(masses=masses, device=device, walkers=args.walkers, steps=args.steps,
                    seed=args.seed, fresh=args.fresh, processes=processes,
-                   likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample, delay_sd=args.delay_sd),
+                   likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample, delay_sd=args.delay_sd,
+                                                 form_sd=args.form_sd),
                    coordinates=args.coordinates,
                    adaptation=None if args.no_adaptation else Adaptation(block_partners=args.block_partners),
                    checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,
