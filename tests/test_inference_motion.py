@@ -907,3 +907,53 @@ def test_a_form_sd_needs_the_motion_likelihood_its_reference_and_a_sane_size():
         LikelihoodSettings(residual="harmonic", form_sd=0.005)
     with pytest.raises(ValueError, match="reference"):
         LikelihoodSettings(form_sd=0.005, normaliser="full", deviation_scale="parameters", input_noise=0)
+
+
+def test_a_start_candidate_simulates_the_drivetrain_once(monkeypatch):
+    """The start search's harmonic objective asks each candidate's residual (for its
+    discrepancy's scale) and then its likelihood at the same parameters: the drivetrain
+    is simulated once for both, and the objective is the same as with a fresh
+    simulation for each."""
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.posterior import motion
+    from bayes_inerter.inference.sampling.optimize import harmonic_misfit
+
+    p = dataclasses.replace(paper_parameters("A3"), f1_0=100.0, f2_0=2000.0, c_n=2.0e5)
+    rec = generate_record(p, 1.5, settings=GeneratorSettings(duration=6.0, ramp=1.0), rng=4, setting_name="A3")
+    model = PosteriorModel(rec)
+    lo, hi = model.bounds()[: model.n_phys].T
+    phys = np.clip(model.to_theta(p, hyper={"tau": 1.0})[: model.n_phys], lo + 1e-6, hi - 1e-6)  # the plate's damping
+    calls = []
+    real = motion.bearing_force
+    monkeypatch.setattr(motion, "bearing_force", lambda *a, **k: calls.append(1) or real(*a, **k))
+    once = harmonic_misfit(model, phys)
+    assert once < 1e29  # the likelihood was evaluated, not refused
+    assert len(calls) == 1
+
+    class Forgetful(list):  # as before the reuse: nothing kept, every call simulates
+        def __setitem__(self, i, value):
+            pass
+
+    monkeypatch.setattr(motion, "_LAST_INPUTS", Forgetful([None]))
+    calls.clear()
+    assert harmonic_misfit(model, phys) == once
+    assert len(calls) == 2
+
+
+def test_the_reused_simulation_follows_the_callers_array_not_its_identity():
+    """A caller that changes its parameter array in place and asks again gets the new
+    parameters' force, and one that asks the old values again in another array gets
+    the old force."""
+    p = dataclasses.replace(paper_parameters("A3"), f1_0=100.0, f2_0=2000.0, c_n=2.0e5)
+    rec = generate_record(p, 1.5, settings=GeneratorSettings(duration=6.0, ramp=1.0), rng=4, setting_name="A3")
+    data = motion_data(rec, 1.5, cutoff=30.0)
+    x = np.array([getattr(p, n) for n in ("b", "m_s", "m_B", "c_n", "k_n", "c_B", "k_B", "f1_0", "c_f1", "f2_0",
+                                          "c_f2")], dtype=float)
+    old = x.copy()
+    F_old = predicted_force(data, x)[0]
+    x[7] *= 2.0  # the plate's friction doubled in place, after the call kept its result
+    np.testing.assert_array_equal(predicted_force(data, old)[0], F_old)  # the kept result, its own vector
+    F_new = predicted_force(data, x)[0]
+    assert np.abs(F_new - F_old).max() > 1.0
+    doubled = dataclasses.replace(p, f1_0=2 * p.f1_0)
+    np.testing.assert_array_equal(F_new, predicted_force(data, {n: getattr(doubled, n) for n in _rigid()})[0])
