@@ -674,3 +674,21 @@ def test_min_ratio_draws_again_only_the_records_below_it():
     got = replicate_device(dataclasses.replace(joint, min_ratio=slowest * 1.5), 0)
     assert got.theta != first.theta
     assert len(got.records) == 2 and min(drive_impedance(r).ratio for r in got.records) >= slowest * 1.5
+
+
+def test_a_model_form_sd_records_the_device_with_b_moved_by_its_error():
+    """Where the likelihood marginalises a model-form error of b (``form_sd`` s), the
+    calibration's records are made with b e^eps, eps ~ N(0, s^2) drawn after the device:
+    the device (theta, the truth the posterior is held against) is the one drawn
+    without it, and its records' b differs from the truth's by eps. Without it the
+    records' b is the truth's."""
+    generator = GeneratorSettings(duration=6.0, ramp=1.0)
+    plain = StudyCalibration(generator=generator, single=True, frequencies=(1.5,), likelihood=LikelihoodSettings())
+    formed = dataclasses.replace(plain, likelihood=dataclasses.replace(plain.likelihood, form_sd=0.05))
+    eps = []
+    for k in range(4):
+        a, b = replicate_device(plain, k), replicate_device(formed, k)
+        assert a.theta == b.theta and a.truth == b.truth
+        assert a.records[0].metadata["true_parameters"]["b"] == pytest.approx(a.truth["b"], rel=1e-12)
+        eps.append(np.log(b.records[0].metadata["true_parameters"]["b"] / b.truth["b"]))
+    assert all(0.0 < abs(e) < 5 * 0.05 for e in eps)

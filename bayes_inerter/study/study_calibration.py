@@ -337,11 +337,17 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
 
 def _simulated_draw(cs: StudyCalibration, base: PosteriorModel, freqs, rng: np.random.Generator):
     """(theta, parameters, records) of one draw from ``base``'s prior recorded at
-    ``freqs``, or None where the generator refuses it."""
+    ``freqs``, or None where the generator refuses it. Where the likelihood marginalises
+    a model-form error of b (``LikelihoodSettings.form_sd`` s), the records are made
+    with b e^eps, eps normal with sd s, drawn after theta: the device's b is the truth
+    the posterior is held against, as the likelihood assumes."""
     theta = np.array([base.all_priors[n].sample(rng) for n in base.names])
     try:
         params = base.parameters(theta)
-        return theta, params, [generate_record(params, f, settings=cs.generator, rng=rng, setting_name=cs.setting)
+        recorded = params
+        if cs.likelihood.form_sd:  # the model-form error the likelihood marginalises: the record's b is b e^eps
+            recorded = dataclasses.replace(params, b=params.b * math.exp(cs.likelihood.form_sd * rng.standard_normal()))
+        return theta, params, [generate_record(recorded, f, settings=cs.generator, rng=rng, setting_name=cs.setting)
                                for f in freqs]
     except (SimulationError, ValueError):
         return None
