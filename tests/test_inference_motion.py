@@ -903,6 +903,7 @@ def test_a_form_sd_needs_the_motion_likelihood_its_reference_and_a_sane_size():
     for bad in (-0.01, 0.2, float("nan"), True):
         with pytest.raises(ValueError, match="form_sd"):
             LikelihoodSettings(form_sd=bad)
+    assert LikelihoodSettings(form_sd=np.float32(0.005)).form_sd == pytest.approx(0.005)  # any real number
     with pytest.raises(ValueError, match="motion-in"):
         LikelihoodSettings(residual="harmonic", form_sd=0.005)
     with pytest.raises(ValueError, match="reference"):

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -246,11 +247,13 @@ class LikelihoodSettings:
         if self.law_sampled and not (self.law and self.residual == "motion"):
             raise ValueError("law_sampled needs the friction law's deviations (law=True) and the motion-in "
                              "likelihood (residual='motion')")
-        if not (isinstance(self.form_sd, (int, float)) and not isinstance(self.form_sd, bool)
+        if not (isinstance(self.form_sd, numbers.Real) and not isinstance(self.form_sd, bool)
                 and 0 <= self.form_sd < 0.2):
-            raise ValueError(f"form_sd must be a relative sd in [0, 0.2), got {self.form_sd!r}")
+            raise ValueError(f"form_sd (fit --form-sd) must be a relative sd in [0, 0.2), such as 0.005, "
+                             f"got {self.form_sd!r}")
         if self.form_sd and self.residual != "motion":
-            raise ValueError("form_sd needs the motion-in likelihood (residual='motion')")
+            raise ValueError("form_sd (fit --form-sd) needs the motion-in likelihood (residual='motion', "
+                             "fit --residual motion)")
         if self.form_sd and "reference" not in (self.normaliser, self.deviation_scale):
             raise ValueError("form_sd needs the reference point: normaliser or deviation_scale 'reference' "
                              "(or form_sd=0)")
