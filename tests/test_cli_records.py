@@ -342,20 +342,21 @@ def test_fit_is_tempered_only_when_asked(monkeypatch, tmp_path):
 
 
 def test_fit_passes_the_form_sd_on_and_refuses_one_out_of_range(monkeypatch, tmp_path, capsys):
-    """``fit --form-sd``: the likelihood's model-form sd of b (0 by default); one outside
-    [0, 0.2) is refused in one line before the folder is touched."""
+    """``fit --form-sd`` and ``--form-friction``: the likelihood's model-form errors of b
+    (0 by default); a form sd outside [0, 0.2) is refused in one line before the folder
+    is touched."""
     seen = []
 
     def fake_fit(rec, out, **options):  # the plumbing is tested, not a fit
-        seen.append(options["likelihood"].form_sd)
+        seen.append((options["likelihood"].form_sd, options["likelihood"].form_friction))
         raise ValueError("stand-in fit")
 
     monkeypatch.setattr("bayes_inerter.inference.fit_record", fake_fit)
     p = _daq(tmp_path, seconds=PERIODIC_SECONDS)
     out = tmp_path / "fit"
-    for extra in ([], ["--form-sd", "0.005"]):
+    for extra in ([], ["--form-sd", "0.005"], ["--form-friction", "0.01"]):
         assert main(["fit", str(p), *MAP, "--out", str(out), "--steps", "4", "--no-plots", *extra]) == 1
-    assert seen == [0.0, 0.005]
+    assert seen == [(0.0, 0.0), (0.005, 0.0), (0.0, 0.01)]
     capsys.readouterr()
     assert main(["fit", str(p), *MAP, "--out", str(out), "--steps", "4", "--form-sd", "0.3"]) != 0
     err = capsys.readouterr().err.strip()

@@ -958,3 +958,48 @@ def test_the_reused_simulation_follows_the_callers_array_not_its_identity():
     assert np.abs(F_new - F_old).max() > 1.0
     doubled = dataclasses.replace(p, f1_0=2 * p.f1_0)
     np.testing.assert_array_equal(F_new, predicted_force(data, {n: getattr(doubled, n) for n in _rigid()})[0])
+
+
+def test_the_form_columns_are_bs_relative_error_and_one_scaled_by_the_friction():
+    """``form_columns``: form_sd s gives s times the force's derivative in log b;
+    form_friction rho gives the same direction with its fundamental's amplitude rho
+    times the Coulomb forces f1_0 + f2_0; both give both; neither gives none. A
+    reference model asked for both appends the two columns, each with a prior sd of 1."""
+    from bayes_inerter.inference import PosteriorModel
+    from bayes_inerter.inference.posterior.motion import form_columns, form_shape
+
+    p = {**_rigid(), "f1_0": 300.0, "f2_0": 100.0}
+    data = motion_data(_record(lambda a: (p["b"] + p["m_s"] + p["m_B"]) * a), FREQ, cutoff=30.0)
+    K = data.harmonics
+    g = form_shape(data, p)
+    x = np.array([p[n] for n in ("b", "m_s", "m_B", "c_n", "k_n", "c_B", "k_B", "f1_0", "c_f1", "f2_0", "c_f2")])
+    assert form_columns(g, 0.0, 0.0, x).shape == (2 * K, 0)
+    np.testing.assert_array_equal(form_columns(g, 0.004, 0.0, x), 0.004 * g)
+    f = form_columns(g, 0.0, 0.01, x)
+    assert f.shape == (2 * K, 1)
+    assert math.hypot(f[0, 0], f[K, 0]) == pytest.approx(0.01 * 400.0)
+    np.testing.assert_allclose(f / np.linalg.norm(f), g / np.linalg.norm(g))  # the same direction
+    assert form_columns(g, 0.004, 0.01, x).shape == (2 * K, 2)
+
+    rec = _record(lambda a: (p["b"] + p["m_s"] + p["m_B"]) * a)
+    plain = PosteriorModel(rec, "rigid", m_s=p["m_s"], m_B=p["m_B"])
+    both = PosteriorModel(rec, "rigid", m_s=p["m_s"], m_B=p["m_B"],
+                          likelihood=LikelihoodSettings(form_sd=0.004, form_friction=0.01))
+    params = dataclasses.replace(paper_parameters("A3"), **{**_rigid(), "f1_0": 400.0, "c_f1": 1e-3})
+    theta = plain.to_theta(params, hyper={"tau": 1.0})
+    plain, both = plain.with_reference(theta), both.with_reference(theta)
+    added = both.motion.basis[:, plain.motion.basis.shape[1]:]
+    assert added.shape == (2 * K, 2)
+    np.testing.assert_allclose(added, form_columns(form_shape(plain.motion, plain.field_vector(theta)), 0.004, 0.01,
+                                                   plain.field_vector(theta)))
+    np.testing.assert_array_equal(both.motion.scale[-2:], [[0.0, 0.0, 1.0]] * 2)
+
+
+def test_a_form_friction_needs_the_motion_likelihood_and_a_sane_share():
+    for bad in (-0.01, 0.5, True):
+        with pytest.raises(ValueError, match="form_friction"):
+            LikelihoodSettings(form_friction=bad)
+    with pytest.raises(ValueError, match="motion-in"):
+        LikelihoodSettings(residual="harmonic", form_friction=0.005)
+    with pytest.raises(ValueError, match="reference"):
+        LikelihoodSettings(form_friction=0.005, normaliser="full", deviation_scale="parameters", input_noise=0)

@@ -692,3 +692,10 @@ def test_a_model_form_sd_records_the_device_with_b_moved_by_its_error():
         assert a.records[0].metadata["true_parameters"]["b"] == pytest.approx(a.truth["b"], rel=1e-12)
         eps.append(np.log(b.records[0].metadata["true_parameters"]["b"] / b.truth["b"]))
     assert all(0.0 < abs(e) < 5 * 0.05 for e in eps)
+
+
+def test_a_calibration_refuses_the_friction_scaled_form_error_it_cannot_draw():
+    cs = StudyCalibration(generator=GeneratorSettings(duration=6.0, ramp=1.0), single=True, frequencies=(1.5,),
+                          likelihood=LikelihoodSettings(form_friction=0.005))
+    with pytest.raises(ValueError, match="form_friction=0"):
+        replicate_device(cs, 0)

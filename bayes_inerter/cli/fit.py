@@ -46,7 +46,7 @@ def cmd_fit(args) -> int:
     options = dict(masses=masses, device=device, walkers=args.walkers, steps=args.steps,
                    seed=args.seed, fresh=args.fresh, processes=processes,
                    likelihood=LikelihoodSettings(residual=args.residual, upsample=args.upsample, delay_sd=args.delay_sd,
-                                                 form_sd=args.form_sd),
+                                                 form_sd=args.form_sd, form_friction=args.form_friction),
                    coordinates=args.coordinates,
                    adaptation=None if args.no_adaptation else Adaptation(block_partners=args.block_partners),
                    checkpoint_seconds=args.checkpoint_seconds, plots=not args.no_plots, interval=args.interval,

@@ -157,6 +157,9 @@ def _add_fit(sub) -> argparse.ArgumentParser:
     p.add_argument("--form-sd", type=_non_negative_float, default=0.0, metavar="FRACTION",
                    help="motion likelihood: b's model-form uncertainty, a relative sd marginalised inside the "
                         "likelihood (default 0: none; 0.005 for 0.5 %%, docs/inference.md)")
+    p.add_argument("--form-friction", type=_non_negative_float, default=0.0, metavar="SHARE",
+                   help="motion likelihood: a model-form error of the inertial force at the fundamental, this "
+                        "share of the Coulomb force (default 0: none; docs/inference.md)")
     p.add_argument("--processes", type=_positive_int, help="worker processes (default: up to 2)")
     p.add_argument("--fresh", action="store_true", help="start over instead of continuing the checkpoint")
     p.add_argument("--coordinates", choices=FIT_COORDINATES, default="impedance",

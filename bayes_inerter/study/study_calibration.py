@@ -341,6 +341,9 @@ def _simulated_draw(cs: StudyCalibration, base: PosteriorModel, freqs, rng: np.r
     a model-form error of b (``LikelihoodSettings.form_sd`` s), the records are made
     with b e^eps, eps normal with sd s, drawn after theta: the device's b is the truth
     the posterior is held against, as the likelihood assumes."""
+    if cs.likelihood.form_friction:
+        raise ValueError("a calibration does not draw form_friction's error into its records yet: calibrate "
+                         "with form_friction=0")
     theta = np.array([base.all_priors[n].sample(rng) for n in base.names])
     try:
         params = base.parameters(theta)

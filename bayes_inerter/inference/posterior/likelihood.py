@@ -164,6 +164,12 @@ class LikelihoodSettings:
         that b's posterior, and every parameter's that moves with it, widens inside the
         chain. Needs the reference point (``normaliser`` or ``deviation_scale``
         "reference").
+    form_friction : motion-in likelihood only: a further model-form error along the same
+        direction, scaled by the friction, not by b (**assumption**; default 0: none):
+        at the fundamental it is this share of the Coulomb forces f1_0 + f2_0 (the
+        reference point's), so it widens b most where the friction is large against the
+        inertia (a break-away the Coulomb law lacks reads as inertance there). Needs the
+        reference point, as ``form_sd``.
     """
 
     residual: str = "motion"
@@ -188,6 +194,7 @@ class LikelihoodSettings:
     reversal_scale: str = "total"
     law_sampled: bool = False
     form_sd: float = 0.0
+    form_friction: float = 0.0
 
     @property
     def sampled_delay_sd(self) -> float:
@@ -254,9 +261,15 @@ class LikelihoodSettings:
         if self.form_sd and self.residual != "motion":
             raise ValueError("form_sd (fit --form-sd) needs the motion-in likelihood (residual='motion', "
                              "fit --residual motion)")
-        if self.form_sd and "reference" not in (self.normaliser, self.deviation_scale):
-            raise ValueError("form_sd needs the reference point: normaliser or deviation_scale 'reference' "
-                             "(or form_sd=0)")
+        if not (isinstance(self.form_friction, numbers.Real) and not isinstance(self.form_friction, bool)
+                and 0 <= self.form_friction < 0.5):
+            raise ValueError(f"form_friction must be a share of the Coulomb force in [0, 0.5), such as 0.005, "
+                             f"got {self.form_friction!r}")
+        if self.form_friction and self.residual != "motion":
+            raise ValueError("form_friction needs the motion-in likelihood (residual='motion', fit --residual motion)")
+        if (self.form_sd or self.form_friction) and "reference" not in (self.normaliser, self.deviation_scale):
+            raise ValueError("form_sd and form_friction need the reference point: normaliser or deviation_scale "
+                             "'reference' (or both 0)")
         if not (0 <= self.gain_sd < 1):
             raise ValueError(f"gain_sd must lie in [0, 1), got {self.gain_sd}")
         if not self.cutoff > 0:

@@ -44,7 +44,7 @@ from . import friction_law
 from .harmonic import harmonic_data, harmonic_loglik, harmonic_variance, linear_transfer
 from .likelihood import LikelihoodSettings, ar1_marginal, ar1_pointwise
 from .motion import (fundamental_misfit, input_noise_shapes, input_noise_variance, motion_data, motion_loglik,
-                     motion_variance, with_input_noise, with_input_shapes, form_shape)
+                     motion_variance, with_input_noise, with_input_shapes, form_shape, form_columns)
 from .parameters import FRICTION_PAIRS, ParameterMap
 from .priors import (DEFAULT_PRIORS, DISCREPANCY_PRIORS, MODAL_PRIORS, MOTION_DISCREPANCY_PRIORS, NOISE_PRIORS,
                      SPLIT_PRIORS, TRUNCATIONS, delay_prior, gain_prior)
@@ -195,9 +195,10 @@ class PosteriorModel:
                                              effects=self.effects(theta))
                 self.motion = with_input_noise(self.motion, extra)
                 self.harmonic = self.motion.harmonic
-            if self.likelihood.form_sd > 0 and self.motion is not None:
+            if (self.likelihood.form_sd > 0 or self.likelihood.form_friction > 0) and self.motion is not None:
                 shape = form_shape(self.motion, x, h["gain"], h["delay"], effects=self.effects(theta))
-                self.motion = with_input_shapes(self.motion, self.likelihood.form_sd * shape)
+                self.motion = with_input_shapes(self.motion, form_columns(shape, self.likelihood.form_sd,
+                                                                          self.likelihood.form_friction, x))
             if self.likelihood.normaliser == "reference":
                 self.reference_noise = motion_variance(self.motion, x, 0.0, 0.0, h["gain"], h["delay"])[0]
             if self.likelihood.deviation_scale == "reference":

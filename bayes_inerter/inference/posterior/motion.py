@@ -135,7 +135,7 @@ from .reversals import SD, deviations_mean, switched_sign, reversal_correction, 
 
 __all__ = ["MotionData", "motion_data", "predicted_force", "deviation_sd", "bearing_force", "motion_variance", "motion_loglik",
            "input_noise_variance", "input_noise_shapes", "with_input_noise", "with_input_shapes", "INPUT_NOISE_SEED",
-           "fundamental_misfit", "plate_hump", "form_shape", "FORM_STEP", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
+           "fundamental_misfit", "plate_hump", "form_shape", "form_columns", "FORM_STEP", "SIGN_BAND", "SIGN_GRID", "DRIVE_GRID", "DRIVE_SETTLE", "DRIVE_TOL",
            "DRIVE_MAX_PERIODS", "ORDER", "FUNDAMENTAL_MAX"]
 
 #: **Assumption** of the reporting: b is called identified only where the fit reproduces
@@ -792,6 +792,22 @@ def form_shape(data: MotionData, p, gain: float = 1.0, delay: float = 0.0, effec
     d = (predicted_force(data, up, gain, delay, effects)[0]
          - predicted_force(data, down, gain, delay, effects)[0]) / (2.0 * FORM_STEP)
     return np.concatenate([d.real, d.imag])[:, None]
+
+
+def form_columns(shape: np.ndarray, form_sd: float, form_friction: float, p) -> np.ndarray:
+    """The model-form errors' deviation columns (prior sd 1 each) from :func:`form_shape`'s
+    ``shape`` at the physical parameters ``p``: ``form_sd`` times it (a relative error of
+    b), and the same direction scaled to ``form_friction`` times the Coulomb forces
+    f1_0 + f2_0 at the fundamental (an error that grows with the friction); those asked."""
+    x = _vector(p)
+    K = shape.shape[0] // 2
+    cols = []
+    if form_sd > 0:
+        cols.append(form_sd * shape)
+    fundamental = math.hypot(float(shape[0, 0]), float(shape[K, 0]))
+    if form_friction > 0 and fundamental > 0:
+        cols.append(form_friction * (x[7] + x[9]) / fundamental * shape)
+    return np.hstack(cols) if cols else np.zeros((shape.shape[0], 0))
 
 
 def with_input_shapes(data: MotionData, shapes: np.ndarray) -> MotionData:

@@ -93,7 +93,7 @@ LATER_TEMPERING = {"adapt_hot": False}
 #: Likelihood settings added after checkpoints were written, with the value in effect
 #: before: a stored identity without one is read as holding that value (the run's own
 #: identity keeps every setting, so checkpoints written since stay as they are).
-LATER_LIKELIHOOD = {"reversals": True, "form_sd": 0.0}
+LATER_LIKELIHOOD = {"reversals": True, "form_sd": 0.0, "form_friction": 0.0}
 
 
 def stored_likelihood(settings):
