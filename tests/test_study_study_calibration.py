@@ -694,8 +694,22 @@ def test_a_model_form_sd_records_the_device_with_b_moved_by_its_error():
     assert all(0.0 < abs(e) < 5 * 0.05 for e in eps)
 
 
-def test_a_calibration_refuses_the_friction_scaled_form_error_it_cannot_draw():
-    cs = StudyCalibration(generator=GeneratorSettings(duration=6.0, ramp=1.0), single=True, frequencies=(1.5,),
-                          likelihood=LikelihoodSettings(form_friction=0.005))
-    with pytest.raises(ValueError, match="form_friction=0"):
-        replicate_device(cs, 0)
+def test_the_friction_scaled_form_error_is_drawn_by_its_size_for_each_record():
+    """With ``form_friction`` rho alone, each record's b is moved by eps of sd
+    rho f_0 / (b w^2 X): drawn anew per record (each likelihood has its own term), so
+    a joint calibration's records differ in b; the device's truth is kept."""
+    generator = GeneratorSettings(duration=6.0, ramp=1.0)
+    plain = StudyCalibration(generator=generator, frequencies=(1.0, 1.5), likelihood=LikelihoodSettings())
+    formed = dataclasses.replace(plain, likelihood=dataclasses.replace(plain.likelihood, form_friction=0.05))
+    z = []
+    for k in range(3):
+        a, b = replicate_device(plain, k), replicate_device(formed, k)
+        assert a.theta == b.theta and a.truth == b.truth
+        p = b.params
+        moved = [np.log(r.metadata["true_parameters"]["b"] / p.b) for r in b.records]
+        assert moved[0] != moved[1]  # each record its own draw
+        for r, eps in zip(b.records, moved):
+            f = r.metadata["drive_frequency_hz"]
+            sd = 0.05 * (p.f1_0 + p.f2_0) / (p.b * (2 * np.pi * f) ** 2 * generator.amplitude)
+            z.append(eps / sd)
+    assert all(0.0 < abs(v) < 5.0 for v in z)  # of its size: a few sd at most

@@ -338,20 +338,27 @@ def _draw_device(cs: StudyCalibration, rng: np.random.Generator, k: int = 0) -> 
 def _simulated_draw(cs: StudyCalibration, base: PosteriorModel, freqs, rng: np.random.Generator):
     """(theta, parameters, records) of one draw from ``base``'s prior recorded at
     ``freqs``, or None where the generator refuses it. Where the likelihood marginalises
-    a model-form error of b (``LikelihoodSettings.form_sd`` s), the records are made
-    with b e^eps, eps normal with sd s, drawn after theta: the device's b is the truth
-    the posterior is held against, as the likelihood assumes."""
-    if cs.likelihood.form_friction:
-        raise ValueError("a calibration does not draw form_friction's error into its records yet: calibrate "
-                         "with form_friction=0")
+    a model-form error of b (``LikelihoodSettings.form_sd`` s, ``form_friction`` rho),
+    each record is made with b e^eps, drawn after theta and anew for each record (each
+    record's likelihood has its own): eps normal with sd s, plus one with sd
+    rho f_0 / (b w^2 X) (the Coulomb forces over the inertial force's amplitude at the
+    drive's amplitude X). The device's b is the truth the posterior is held against, as
+    the likelihood assumes."""
     theta = np.array([base.all_priors[n].sample(rng) for n in base.names])
     try:
         params = base.parameters(theta)
-        recorded = params
-        if cs.likelihood.form_sd:  # the model-form error the likelihood marginalises: the record's b is b e^eps
-            recorded = dataclasses.replace(params, b=params.b * math.exp(cs.likelihood.form_sd * rng.standard_normal()))
-        return theta, params, [generate_record(recorded, f, settings=cs.generator, rng=rng, setting_name=cs.setting)
-                               for f in freqs]
+        records = []
+        for f in freqs:
+            recorded = params
+            s, rho = cs.likelihood.form_sd, cs.likelihood.form_friction
+            if s or rho:  # the model-form errors the likelihood marginalises: the record's b is b e^eps
+                eps = s * rng.standard_normal() if s else 0.0
+                if rho:
+                    inertial = params.b * (2.0 * math.pi * f) ** 2 * cs.generator.amplitude
+                    eps += rho * (params.f1_0 + params.f2_0) / inertial * rng.standard_normal()
+                recorded = dataclasses.replace(params, b=params.b * math.exp(eps))
+            records.append(generate_record(recorded, f, settings=cs.generator, rng=rng, setting_name=cs.setting))
+        return theta, params, records
     except (SimulationError, ValueError):
         return None
 
