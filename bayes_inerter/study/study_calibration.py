@@ -347,10 +347,10 @@ def _simulated_draw(cs: StudyCalibration, base: PosteriorModel, freqs, rng: np.r
     theta = np.array([base.all_priors[n].sample(rng) for n in base.names])
     try:
         params = base.parameters(theta)
+        s, rho = cs.likelihood.form_sd, cs.likelihood.form_friction
         records = []
         for f in freqs:
             recorded = params
-            s, rho = cs.likelihood.form_sd, cs.likelihood.form_friction
             if s or rho:  # the model-form errors the likelihood marginalises: the record's b is b e^eps
                 eps = s * rng.standard_normal() if s else 0.0
                 if rho:

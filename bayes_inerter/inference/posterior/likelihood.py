@@ -254,19 +254,13 @@ class LikelihoodSettings:
         if self.law_sampled and not (self.law and self.residual == "motion"):
             raise ValueError("law_sampled needs the friction law's deviations (law=True) and the motion-in "
                              "likelihood (residual='motion')")
-        if not (isinstance(self.form_sd, numbers.Real) and not isinstance(self.form_sd, bool)
-                and 0 <= self.form_sd < 0.2):
-            raise ValueError(f"form_sd (fit --form-sd) must be a relative sd in [0, 0.2), such as 0.005, "
-                             f"got {self.form_sd!r}")
-        if self.form_sd and self.residual != "motion":
-            raise ValueError("form_sd (fit --form-sd) needs the motion-in likelihood (residual='motion', "
-                             "fit --residual motion)")
-        if not (isinstance(self.form_friction, numbers.Real) and not isinstance(self.form_friction, bool)
-                and 0 <= self.form_friction < 0.5):
-            raise ValueError(f"form_friction must be a share of the Coulomb force in [0, 0.5), such as 0.005, "
-                             f"got {self.form_friction!r}")
-        if self.form_friction and self.residual != "motion":
-            raise ValueError("form_friction needs the motion-in likelihood (residual='motion', fit --residual motion)")
+        for name, top, what in (("form_sd", 0.2, "a relative sd"), ("form_friction", 0.5, "a share of the Coulomb force")):
+            value, option = getattr(self, name), "--" + name.replace("_", "-")
+            if not (isinstance(value, numbers.Real) and not isinstance(value, bool) and 0 <= value < top):
+                raise ValueError(f"{name} (fit {option}) must be {what} in [0, {top:g}), such as 0.005, got {value!r}")
+            if value and self.residual != "motion":
+                raise ValueError(f"{name} (fit {option}) needs the motion-in likelihood (residual='motion', "
+                                 "fit --residual motion)")
         if (self.form_sd or self.form_friction) and "reference" not in (self.normaliser, self.deviation_scale):
             raise ValueError("form_sd and form_friction need the reference point: normaliser or deviation_scale "
                              "'reference' (or both 0)")
