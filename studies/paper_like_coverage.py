@@ -7,7 +7,7 @@ go on); replicates.csv and coverage.csv from all of them.
     python studies/paper_like_coverage.py --replicates 27 [--seed0 1000] [--out results/paper-like-coverage]
         [--max-steps 20000] [--processes 2] [--family default] [--model two-port-stribeck]
         [--likelihood input_noise=16]
-        [--freq 0.5] [--duration 20] [--work runs/NAME] [--summarise [--against FOLDER]]
+        [--freq 0.5] [--parity odd] [--duration 20] [--work runs/NAME] [--summarise [--against FOLDER]]
 
 With --summarise --against FOLDER (the same replicates fitted otherwise) it also writes
 pairs.csv and pairs_summary.csv, replicate by replicate.

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from bayes_inerter.device import grid_case
 from bayes_inerter.inference import Convergence
 from bayes_inerter.executor import Serial
 from bayes_inerter.study.paper_like_coverage import Config, likelihood_settings, run
@@ -26,7 +27,7 @@ def _copy_committed(folder):
 @pytest.mark.parametrize("changes, cause", [
     ({"family": "nonsense"}, "unknown family"), ({"freq": 2.0}, "freq must be one of"),
     ({"likelihood": "input_noise"}, "name=value pairs"), ({"likelihood": "no_such=1"}, "not a likelihood setting"),
-    ({"replicates": 0}, "replicates must be"), ({"tempering": 1}, "at least 2 temperatures"),
+    ({"replicates": 0}, "replicates must be"), ({"parity": "first"}, "parity must be one of"), ({"tempering": 1}, "at least 2 temperatures"),
     ({"tempering": 4, "hottest_beta": 1.0}, "hottest beta")])
 def test_the_configuration_names_what_it_refuses(changes, cause):
     with pytest.raises(ValueError, match=cause):
@@ -140,6 +141,13 @@ def test_progress_counts_only_the_replicates_of_the_frequency_asked(tmp_path):
         progress=lambda done, total: seen.append((done, total)))
     at_half = sum(r["freq_hz"] == 0.5 for r in finished(COMMITTED))
     assert at_half < 100 and seen == [(at_half, at_half)]
+
+
+def test_parity_asks_only_the_odd_or_the_even_replicates():
+    odd, even_at_1hz = Config(parity="odd"), Config(parity="even", freq=1.0)
+    assert [k for k in range(6) if odd.wants(k)] == [1, 3, 5]
+    assert all(k % 2 == 0 and grid_case(k)[1] == 1.0 for k in range(54) if even_at_1hz.wants(k))
+    assert any(even_at_1hz.wants(k) for k in range(54))
 
 
 def test_pairs_set_each_replicate_beside_the_same_record_fitted_otherwise(tmp_path):

@@ -37,7 +37,8 @@ the library's default starts a new folder). ``tempering`` T fits with parallel t
 alone (the folders' default, and ``fit``'s); a folder keeps one sampler.
 ``tau_rtol`` stops the chains with that tolerance of the convergence rule
 (``Convergence.tau_rtol``; a folder keeps one, each replicate names it, ``stop_rule``).
-``freq`` F runs only the replicates driven at F Hz. ``duration`` D makes every record D s
+``freq`` F runs only the replicates driven at F Hz; ``parity`` "odd" or "even" only the
+replicates of odd or even k (a method's settings chosen on one half are measured on the other). ``duration`` D makes every record D s
 long, ramp included (the paper's are 10 s: 3 steady periods at 0.5 Hz, results/record-length);
 a folder keeps one length. ``work`` W runs replicate k's fit in W/<k> (``fit_record``'s
 folder, its checkpoint included), removed once the replicate is written: a run stopped
@@ -76,10 +77,11 @@ from .manifest import source_commit
 from .output import StudyOutput
 from .replicate_store import finished, load_replicates, write_replicate
 
-__all__ = ["Config", "run", "FAMILIES", "LEVELS", "replicate", "with_errors", "summarise", "likelihood_settings",
+__all__ = ["Config", "run", "FAMILIES", "LEVELS", "PARITIES", "replicate", "with_errors", "summarise", "likelihood_settings",
            "pairs"]
 
 LEVELS = (0.94, 0.5)
+PARITIES = ("even", "odd")  # index k % 2
 #: Device families: the default paper-like device, and the held-out ones of issue 39 (item 5),
 #: each the default with one effect changed (none of them used to choose a setting).
 FAMILIES = {
@@ -328,6 +330,8 @@ class Config:
     likelihood: str = field(default="default", metadata={
         "help": "LikelihoodSettings changed from the default, NAME=VALUE,... (values as JSON)"})
     freq: float | None = field(default=None, metadata={"help": "only the replicates driven at this frequency, Hz"})
+    parity: str | None = field(default=None, metadata={
+        "choices": PARITIES, "help": "only the replicates of odd or even k (default: all)"})
     tempering: int | None = field(default=None, metadata={"help": "parallel tempering's temperatures (default: none)"})
     hottest_beta: float = field(default=Tempering.beta_min, metadata={"help": "the tempering ladder's hottest beta"})
     tau_rtol: float | None = field(default=None, metadata={
@@ -355,6 +359,8 @@ class Config:
             raise ValueError(f"unknown model {self.model!r}; choose from {', '.join(MOTION_MODELS)}")
         if self.freq is not None and self.freq not in FREQUENCIES_HZ:
             raise ValueError(f"freq must be one of {', '.join(f'{f:g}' for f in FREQUENCIES_HZ)} Hz, got {self.freq:g}")
+        if self.parity is not None and self.parity not in PARITIES:
+            raise ValueError(f"parity must be one of {', '.join(PARITIES)}, got {self.parity!r}")
         if self.duration is not None and not self.duration > 0:
             raise ValueError(f"duration must be a positive number of seconds, got {self.duration!r}")
         if self.block_partners not in PARTNERS:
@@ -366,6 +372,11 @@ class Config:
             settings_changes(self.likelihood)
         except ValueError as exc:
             raise ValueError(f"likelihood {self.likelihood!r}: {exc}") from None
+
+    def wants(self, k: int) -> bool:
+        """Whether replicate ``k`` is among those asked (``freq``, ``parity``)."""
+        return ((self.freq is None or grid_case(k)[1] == self.freq)
+                and (self.parity is None or k % 2 == PARITIES.index(self.parity)))
 
     def ladder(self) -> Tempering | None:
         """The fit's tempering (None: the ensemble alone)."""
@@ -425,7 +436,7 @@ def run(config: Config, out, executor, *, progress=None) -> StudyOutput:
     lines, failed = [], []
     if not config.summarise:
         commit = source_commit() or ""  # the code this run loaded, read once: HEAD may move while it runs
-        wanted = [k for k in range(config.replicates) if config.freq is None or grid_case(k)[1] == config.freq]
+        wanted = [k for k in range(config.replicates) if config.wants(k)]
         done = {r["replicate"] for r in found}
         todo = [k for k in wanted if k not in done]
         jobs = [(k, out, config, commit) for k in todo]
