@@ -189,8 +189,10 @@ def test_reports_say_what_failed_and_what_missed(tmp_path):
 def test_one_replicate_ranks_every_physical_parameter(tmp_path):
     cs = StudyCalibration(steps=40, draws=9, generator=GeneratorSettings(duration=3.0, ramp=1.0), likelihood=AR1)
     rep = study_replicate(cs, 0)
-    work = tmp_path / "work"  # a work folder a stopped run would continue from: the same replicate, then removed
-    assert study_replicate(cs, 0, work) == rep and not work.exists()
+    # a work folder a stopped run would continue from: the same replicate, its fit kept there
+    # (the caller, calibration.run_replicates, removes it once the replicate is written)
+    work = tmp_path / "work"
+    assert study_replicate(cs, 0, work) == rep and (work / "fit").is_dir()
     assert list(rep["ranks"]) == NAMES
     assert all(0 <= r <= cs.draws for r in rep["ranks"].values())
     assert all(rep["central"]["50"][n] <= rep["central"]["94"][n] for n in NAMES)  # nested by construction
