@@ -7,6 +7,7 @@ from typing import ClassVar
 
 import pytest
 
+from bayes_inerter.inference.posterior.likelihood import LikelihoodSettings
 from bayes_inerter.records import GeneratorSettings
 from bayes_inerter.study.calibration import (RUNNING, CalibrationSettings, compare_calibrations, coverage_table,
                                             replicate, run_calibration, run_replicates)
@@ -207,3 +208,27 @@ def test_a_result_file_is_written_whole_and_leaves_nothing_beside_it(tmp_path):
     assert json.loads((tmp_path / "0001.json").read_text()) == {"replicate": 1, "b": 3531.6}
     assert (tmp_path / "0001.json").read_text().endswith("}\n")
     assert [p.name for p in tmp_path.iterdir()] == ["0001.json"]
+
+
+@dataclass(frozen=True)
+class _Likelihood:
+    """A calibration whose fits take a likelihood (its replicates are stand-ins)."""
+
+    likelihood: LikelihoodSettings = LikelihoodSettings()
+
+    def replicate(self, k):
+        return {"replicate": k}
+
+
+def test_a_run_saved_before_the_model_form_terms_holds_them_at_0(tmp_path):
+    """A settings.json saved before the likelihood's model-form terms existed was fitted
+    without them: it holds them at 0 (``identity.LATER_LIKELIHOOD``), so it goes on
+    under a likelihood without them and is refused by one that takes them."""
+    run_replicates(_Likelihood(), tmp_path, 1)
+    saved = json.loads((tmp_path / "settings.json").read_text())
+    assert saved["likelihood"]["form_sd"] == 0 and saved["likelihood"]["form_friction"] == 0
+    saved["likelihood"] = {k: v for k, v in saved["likelihood"].items() if k not in ("form_sd", "form_friction")}
+    (tmp_path / "settings.json").write_text(json.dumps(saved))
+    with pytest.raises(ValueError, match="other calibration settings"):
+        run_replicates(_Likelihood(LikelihoodSettings(form_sd=0.005)), tmp_path, 2)
+    assert run_replicates(_Likelihood(), tmp_path, 2)[1] == {"replicate": 1}

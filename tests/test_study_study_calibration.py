@@ -255,19 +255,23 @@ def test_inspecting_a_single_record_replicate_uses_its_one_record(tmp_path):
 def test_the_scripts_config_makes_the_settings_a_committed_folder_was_run_with():
     """results/coverage-sbc-v6's command, read as the script reads it, gives the settings
     that folder's settings.json holds (an option added since, absent there, at its
-    default: how the study reads a folder it continues)."""
-    from dataclasses import asdict
+    default, or for the likelihood's at the value in effect before: how the study reads
+    a folder it continues)."""
     from pathlib import Path
 
-    from bayes_inerter.study.calibration import _with_defaults
+    from bayes_inerter.study.calibration import _saved_settings, _stored_settings, _with_defaults
     from bayes_inerter.study.study_calibration import Config
 
     folder = Path(__file__).resolve().parents[1] / "results" / "coverage-sbc-v6"
     saved = json.loads((folder / "settings.json").read_text())
     config = Config(replicates=150, seed=11, single=True, residual="motion", converge=True, max_steps=40000,
                     freqs=(0.5, 1.0, 1.5))
-    mine = json.loads(json.dumps(asdict(config.settings()), default=str))
-    assert _with_defaults(saved, mine) == mine
+    mine = _stored_settings(config.settings())
+    assert _with_defaults(_saved_settings(folder / "settings.json"), mine) == mine
+    # fitted before the model-form terms existed, so without them: refused by a run that takes them
+    formed = _stored_settings(dataclasses.replace(config, form_sd=0.005).settings())
+    assert _with_defaults(_saved_settings(folder / "settings.json"), formed) != formed
+    assert dataclasses.replace(config, form_sd=0.005, form_friction=0.01).settings().likelihood.form_friction == 0.01
     assert "law_sampled" not in saved["likelihood"]  # the case above: an option newer than the folder,
     assert mine["likelihood"]["law_sampled"] is False  # which the command leaves at its default
     with pytest.raises(ValueError, match="replicates must be"):

@@ -46,7 +46,7 @@ from ..executor import make_executor
 from ..inference.posterior.model import LikelihoodSettings, PosteriorModel
 from ..inference.posterior.priors import LogNormal, LogUniform, Uniform
 from ..inference.summaries.results import ar1_noise, posterior_sample
-from ..inference.sampling.identity import LATER_ADAPTATION, LATER_TEMPERING
+from ..inference.sampling.identity import LATER_ADAPTATION, LATER_TEMPERING, stored_likelihood
 from ..inference.sampling.sampler import run_sampler
 from ..records.generator import GeneratorSettings, generate_record
 from ..simulate import SimulationError
@@ -265,6 +265,21 @@ def _with_defaults(saved: dict, defaults: dict) -> dict:
     return out
 
 
+def _stored_settings(cs) -> dict:
+    """``cs`` as settings.json holds it (JSON data)."""
+    return json.loads(json.dumps(asdict(cs), default=str))
+
+
+def _saved_settings(path: Path) -> dict:
+    """settings.json as saved, a likelihood saved before some of its settings existed
+    holding the values in effect then (``identity.stored_likelihood``), not today's
+    defaults."""
+    saved = json.loads(path.read_text())
+    if isinstance(saved.get("likelihood"), dict):
+        saved["likelihood"] = stored_likelihood(saved["likelihood"])
+    return saved
+
+
 def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=None, work=None,
                    executor=None) -> list[dict]:
     """Run replicates 0..``replicates``-1 of ``cs`` (any frozen settings dataclass with a
@@ -281,9 +296,8 @@ def run_replicates(cs, out, replicates: int, *, processes: int = 1, progress=Non
     check_output_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     settings_file = out / "settings.json"
-    mine = json.loads(json.dumps(asdict(cs), default=str))
-    defaults = json.loads(json.dumps(asdict(type(cs)()), default=str))
-    if settings_file.exists() and _with_defaults(json.loads(settings_file.read_text()), defaults) != mine:
+    mine, defaults = _stored_settings(cs), _stored_settings(type(cs)())
+    if settings_file.exists() and _with_defaults(_saved_settings(settings_file), defaults) != mine:
         raise ValueError(f"{out} holds replicates of other calibration settings; choose another output folder")
     settings_file.write_text(json.dumps(mine, indent=2) + "\n")
     write_manifest(out, {"settings": mine, "replicates": replicates, "processes": processes})

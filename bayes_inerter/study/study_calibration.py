@@ -987,6 +987,12 @@ class Config:
     deviation_scale: str | None = field(default=None, metadata={
         "help": "where the motion-in likelihood takes its deviations' prior sd (LikelihoodSettings."
                 "deviation_scale; default: the library's)"})
+    form_sd: float | None = field(default=None, metadata={
+        "help": "the motion-in likelihood's model-form sd of b (LikelihoodSettings.form_sd; default: the "
+                "library's, 0: none)"})
+    form_friction: float | None = field(default=None, metadata={
+        "help": "the motion-in likelihood's model-form error scaled by the friction (LikelihoodSettings."
+                "form_friction; default: the library's, 0: none)"})
     converge: bool = field(default=False, metadata={"help": "each chain to the convergence rule"})
     max_steps: int = field(default=StudyCalibration.max_steps, metadata={"help": "the cap of a chain run to the rule"})
     tempering: int | None = field(default=None, metadata={
@@ -1042,7 +1048,8 @@ class Config:
                  "law_sampled": True if self.law_sampled else None, "law": None if self.law else False,
                  "reversals": None if self.reversals else False,
                  "normaliser": self.normaliser or None,
-                 "deviation_scale": self.deviation_scale or None}
+                 "deviation_scale": self.deviation_scale or None,
+                 "form_sd": self.form_sd, "form_friction": self.form_friction}
         changes = {k: v for k, v in given.items() if v is not None}
         if changes:
             extra["likelihood"] = LikelihoodSettings(**changes)
