@@ -319,3 +319,46 @@ def test_a_replicate_fits_the_model_asked_and_a_folder_keeps_one(tmp_path, monke
     (tmp_path / "replicates" / "0000.json").write_text(json.dumps(today))
     with pytest.raises(ValueError, match="of the model two-port, not two-port-stribeck"):
         run(Config(model="two-port-stribeck"), tmp_path, Serial())
+
+
+def test_b_with_the_model_form_error_is_drawn_from_the_same_chain_and_counted(tmp_path, monkeypatch):
+    """Each replicate also keeps b's intervals with the model-form error drawn after the
+    likelihood (``summaries.model_form``): about the same centre, wider by the law's sd
+    (here its friction term dominates: f_0 large against b's inertial force); summarise
+    counts them among the converged replicates."""
+    from types import SimpleNamespace
+
+    import math
+
+    import numpy as np
+
+    from bayes_inerter.device import paper_parameters
+    from bayes_inerter.inference.summaries.model_form import ModelFormError, accel_amplitude
+    from bayes_inerter.study import paper_like_coverage as plc
+    from bayes_inerter.study.replicate_store import write_replicate
+
+    b_true = paper_parameters(grid_case(0)[0]).b
+    rng = np.random.default_rng(2)
+    b = rng.normal(b_true, 1e-4 * b_true, size=(2, 2000))
+    f_0 = np.full(b.shape, 800.0)
+
+    def fit(record, out, **options):
+        return SimpleNamespace(idata=SimpleNamespace(posterior={"b": b, "f_0": f_0}), converged=True,
+                               iterations=750, tau=np.array([4.0]), tau_by_parameter=None,
+                               b_interval=SimpleNamespace(identified=True, phi=0.9))
+
+    monkeypatch.setattr(plc, "fit_record", fit)
+    got = plc.replicate(0, 6000, 500)
+    rec = plc.paper_like_record(*grid_case(0), seed=6000, device=plc.FAMILIES["default"])
+    sd = float(ModelFormError().relative_sd(b_true, 800.0, accel_amplitude(rec)))
+    lo, hi = got["hdi94_form"]
+    width = math.log(hi / lo)
+    assert width == pytest.approx(2 * 1.881 * sd, rel=0.1)  # a normal's 94 % HDI is +-1.881 sd wide
+    assert math.log(math.sqrt(lo * hi) / b_true) == pytest.approx(0.0, abs=0.1 * sd)
+    assert got["hdi94"][1] - got["hdi94"][0] < 0.1 * (hi - lo)
+    write_replicate(tmp_path, 0, got)
+    write_replicate(tmp_path, 1, {**got, "replicate": 1, "hdi94_form": [hi, 2 * hi]})  # misses
+    (row,) = [r for r in plc.summarise(tmp_path) if r["freq_hz"] == "all"]
+    assert row["converged_with_form"] == 2 and row["coverage94_form_converged"] == 0.5
+    lines = list(csv.DictReader((tmp_path / "replicates.csv").open()))
+    assert [x["covered94_form"] for x in lines] == ["True", "False"]

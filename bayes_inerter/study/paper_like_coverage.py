@@ -23,6 +23,9 @@ miscalibrated sensors. Where the fit samples the sensors' gain ratio, also b / g
 intervals, held against b g_F / g_a: b's own intervals are widened by the gain's prior,
 which the generator's sensors are drawn from, so they alone cannot tell whether the
 part the record decides is calibrated.
+Also b with the model-form error drawn after the likelihood from the same chain
+(``summaries.model_form``, a candidate: each draw of b times e^eps), its intervals held
+against the true b, so that one run measures it beside the posterior's own.
 
 ``family`` makes the records of a device family the likelihood was not designed on
 (``FAMILIES``: a wider nut backlash, a larger break-away, noise coloured at 20 Hz, the two
@@ -69,6 +72,7 @@ from ..inference.sampling.moves.block import PARTNERS
 from ..inference.posterior.likelihood import LikelihoodSettings, settings_changes
 from ..inference.posterior.model import MOTION_MODELS
 from ..inference.sampling.tempering import Tempering
+from ..inference.summaries.model_form import ModelFormError, accel_amplitude
 from ..inference.summaries.results import hdi
 from ..records.paper_like import PaperLike, laboratory, paper_like_record
 from . import stop_rule
@@ -151,12 +155,32 @@ def replicate(k: int, seed0: int, max_steps: int, family: str = "default", commi
         out[f"covered{key}"] = bool(lo <= b_true <= hi)
         out[f"width{key}_pct"] = 100.0 * (hi - lo) / b_true
     posterior = res.idata.posterior
+    # the device's b with the model-form error drawn after the likelihood (summaries.model_form),
+    # from the same chain, so that one run measures the posterior's b and this one side by side
+    device_b = ModelFormError().draws(b, _coulomb(posterior, b.shape), accel_amplitude(rec, freq),
+                                      np.random.default_rng([seed, FORM_STREAM]))
+    for level in LEVELS:
+        lo, hi = hdi(device_b, level)
+        out[f"hdi{round(100 * level)}_form"] = [float(lo), float(hi)]
     if "gain" in posterior:  # b beyond the sensors' calibration, what the record itself tells (absent before)
         ratio = b / np.asarray(posterior["gain"]).ravel()
         for level in LEVELS:
             lo, hi = hdi(ratio, level)
             out[f"hdi{round(100 * level)}_b_over_gain"] = [float(lo), float(hi)]
     return out
+
+
+#: The random stream of a replicate's model-form draws (with its laboratory's seed).
+FORM_STREAM = 7
+
+
+def _coulomb(posterior, shape) -> np.ndarray:
+    """The Coulomb forces f1_0 + f2_0 at each draw (N; 0 for a model without them)."""
+    if "f_0" in posterior:
+        return np.asarray(posterior["f_0"]).ravel()
+    if "f1_0" in posterior:
+        return np.asarray(posterior["f1_0"]).ravel() + np.asarray(posterior["f2_0"]).ravel()
+    return np.zeros(shape)
 
 
 def _ladder_entry(tempering: Tempering | None) -> list | None:
@@ -205,6 +229,10 @@ def with_errors(r: dict) -> dict:
            "error_beyond_gain_pct": 100.0 * (r["b_median"] / (r["b_true"] * gain) - 1.0)}
     apparent = r["b_true"] * gain  # what b / gain estimates: the sampled gain stands for g_a / g_F
     for key in ("94", "50"):
+        if f"hdi{key}_form" in r:  # b with the model-form error, against the device's b
+            lo, hi = r[f"hdi{key}_form"]
+            out[f"covered{key}_form"] = bool(lo <= r["b_true"] <= hi)
+            out[f"width{key}_form_pct"] = 100.0 * (hi - lo) / r["b_true"]
         if f"hdi{key}_b_over_gain" in r:
             lo, hi = r[f"hdi{key}_b_over_gain"]
             out[f"covered{key}_b_over_gain"] = bool(lo <= apparent <= hi)
@@ -221,6 +249,10 @@ def summarise(out: Path) -> list[dict]:
         beyond = any("covered94_b_over_gain" in r for r in reps)
         if beyond:  # only folders whose replicates hold b / gain, so older tables are remade unchanged
             fields += [f"{what}{key}_b_over_gain{unit}" for key in ("94", "50")
+                       for what, unit in (("covered", ""), ("width", "_pct"))]
+        formed = any("covered94_form" in r for r in reps)
+        if formed:  # only folders whose replicates hold b with the model-form error
+            fields += [f"{what}{key}_form{unit}" for key in ("94", "50")
                        for what, unit in (("covered", ""), ("width", "_pct"))]
         w = csv.DictWriter(f, fields)
         w.writeheader()
@@ -252,6 +284,14 @@ def summarise(out: Path) -> list[dict]:
                     round(sum(r[f"covered{key}_b_over_gain"] for r in held) / len(held), 3) if held else ""
             row["median_width94_b_over_gain_pct"] = \
                 round(float(np.median([r["width94_b_over_gain_pct"] for r in held])), 2) if held else ""
+        if formed:  # b with the model-form error (summaries.model_form), among the converged that hold it
+            held = [r for r in good if "covered94_form" in r]
+            row["converged_with_form"] = len(held)
+            for key in ("94", "50"):
+                row[f"coverage{key}_form_converged"] = \
+                    round(sum(r[f"covered{key}_form"] for r in held) / len(held), 3) if held else ""
+            row["median_width94_form_pct"] = round(float(np.median([r["width94_form_pct"] for r in held])), 2) \
+                if held else ""
         row["median_seconds"] = round(float(np.median([r["seconds"] for r in sel])), 1)
         for key in ("error_pct", "error_beyond_gain_pct"):
             row[f"mean_{key}"] = round(float(np.mean([r[key] for r in sel])), 2)
