@@ -41,11 +41,12 @@ alone (the folders' default, and ``fit``'s); a folder keeps one sampler.
 ``tau_rtol`` stops the chains with that tolerance of the convergence rule
 (``Convergence.tau_rtol``; a folder keeps one, each replicate names it, ``stop_rule``).
 ``freq`` F runs only the replicates driven at F Hz; ``parity`` "odd" or "even" only the
-replicates of odd or even k (a method's settings chosen on one half are measured on the other). ``duration`` D makes every record D s
-long, ramp included (the paper's are 10 s: 3 steady periods at 0.5 Hz, results/record-length);
-a folder keeps one length. ``work`` W runs replicate k's fit in W/<k> (``fit_record``'s
-folder, its checkpoint included), removed once the replicate is written: a run stopped
-mid-chain continues that chain when run again, where the default (None, a temporary
+replicates of odd or even k (a method's settings chosen on one half are measured on the
+other). ``duration`` D makes every record D s long, ramp included (the paper's are 10 s:
+3 steady periods at 0.5 Hz, results/record-length); a folder keeps one length. ``work`` W
+runs replicate k's fit in W/<k> (``fit_record``'s folder, its checkpoint included),
+removed once the replicate is written: a run stopped mid-chain continues that chain when
+run again, where the default (None, a temporary
 folder) starts it over. The folder is stamped with the run's output folder, cap and
 tolerance, and one stamped otherwise is refused. A continued replicate's ``seconds``
 count only its last run; ``sampling_s_all_runs`` over ``steps_timed`` is its seconds per
@@ -81,8 +82,8 @@ from .manifest import source_commit
 from .output import StudyOutput
 from .replicate_store import finished, load_replicates, write_replicate
 
-__all__ = ["Config", "run", "FAMILIES", "LEVELS", "PARITIES", "replicate", "with_errors", "summarise", "likelihood_settings",
-           "pairs"]
+__all__ = ["Config", "run", "FAMILIES", "LEVELS", "PARITIES", "FORM_STREAM", "replicate", "with_errors", "summarise",
+           "likelihood_settings", "pairs"]
 
 LEVELS = (0.94, 0.5)
 PARITIES = ("even", "odd")  # index k % 2
@@ -290,8 +291,8 @@ def summarise(out: Path) -> list[dict]:
             for key in ("94", "50"):
                 row[f"coverage{key}_form_converged"] = \
                     round(sum(r[f"covered{key}_form"] for r in held) / len(held), 3) if held else ""
-            row["median_width94_form_pct"] = round(float(np.median([r["width94_form_pct"] for r in held])), 2) \
-                if held else ""
+            widths = [r["width94_form_pct"] for r in held]
+            row["median_width94_form_pct"] = round(float(np.median(widths)), 2) if held else ""
         row["median_seconds"] = round(float(np.median([r["seconds"] for r in sel])), 1)
         for key in ("error_pct", "error_beyond_gain_pct"):
             row[f"mean_{key}"] = round(float(np.mean([r[key] for r in sel])), 2)
