@@ -46,8 +46,7 @@ other). ``duration`` D makes every record D s long, ramp included (the paper's a
 3 steady periods at 0.5 Hz, results/record-length); a folder keeps one length. ``work`` W
 runs replicate k's fit in W/<k> (``fit_record``'s folder, its checkpoint included),
 removed once the replicate is written: a run stopped mid-chain continues that chain when
-run again, where the default (None, a temporary
-folder) starts it over. The folder is stamped with the run's output folder, cap and
+run again, where the default (None, a temporary folder) starts it over. The folder is stamped with the run's output folder, cap and
 tolerance, and one stamped otherwise is refused. A continued replicate's ``seconds``
 count only its last run; ``sampling_s_all_runs`` over ``steps_timed`` is its seconds per
 step (a run stopped before it wrote fit.json leaves its steps untimed).
@@ -241,20 +240,21 @@ def with_errors(r: dict) -> dict:
     return out
 
 
+#: The intervals a replicate may hold beside b's own, by their keys' suffix: b / gain's
+#: (against b g_F / g_a) and b with the model-form error's (against b), in the tables' order.
+OTHER_INTERVALS = ("_b_over_gain", "_form")
+
+
 def summarise(out: Path) -> list[dict]:
     reps = [with_errors(r) for r in finished(out)]
     with (out / "replicates.csv").open("w", newline="") as f:
         fields = ["replicate", "setting", "freq_hz", "seed", "b_true", "b_median", "hdi94", "hdi50", "covered94",
                   "covered50", "width94_pct", "identified", "converged", "steps", "tau_max", "seconds", "phi",
                   "error_pct", "gain_ratio_pct", "error_beyond_gain_pct"]
-        beyond = any("covered94_b_over_gain" in r for r in reps)
-        if beyond:  # only folders whose replicates hold b / gain, so older tables are remade unchanged
-            fields += [f"{what}{key}_b_over_gain{unit}" for key in ("94", "50")
-                       for what, unit in (("covered", ""), ("width", "_pct"))]
-        formed = any("covered94_form" in r for r in reps)
-        if formed:  # only folders whose replicates hold b with the model-form error
-            fields += [f"{what}{key}_form{unit}" for key in ("94", "50")
-                       for what, unit in (("covered", ""), ("width", "_pct"))]
+        # the other intervals only in folders whose replicates hold them, so older tables are remade unchanged
+        held_by = [suffix for suffix in OTHER_INTERVALS if any(f"covered94{suffix}" in r for r in reps)]
+        fields += [f"{what}{key}{suffix}{unit}" for suffix in held_by for key in ("94", "50")
+                   for what, unit in (("covered", ""), ("width", "_pct"))]
         w = csv.DictWriter(f, fields)
         w.writeheader()
         for r in reps:
@@ -277,22 +277,14 @@ def summarise(out: Path) -> list[dict]:
         row["converged_identified"] = len(good)
         for key in ("94", "50"):
             row[f"coverage{key}_converged"] = round(sum(r[f"covered{key}"] for r in good) / len(good), 3) if good else ""
-        if beyond:  # b / gain's intervals against b g_F / g_a, among the converged replicates that hold them
-            held = [r for r in good if "covered94_b_over_gain" in r]
-            row["converged_with_b_over_gain"] = len(held)
+        for suffix in held_by:  # among the converged replicates that hold them
+            held = [r for r in good if f"covered94{suffix}" in r]
+            row[f"converged_with{suffix}"] = len(held)
             for key in ("94", "50"):
-                row[f"coverage{key}_b_over_gain_converged"] = \
-                    round(sum(r[f"covered{key}_b_over_gain"] for r in held) / len(held), 3) if held else ""
-            row["median_width94_b_over_gain_pct"] = \
-                round(float(np.median([r["width94_b_over_gain_pct"] for r in held])), 2) if held else ""
-        if formed:  # b with the model-form error (summaries.model_form), among the converged that hold it
-            held = [r for r in good if "covered94_form" in r]
-            row["converged_with_form"] = len(held)
-            for key in ("94", "50"):
-                row[f"coverage{key}_form_converged"] = \
-                    round(sum(r[f"covered{key}_form"] for r in held) / len(held), 3) if held else ""
-            widths = [r["width94_form_pct"] for r in held]
-            row["median_width94_form_pct"] = round(float(np.median(widths)), 2) if held else ""
+                row[f"coverage{key}{suffix}_converged"] = \
+                    round(sum(r[f"covered{key}{suffix}"] for r in held) / len(held), 3) if held else ""
+            row[f"median_width94{suffix}_pct"] = \
+                round(float(np.median([r[f"width94{suffix}_pct"] for r in held])), 2) if held else ""
         row["median_seconds"] = round(float(np.median([r["seconds"] for r in sel])), 1)
         for key in ("error_pct", "error_beyond_gain_pct"):
             row[f"mean_{key}"] = round(float(np.mean([r[key] for r in sel])), 2)
