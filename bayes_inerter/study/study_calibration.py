@@ -68,6 +68,7 @@ from ..inference.sampling.moves.block import PARTNERS
 from ..inference.sampling.tempering import Tempering
 from ..inference.fit import ALL_DRAWS_FILE, fit_joint, fit_record
 from ..inference.posterior.likelihood import LikelihoodSettings
+from ..inference.summaries.model_form import ModelFormError
 from ..inference.posterior.model import PosteriorModel
 from ..inference.posterior.motion import deviation_sd, motion_variance, predicted_force
 from ..inference.posterior.priors import LogUniform, Uniform, tau_floor_prior
@@ -340,10 +341,10 @@ def _simulated_draw(cs: StudyCalibration, base: PosteriorModel, freqs, rng: np.r
     ``freqs``, or None where the generator refuses it. Where the likelihood marginalises
     a model-form error of b (``LikelihoodSettings.form_sd`` s, ``form_friction`` rho),
     each record is made with b e^eps, drawn after theta and anew for each record (each
-    record's likelihood has its own): eps normal with sd s, plus one with sd
-    rho f_0 / (b w^2 X) (the Coulomb forces over the inertial force's amplitude at the
-    drive's amplitude X). The device's b is the truth the posterior is held against, as
-    the likelihood assumes."""
+    record's likelihood has its own): eps normal with sd sqrt(s^2 + (rho f_0 / (b w^2 X))^2)
+    (``summaries.model_form.ModelFormError``'s law; the Coulomb forces over the inertial
+    force's amplitude at the drive's amplitude X). The device's b is the truth the
+    posterior is held against, as the likelihood assumes."""
     theta = np.array([base.all_priors[n].sample(rng) for n in base.names])
     try:
         params = base.parameters(theta)
@@ -352,11 +353,9 @@ def _simulated_draw(cs: StudyCalibration, base: PosteriorModel, freqs, rng: np.r
         for f in freqs:
             recorded = params
             if s or rho:  # the model-form errors the likelihood marginalises: the record's b is b e^eps
-                eps = s * rng.standard_normal() if s else 0.0
-                if rho:
-                    inertial = params.b * (2.0 * math.pi * f) ** 2 * cs.generator.amplitude
-                    eps += rho * (params.f1_0 + params.f2_0) / inertial * rng.standard_normal()
-                recorded = dataclasses.replace(params, b=params.b * math.exp(eps))
+                accel = (2.0 * math.pi * f) ** 2 * cs.generator.amplitude
+                b = ModelFormError(sd=s, friction=rho).draws(params.b, params.f1_0 + params.f2_0, accel, rng)
+                recorded = dataclasses.replace(params, b=float(b))
             records.append(generate_record(recorded, f, settings=cs.generator, rng=rng, setting_name=cs.setting))
         return theta, params, records
     except (SimulationError, ValueError):
